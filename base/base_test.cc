@@ -1,0 +1,66 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "base/binary_reader.h"
+#include "base/error.h"
+#include "base/file_util.h"
+#include "base/text_reader.h"
+
+namespace ms {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(TextReader, ReportsFileLineAndField) {
+  TextReader reader("points.txt", "# comment\n\n1 2 x\n");
+  std::string_view line = reader.RequireDataLine("a point");
+  auto fields = SplitFields(line);
+  ASSERT_EQ(fields.size(), 3u);
+  EXPECT_EQ(reader.ParseInt(fields[0], "id"), 1);
+  try {
+    reader.ParseDouble(fields[2], "X");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "points.txt:3: X: 'x' is not a number");
+  }
+}
+
+TEST(TextReader, RejectsNonFiniteAndOutOfRange) {
+  TextReader reader("f", "nan inf -5 99999999999999999999");
+  EXPECT_THROW(reader.NextDouble("a"), InputError);
+  EXPECT_THROW(reader.NextDouble("b"), InputError);
+  EXPECT_THROW(reader.NextInt("c", 0, 10), InputError);
+  EXPECT_THROW(reader.NextInt("d"), InputError);
+  EXPECT_TRUE(reader.AtEnd());
+  EXPECT_THROW(reader.NextToken("e"), InputError);
+}
+
+TEST(BinaryReader, TruncationAndHugeCounts) {
+  const char bytes[6] = {1, 0, 0, 0, 2, 0};
+  BinaryReader reader("x.bin", bytes, sizeof(bytes));
+  EXPECT_EQ(reader.Read<uint32_t>("n"), 1u);
+  EXPECT_THROW(reader.Read<uint32_t>("m"), InputError);
+  EXPECT_THROW(reader.CheckCount(uint64_t{1} << 40, 8, "points"), InputError);
+  EXPECT_NO_THROW(reader.CheckCount(1, 2, "points"));
+}
+
+TEST(AtomicFileWriter, LeavesNothingWhenNotCommitted) {
+  const fs::path dir = fs::temp_directory_path() / "ms_base_test";
+  fs::create_directories(dir);
+  const fs::path target = dir / "out.txt";
+  fs::remove(target);
+  {
+    AtomicFileWriter writer(target);
+    writer.stream() << "partial";
+  }
+  EXPECT_FALSE(fs::exists(target));
+  WriteFileAtomically(target, [](std::ostream& out) { out << "complete"; });
+  EXPECT_EQ(ReadFileToString(target), "complete");
+  EXPECT_THROW(ReadFileToString(target, 3), InputError);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace ms

@@ -1,0 +1,51 @@
+// Reading and writing scenes in the formats of the field. The project's own canonical store is
+// HDF5 (.h5); the others are importers/exporters. Every reader checks what it reads and throws
+// InputError naming the file, line (or byte) and field; none trusts counts from the file.
+#pragma once
+
+#include <string>
+
+#include "scene/scene.h"
+
+namespace ms {
+
+enum class SceneFormat {
+  kAuto,          // decide from the path (see DetectSceneFormat)
+  kManisweepH5,   // scene.h5
+  kColmapText,    // directory with cameras.txt, images.txt, points3D.txt
+  kColmapBinary,  // directory with cameras.bin, images.bin, points3D.bin
+  kNvm,           // VisualSFM NVM_V3 .nvm
+  kBundler,       // bundle.out (+ list.txt beside it)
+  kOpenMvg,       // sfm_data.json
+  kStrecha,       // directory of *.camera files (cameras only)
+  kMiddlebury,    // *_par.txt (cameras only)
+};
+
+// "colmap-text", "colmap-binary", "nvm", "bundler", "openmvg", "strecha", "middlebury", "h5",
+// "auto". Throws InputError for an unknown name.
+SceneFormat ParseSceneFormat(const std::string& name);
+std::string SceneFormatName(SceneFormat format);
+
+struct SceneReadOptions {
+  // Where images live when the format stores names relative to something else; default: the
+  // format's own convention (next to the file, or COLMAP's parent "images/" folder, ...).
+  std::string image_dir;
+  int nvm_model_index = 0;      // NVM files may hold several models
+  bool require_images = false;  // fail if an image file is missing
+  // Check image sizes against the files (reads only headers). Sets sizes where the format lacks
+  // them (NVM, Bundler).
+  bool read_image_sizes = true;
+};
+
+// Detects by extension/contents: *.h5, *.nvm, *.json, bundle.out/*.out, *_par.txt, a directory
+// with cameras.{txt,bin} (COLMAP; a "sparse/" or "sparse/0/" subfolder is looked into), or a
+// directory of *.camera files.
+SceneFormat DetectSceneFormat(const std::string& path);
+
+Scene ReadScene(const std::string& path, const SceneReadOptions& options = {},
+                SceneFormat format = SceneFormat::kAuto);
+
+// Writes atomically (temporary name, then rename). Directory formats create the directory.
+void WriteScene(const Scene& scene, const std::string& path, SceneFormat format);
+
+}  // namespace ms
