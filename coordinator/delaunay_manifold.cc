@@ -1,0 +1,1170 @@
+// The only translation unit that sees CGAL's Delaunay triangulation (compile time, see
+// docs/manifold.md for the algorithm and its invariants).
+#include "coordinator/delaunay_manifold.h"
+
+#include <CGAL/Delaunay_triangulation_3.h>
+#include <CGAL/Delaunay_triangulation_cell_base_3.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_cell_base_with_info_3.h>
+#include <CGAL/Triangulation_vertex_base_with_info_3.h>
+#include <CGAL/intersections.h>
+
+#include <algorithm>
+#include <array>
+#include <climits>
+#include <cmath>
+#include <queue>
+#include <sstream>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include "base/check.h"
+#include "base/error.h"
+#include "base/log.h"
+#include "coordinator/manifold_internal.h"
+#include "coordinator/ray_index.h"
+#include "coordinator/steiner_points.h"
+
+namespace ms {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+
+constexpr int32_t kInfiniteVertexId = INT32_MAX;
+
+struct VertexInfo {
+  int32_t id = kInfiniteVertexId;  // point id (>= 0) or -1 - k for Steiner point k
+  int32_t outside_cells = 0;       // incident cells in O
+};
+
+struct CellInfo {
+  int32_t crossings = 0;  // viewing rays whose open segment meets the open cell
+  // Of those, the rays that end at vertex i of this cell. They do not spread w2 across the
+  // three faces containing vertex i: evidence of free space stops at the ray's point.
+  int32_t ends[4] = {0, 0, 0, 0};
+  uint32_t stamp = 0;     // visit marker for walks and set building
+  bool outside = false;   // in O
+  bool queued = false;    // in the growing queue
+  bool has_camera = false;
+};
+
+using Vb = CGAL::Triangulation_vertex_base_with_info_3<VertexInfo, Kernel>;
+using Cb = CGAL::Triangulation_cell_base_with_info_3<CellInfo, Kernel,
+                                                     CGAL::Delaunay_triangulation_cell_base_3<Kernel>>;
+using Tds = CGAL::Triangulation_data_structure_3<Vb, Cb>;
+using Delaunay = CGAL::Delaunay_triangulation_3<Kernel, Tds>;
+using Cell_handle = Delaunay::Cell_handle;
+using Vertex_handle = Delaunay::Vertex_handle;
+using Facet = Delaunay::Facet;
+using Locate_type = Delaunay::Locate_type;
+
+Point ToPoint(const Eigen::Vector3d& p) { return Point(p.x(), p.y(), p.z()); }
+
+// Sign of K_ij = A_j B_i - A_i B_j is kPluckerSign[i][j] * orientation(p_k, p_l, a, b) for a
+// positively oriented cell, where {k < l} are the two other indices (a Grassmann-Pluecker
+// identity; A_i, B_i are the orientations of a and b against face i).
+constexpr int kPluckerSign[4][4] = {{0, -1, 1, -1}, {1, 0, -1, 1}, {-1, 1, 0, -1}, {1, -1, 1, 0}};
+
+void OtherTwo(int i, int j, int* k, int* l) {
+  int found[2], n = 0;
+  for (int m = 0; m < 4; ++m) {
+    if (m != i && m != j) found[n++] = m;
+  }
+  *k = found[0];
+  *l = found[1];
+}
+
+// Orientations of the segment end points against the four faces of a finite cell.
+struct FaceSides {
+  int a[4];  // sign of orientation with vertex i replaced by a (> 0: a on the inner side)
+  int b[4];
+};
+
+FaceSides ComputeFaceSides(const Cell_handle& c, const Point& a, const Point& b) {
+  const Point& p0 = c->vertex(0)->point();
+  const Point& p1 = c->vertex(1)->point();
+  const Point& p2 = c->vertex(2)->point();
+  const Point& p3 = c->vertex(3)->point();
+  FaceSides s;
+  s.a[0] = CGAL::orientation(a, p1, p2, p3);
+  s.a[1] = CGAL::orientation(p0, a, p2, p3);
+  s.a[2] = CGAL::orientation(p0, p1, a, p3);
+  s.a[3] = CGAL::orientation(p0, p1, p2, a);
+  s.b[0] = CGAL::orientation(b, p1, p2, p3);
+  s.b[1] = CGAL::orientation(p0, b, p2, p3);
+  s.b[2] = CGAL::orientation(p0, p1, b, p3);
+  s.b[3] = CGAL::orientation(p0, p1, p2, b);
+  return s;
+}
+
+// Sign of K_ij (see kPluckerSign).
+int PluckerSign(const Cell_handle& c, int i, int j, const Point& a, const Point& b) {
+  int k, l;
+  OtherTwo(i, j, &k, &l);
+  return kPluckerSign[i][j] *
+         static_cast<int>(CGAL::orientation(c->vertex(k)->point(), c->vertex(l)->point(), a, b));
+}
+
+// Exact test: does the open segment (a, b) meet the open (finite) cell? Along the segment,
+// face i's orientation is (1-t) A_i + t B_i; the segment is inside for the t where all four
+// are positive: an interval bounded below by faces with A <= 0 < B and above by faces with
+// A > 0 >= B. It is non-empty iff every lower bound is below every upper bound.
+bool SegmentCrossesCell(const Cell_handle& c, const Point& a, const Point& b, const FaceSides& s) {
+  int lower[4], upper[4], nl = 0, nu = 0;
+  for (int i = 0; i < 4; ++i) {
+    if (s.a[i] <= 0 && s.b[i] <= 0) return false;
+    if (s.a[i] <= 0) lower[nl++] = i;
+    else if (s.b[i] <= 0) upper[nu++] = i;
+  }
+  for (int x = 0; x < nl; ++x) {
+    for (int y = 0; y < nu; ++y) {
+      if (PluckerSign(c, lower[x], upper[y], a, b) <= 0) return false;
+    }
+  }
+  return true;
+}
+
+bool SegmentCrossesCell(const Cell_handle& c, const Point& a, const Point& b) {
+  return SegmentCrossesCell(c, a, b, ComputeFaceSides(c, a, b));
+}
+
+using CellKey = std::array<int32_t, 4>;
+
+struct QueueEntry {
+  double weight;
+  CellKey key;
+  Cell_handle cell;
+  // Max-heap: heavier first; among equal weights the smaller key first (determinism).
+  bool operator<(const QueueEntry& o) const {
+    if (weight != o.weight) return weight < o.weight;
+    return key > o.key;
+  }
+};
+
+}  // namespace
+
+struct ManifoldTestAccess;
+
+class DelaunayManifold::Impl {
+ public:
+  Impl(std::vector<ManifoldCamera> cameras, const ManifoldOptions& options)
+      : options_(options), cameras_(std::move(cameras)) {
+    options_.Check();
+    for (size_t c = 0; c < cameras_.size(); ++c) {
+      if (!cameras_[c].center.allFinite() || !cameras_[c].R.allFinite()) {
+        throw InputError("camera " + std::to_string(c) + ": pose is not finite");
+      }
+    }
+    std::vector<RayIndex::Camera> index_cameras;
+    for (const ManifoldCamera& c : cameras_) {
+      index_cameras.push_back({c.R, c.center, c.u_min, c.u_max, c.v_min, c.v_max});
+    }
+    ray_index_ = std::make_unique<RayIndex>(std::move(index_cameras));
+    camera_cells_.resize(cameras_.size());
+  }
+
+  BuildStats Build(const std::vector<RayPoint>& points);
+  InsertionStats Insert(const std::vector<RayPoint>& points);
+  Mesh ExtractSurface(SurfaceInfo* info) const;
+  std::string Validate(bool check_weights) const;
+
+  friend struct ManifoldTestAccess;
+  int64_t num_points() const { return static_cast<int64_t>(positions_.size()); }
+  int64_t num_vertices() const { return static_cast<int64_t>(dt_.number_of_vertices()); }
+  int64_t num_cells() const { return static_cast<int64_t>(dt_.number_of_finite_cells()); }
+  int64_t num_outside_cells() const { return outside_count_; }
+  size_t MemoryBytes() const {
+    return dt_.number_of_cells() * sizeof(Delaunay::Cell) +
+           dt_.number_of_vertices() * sizeof(Delaunay::Vertex) +
+           positions_.capacity() * sizeof(Eigen::Vector3d) +
+           point_cameras_.capacity() * sizeof(std::vector<int32_t>) + ray_count_ * sizeof(int32_t) +
+           vertex_of_point_.capacity() * sizeof(Vertex_handle) + ray_index_->MemoryBytes();
+  }
+
+ private:
+  struct CameraStart {
+    bool valid = false;
+    Cell_handle cell;
+    Locate_type type = Delaunay::CELL;
+    int li = 0, lj = 0;
+  };
+
+  // --- labels and weights ---
+  bool InO(const Cell_handle& c) const { return !dt_.is_infinite(c) && c->info().outside; }
+  // w1 per ray crossing c, plus w2 per ray crossing a face neighbour n, except rays that end
+  // at a vertex of the face c and n share.
+  double Weight(const Cell_handle& c) const {
+    int64_t neighbours = 0;
+    for (int i = 0; i < 4; ++i) {
+      const Cell_handle n = c->neighbor(i);
+      const CellInfo& ni = n->info();
+      const int shared_face_of_n = n->index(c);
+      neighbours += ni.crossings - (ni.ends[0] + ni.ends[1] + ni.ends[2] + ni.ends[3]) +
+                    ni.ends[shared_face_of_n];
+    }
+    return options_.w1 * c->info().crossings + options_.w2 * static_cast<double>(neighbours);
+  }
+  // Counts one ray crossing c that ends at `target`.
+  static void CountCrossing(const Cell_handle& c, const Vertex_handle& target) {
+    ++c->info().crossings;
+    int i;
+    if (c->has_vertex(target, i)) ++c->info().ends[i];
+  }
+  bool IsFree(const Cell_handle& c) const {
+    return !dt_.is_infinite(c) && Weight(c) >= options_.free_threshold;
+  }
+  void SetOutside(const Cell_handle& c, bool outside) {
+    MS_CHECK(!dt_.is_infinite(c));
+    if (c->info().outside == outside) return;
+    c->info().outside = outside;
+    const int delta = outside ? 1 : -1;
+    outside_count_ += delta;
+    for (int i = 0; i < 4; ++i) c->vertex(i)->info().outside_cells += delta;
+  }
+  CellKey Key(const Cell_handle& c) const {
+    CellKey key;
+    for (int i = 0; i < 4; ++i) key[i] = c->vertex(i)->info().id;
+    std::sort(key.begin(), key.end());
+    return key;
+  }
+
+  // --- manifold tests ---
+  bool FlipKeepsManifold(const Cell_handle& t) const;
+  bool VertexRegular(const Vertex_handle& v, const Cell_handle& flipped) const;
+
+  // --- growing and shrinking ---
+  void Grow(const std::vector<Cell_handle>& seeds);
+  int64_t GrowFromHeaviest();
+  std::vector<Cell_handle> BoundarySeeds() const;
+
+  // --- rays ---
+  uint32_t NextStamp() const;
+  const CameraStart& StartOf(int camera);
+  // Calls visit(cell) for every cell crossed by the open segment camera -> point.
+  template <typename Visit>
+  int64_t Walk(const CameraStart& start, const Point& a, const Point& b, Visit&& visit) const;
+  template <typename Visit>
+  void WalkFallback(Cell_handle from, const Point& a, const Point& b, uint32_t stamp,
+                    Visit& visit) const;
+  std::vector<Cell_handle> StartCandidates(const CameraStart& start) const;
+
+  ManifoldOptions options_;
+  std::vector<ManifoldCamera> cameras_;
+  std::vector<Point> camera_points_;
+  std::vector<CameraStart> camera_cells_;
+  mutable Delaunay dt_;
+  std::unique_ptr<RayIndex> ray_index_;
+  std::vector<Eigen::Vector3d> positions_;
+  std::vector<std::vector<int32_t>> point_cameras_;
+  std::vector<Vertex_handle> vertex_of_point_;
+  Eigen::Vector3d box_min_, box_max_;  // Steiner box: points outside are discarded
+  int64_t steiner_count_ = 0;
+  int64_t outside_count_ = 0;
+  int64_t ray_count_ = 0;
+  mutable uint32_t stamp_ = 0;
+  bool built_ = false;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Ray walking
+
+uint32_t DelaunayManifold::Impl::NextStamp() const {
+  if (++stamp_ == 0) {
+    for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) c->info().stamp = 0;
+    stamp_ = 1;
+  }
+  return stamp_;
+}
+
+const DelaunayManifold::Impl::CameraStart& DelaunayManifold::Impl::StartOf(int camera) {
+  CameraStart& start = camera_cells_[camera];
+  if (!start.valid) {
+    start.cell = dt_.locate(camera_points_[camera], start.type, start.li, start.lj);
+    start.valid = true;
+    start.cell->info().has_camera = true;
+  }
+  return start;
+}
+
+std::vector<Cell_handle> DelaunayManifold::Impl::StartCandidates(const CameraStart& start) const {
+  std::vector<Cell_handle> cells;
+  switch (start.type) {
+    case Delaunay::CELL:
+      cells.push_back(start.cell);
+      break;
+    case Delaunay::FACET:
+      cells.push_back(start.cell);
+      cells.push_back(start.cell->neighbor(start.li));
+      break;
+    case Delaunay::EDGE: {
+      auto circ = dt_.incident_cells(start.cell, start.li, start.lj), done = circ;
+      do {
+        cells.push_back(circ);
+      } while (++circ != done);
+      break;
+    }
+    case Delaunay::VERTEX:
+      dt_.incident_cells(start.cell->vertex(start.li), std::back_inserter(cells));
+      break;
+    default:
+      MS_CHECK(false) << "camera outside the triangulation (locate type " << start.type << ")";
+  }
+  return cells;
+}
+
+template <typename Visit>
+int64_t DelaunayManifold::Impl::Walk(const CameraStart& start, const Point& a, const Point& b,
+                                     Visit&& visit) const {
+  const uint32_t stamp = NextStamp();
+  int64_t steps = 0;
+  Cell_handle current;
+  const std::vector<Cell_handle> candidates = StartCandidates(start);
+  for (const Cell_handle& c : candidates) {
+    if (!dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
+      current = c;
+      break;
+    }
+  }
+  if (current == Cell_handle()) {
+    // The segment leaves the camera along a face or edge: enumerate exhaustively.
+    WalkFallback(candidates.front(), a, b, stamp, visit);
+    return steps;
+  }
+  for (;;) {
+    current->info().stamp = stamp;
+    visit(current);
+    ++steps;
+    const FaceSides s = ComputeFaceSides(current, a, b);
+    // Faces that bound the segment's interval from above: it leaves through the first.
+    int exit = -1, ties[3], num_ties = 0;
+    for (int j = 0; j < 4; ++j) {
+      if (!(s.a[j] > 0 && s.b[j] <= 0)) continue;
+      if (exit < 0) {
+        exit = j;
+        ties[0] = j;
+        num_ties = 1;
+        continue;
+      }
+      // U_j < U_exit  <=>  K_{j,exit} < 0.
+      const int order = PluckerSign(current, j, exit, a, b);
+      if (order < 0) {
+        exit = j;
+        ties[0] = j;
+        num_ties = 1;
+      } else if (order == 0) {
+        ties[num_ties++] = j;
+      }
+    }
+    if (exit < 0 || s.b[exit] == 0) break;  // the segment ends in or on this cell
+    Cell_handle next;
+    if (num_ties == 1) {
+      next = current->neighbor(exit);
+      MS_CHECK(!dt_.is_infinite(next)) << "viewing ray leaves the triangulation";
+      if (next->info().stamp == stamp) next = Cell_handle();
+    } else {
+      // Leaves through an edge (two faces tie) or a vertex (three): the next cell is the one
+      // around that simplex that the segment enters.
+      std::vector<Cell_handle> around;
+      if (num_ties == 2) {
+        int k, l;
+        OtherTwo(ties[0], ties[1], &k, &l);
+        auto circ = dt_.incident_cells(current, k, l), done = circ;
+        do {
+          around.push_back(circ);
+        } while (++circ != done);
+      } else {
+        const int vertex = 6 - ties[0] - ties[1] - ties[2];
+        dt_.incident_cells(current->vertex(vertex), std::back_inserter(around));
+      }
+      for (const Cell_handle& c : around) {
+        if (c->info().stamp != stamp && !dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
+          next = c;
+          break;
+        }
+      }
+    }
+    if (next == Cell_handle()) {
+      // Degenerate: the segment runs inside a face or along an edge for a while.
+      WalkFallback(current, a, b, stamp, visit);
+      return steps;
+    }
+    current = next;
+  }
+  return steps;
+}
+
+// Exhaustive enumeration for degenerate segments: flood over cells whose closure meets the
+// closed segment (exact predicate), connected through shared vertices, and visit the unvisited
+// ones that the open segment crosses.
+template <typename Visit>
+void DelaunayManifold::Impl::WalkFallback(Cell_handle from, const Point& a, const Point& b,
+                                          uint32_t stamp, Visit& visit) const {
+  const Kernel::Segment_3 segment(a, b);
+  std::vector<Cell_handle> stack{from};
+  std::unordered_set<const void*> seen{&*from};
+  std::vector<Cell_handle> around;
+  while (!stack.empty()) {
+    const Cell_handle c = stack.back();
+    stack.pop_back();
+    if (dt_.is_infinite(c)) continue;
+    const Kernel::Tetrahedron_3 tet(c->vertex(0)->point(), c->vertex(1)->point(),
+                                    c->vertex(2)->point(), c->vertex(3)->point());
+    if (c != from && !CGAL::do_intersect(segment, tet)) continue;
+    if (c->info().stamp != stamp && SegmentCrossesCell(c, a, b)) {
+      c->info().stamp = stamp;
+      visit(c);
+    }
+    for (int i = 0; i < 4; ++i) {
+      around.clear();
+      dt_.incident_cells(c->vertex(i), std::back_inserter(around));
+      for (const Cell_handle& n : around) {
+        if (seen.insert(&*n).second) stack.push_back(n);
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Manifold tests
+
+// Would flipping t (into O if it is outside O, out of O otherwise) keep the surface manifold?
+// Fast test first (Lhuillier): count the vertices V, edges E and faces F that t shares with
+// the side it joins; some (V,E,F) are always safe. Otherwise test vertex regularity of t's
+// four vertices after the flip, the exact criterion.
+bool DelaunayManifold::Impl::FlipKeepsManifold(const Cell_handle& t) const {
+  const bool joining_outside = !t->info().outside;
+  const auto on_target_side = [&](const Cell_handle& c) {
+    return c != t && (joining_outside ? InO(c) : !InO(c));
+  };
+  int F = 0;
+  for (int i = 0; i < 4; ++i) F += on_target_side(t->neighbor(i));
+  int V = 0;
+  std::vector<Cell_handle> around;
+  for (int i = 0; i < 4; ++i) {
+    const Vertex_handle v = t->vertex(i);
+    if (joining_outside) {
+      V += v->info().outside_cells > 0;
+    } else {
+      around.clear();
+      dt_.incident_cells(v, std::back_inserter(around));
+      V += std::any_of(around.begin(), around.end(), on_target_side);
+    }
+  }
+  int E = 0;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i + 1; j < 4; ++j) {
+      auto circ = dt_.incident_cells(t, i, j), done = circ;
+      bool touches = false;
+      do {
+        touches = on_target_side(circ);
+      } while (!touches && ++circ != done);
+      E += touches;
+    }
+  }
+  if ((V == 0 && E == 0 && F == 0) || (V == 3 && E == 3 && F == 1) ||
+      (V == 4 && E == 5 && F == 2) || (V == 4 && E == 6 && (F == 3 || F == 4))) {
+    return true;
+  }
+  for (int i = 0; i < 4; ++i) {
+    if (!VertexRegular(t->vertex(i), t)) return false;
+  }
+  return true;
+}
+
+// A vertex is regular when the edges opposite to it in the surface faces around it form one
+// closed cycle (or there are none). `flipped` is evaluated with its label inverted.
+bool DelaunayManifold::Impl::VertexRegular(const Vertex_handle& v, const Cell_handle& flipped) const {
+  const auto label = [&](const Cell_handle& c) { return c == flipped ? !InO(c) : InO(c); };
+  std::vector<Cell_handle> around;
+  dt_.incident_cells(v, std::back_inserter(around));
+  std::vector<std::pair<Vertex_handle, Vertex_handle>> link;
+  for (const Cell_handle& c : around) {
+    if (!label(c)) continue;
+    for (int i = 0; i < 4; ++i) {
+      if (c->vertex(i) == v || label(c->neighbor(i))) continue;
+      Vertex_handle ends[2];
+      int n = 0;
+      for (int j = 0; j < 4; ++j) {
+        if (j != i && c->vertex(j) != v) ends[n++] = c->vertex(j);
+      }
+      link.emplace_back(ends[0], ends[1]);
+    }
+  }
+  if (link.empty()) return true;
+  // Every link vertex must have degree 2 and the edges must form a single cycle.
+  std::vector<std::pair<Vertex_handle, int>> degree;
+  for (const auto& [p, q] : link) {
+    for (const Vertex_handle& w : {p, q}) {
+      auto it = std::find_if(degree.begin(), degree.end(),
+                             [&](const auto& entry) { return entry.first == w; });
+      if (it == degree.end()) {
+        degree.emplace_back(w, 1);
+      } else if (++it->second > 2) {
+        return false;
+      }
+    }
+  }
+  for (const auto& entry : degree) {
+    if (entry.second != 2) return false;
+  }
+  // Walk the cycle from the first edge; it must use every edge.
+  const Vertex_handle first = link[0].first;
+  Vertex_handle previous = first, current = link[0].second;
+  size_t length = 1;
+  while (current != first) {
+    bool advanced = false;
+    for (const auto& [p, q] : link) {
+      const Vertex_handle other = p == current ? q : q == current ? p : Vertex_handle();
+      if (other != Vertex_handle() && other != previous) {
+        previous = current;
+        current = other;
+        advanced = true;
+        break;
+      }
+    }
+    if (!advanced) return false;
+    if (++length > link.size()) return false;
+  }
+  return length == link.size();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Growing
+
+void DelaunayManifold::Impl::Grow(const std::vector<Cell_handle>& seeds) {
+  std::priority_queue<QueueEntry> queue;
+  const auto push = [&](const Cell_handle& c) {
+    if (dt_.is_infinite(c) || c->info().outside || c->info().queued || !IsFree(c)) return;
+    c->info().queued = true;
+    queue.push({Weight(c), Key(c), c});
+  };
+  for (const Cell_handle& c : seeds) push(c);
+  std::vector<Cell_handle> refused;
+  for (;;) {
+    int64_t added = 0;
+    while (!queue.empty()) {
+      const Cell_handle c = queue.top().cell;
+      queue.pop();
+      c->info().queued = false;
+      if (c->info().outside) continue;
+      if (FlipKeepsManifold(c)) {
+        SetOutside(c, true);
+        ++added;
+        for (int i = 0; i < 4; ++i) push(c->neighbor(i));
+      } else {
+        refused.push_back(c);
+      }
+    }
+    // A cell refused earlier may be accepted now that O has changed around it: retry until
+    // a round adds nothing.
+    if (added == 0 || refused.empty()) break;
+    std::vector<Cell_handle> retry;
+    retry.swap(refused);
+    for (const Cell_handle& c : retry) push(c);
+  }
+  for (const Cell_handle& c : refused) c->info().queued = false;
+}
+
+int64_t DelaunayManifold::Impl::GrowFromHeaviest() {
+  const int64_t before = outside_count_;
+  for (;;) {
+    Cell_handle best;
+    QueueEntry best_entry{-1, {}, Cell_handle()};
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      if (c->info().outside || !IsFree(c)) continue;
+      if (outside_count_ > 0) {
+        // Later seeds must start a separate component: no vertex touching O.
+        bool touches = false;
+        for (int i = 0; i < 4; ++i) touches |= c->vertex(i)->info().outside_cells > 0;
+        if (touches) continue;
+      }
+      const QueueEntry entry{Weight(c), Key(c), c};
+      if (best == Cell_handle() || best_entry < entry) {
+        best = c;
+        best_entry = entry;
+      }
+    }
+    if (best == Cell_handle()) break;
+    Grow({best});
+    if (!options_.grow_all_components) break;
+  }
+  return outside_count_ - before;
+}
+
+std::vector<Cell_handle> DelaunayManifold::Impl::BoundarySeeds() const {
+  std::vector<Cell_handle> seeds;
+  for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+    if (c->info().outside) continue;
+    for (int i = 0; i < 4; ++i) {
+      if (InO(c->neighbor(i))) {
+        seeds.push_back(c);
+        break;
+      }
+    }
+  }
+  return seeds;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Build
+
+BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
+  if (built_) throw InternalError("DelaunayManifold::Build called twice");
+  built_ = true;
+  BuildStats stats;
+  stats.points = static_cast<int64_t>(points.size());
+  Timer timer;
+
+  // Bounding box of points and cameras, Steiner points around it.
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const RayPoint& p = points[i];
+    if (!p.position.allFinite()) {
+      throw InputError("point " + std::to_string(i) + ": position is not finite");
+    }
+    for (int32_t c : p.cameras) {
+      if (c < 0 || c >= static_cast<int32_t>(cameras_.size())) {
+        throw InputError("point " + std::to_string(i) + ": camera " + std::to_string(c) +
+                         " out of range (" + std::to_string(cameras_.size()) + " cameras)");
+      }
+    }
+    lo = lo.cwiseMin(p.position);
+    hi = hi.cwiseMax(p.position);
+  }
+  for (const ManifoldCamera& c : cameras_) {
+    lo = lo.cwiseMin(c.center);
+    hi = hi.cwiseMax(c.center);
+  }
+  if (!(lo.array() <= hi.array()).all()) throw InputError("no points and no cameras");
+  const std::vector<Eigen::Vector3d> steiner =
+      MakeSteinerPoints(lo, hi, options_.steiner_margin, options_.steiner_grid);
+  steiner_count_ = stats.steiner_points = static_cast<int64_t>(steiner.size());
+  box_min_ = Eigen::Vector3d::Constant(INFINITY);
+  box_max_ = -box_min_;
+  for (const Eigen::Vector3d& s : steiner) {
+    box_min_ = box_min_.cwiseMin(s);
+    box_max_ = box_max_.cwiseMax(s);
+  }
+
+  // (1) Point insertion: Steiner points and input points together (CGAL sorts spatially).
+  std::vector<std::pair<Point, VertexInfo>> vertices;
+  vertices.reserve(steiner.size() + points.size());
+  for (size_t k = 0; k < steiner.size(); ++k) {
+    vertices.push_back({ToPoint(steiner[k]), {static_cast<int32_t>(-1 - k), 0}});
+  }
+  for (size_t i = 0; i < points.size(); ++i) {
+    vertices.push_back({ToPoint(points[i].position), {static_cast<int32_t>(i), 0}});
+  }
+  dt_.insert(vertices.begin(), vertices.end());
+  positions_.reserve(points.size());
+  point_cameras_.reserve(points.size());
+  vertex_of_point_.assign(points.size(), Vertex_handle());
+  for (auto v = dt_.finite_vertices_begin(); v != dt_.finite_vertices_end(); ++v) {
+    if (v->info().id >= 0) vertex_of_point_[v->info().id] = v;
+  }
+  for (size_t i = 0; i < points.size(); ++i) {
+    positions_.push_back(points[i].position);
+    std::vector<int32_t> cams = points[i].cameras;
+    std::sort(cams.begin(), cams.end());
+    cams.erase(std::unique(cams.begin(), cams.end()), cams.end());
+    point_cameras_.push_back(std::move(cams));
+    if (vertex_of_point_[i] == Vertex_handle()) {
+      // Same position as another point: its rays end at that vertex.
+      Locate_type type;
+      int li, lj;
+      const Cell_handle c = dt_.locate(ToPoint(points[i].position), type, li, lj);
+      MS_CHECK(type == Delaunay::VERTEX) << "point " << i << " not found after insertion";
+      vertex_of_point_[i] = c->vertex(li);
+      ++stats.merged_duplicates;
+    }
+  }
+  stats.vertices = num_vertices();
+  stats.cells = num_cells();
+  stats.seconds_triangulation = timer.Seconds();
+  spdlog::info("manifold: Delaunay of {} points + {} Steiner points: {} cells in {:.2f} s",
+               points.size(), steiner.size(), stats.cells, stats.seconds_triangulation);
+
+  // (2) Ray tracing and weighting.
+  timer.Restart();
+  camera_points_.clear();
+  for (const ManifoldCamera& c : cameras_) camera_points_.push_back(ToPoint(c.center));
+  for (size_t c = 0; c < cameras_.size(); ++c) {
+    camera_cells_[c].valid = false;
+    StartOf(static_cast<int>(c));
+  }
+  int64_t total_rays = 0;
+  for (const auto& cams : point_cameras_) total_rays += static_cast<int64_t>(cams.size());
+  Progress progress("manifold: ray tracing", total_rays);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Vertex_handle target_vertex = vertex_of_point_[i];
+    const Point target = target_vertex->point();
+    const auto count = [&](const Cell_handle& c) { CountCrossing(c, target_vertex); };
+    for (int32_t c : point_cameras_[i]) {
+      stats.ray_cell_steps += Walk(StartOf(c), camera_points_[c], target, count);
+      ray_index_->Add(c, static_cast<int32_t>(i), positions_[i]);
+      ++stats.rays;
+      progress.Update(stats.rays);
+    }
+  }
+  ray_count_ = stats.rays;
+  stats.seconds_ray_tracing = timer.Seconds();
+  spdlog::info("manifold: traced {} rays ({} cell steps) in {:.2f} s ({:.0f} rays/s)", stats.rays,
+               stats.ray_cell_steps, stats.seconds_ray_tracing,
+               stats.seconds_ray_tracing > 0 ? stats.rays / stats.seconds_ray_tracing : 0.0);
+
+  // (3) Growing.
+  timer.Restart();
+  for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+    stats.free_cells += IsFree(c);
+  }
+  GrowFromHeaviest();
+  stats.outside_cells = outside_count_;
+  stats.seconds_growing = timer.Seconds();
+  spdlog::info("manifold: grew O to {} of {} free cells in {:.2f} s", stats.outside_cells,
+               stats.free_cells, stats.seconds_growing);
+  if (options_.validate_each_step) {
+    const std::string problem = Validate(true);
+    if (!problem.empty()) throw InternalError("manifold invalid after build: " + problem);
+  }
+  return stats;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Incremental insertion
+
+InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& points) {
+  MS_CHECK(built_) << "Insert before Build";
+  InsertionStats stats;
+  stats.requested = static_cast<int64_t>(points.size());
+  Timer timer;
+  Progress progress("manifold: inserting points", stats.requested);
+  std::vector<Cell_handle> conflicts, new_cells, around;
+  std::vector<std::pair<CellKey, Cell_handle>> shrink_set;
+  std::vector<Facet> boundary;
+  std::vector<RayRef> candidates;
+  Cell_handle hint;
+  for (size_t n = 0; n < points.size(); ++n) {
+    progress.Update(static_cast<int64_t>(n));
+    const RayPoint& rp = points[n];
+    if (!rp.position.allFinite()) {
+      throw InputError("new point " + std::to_string(n) + ": position is not finite");
+    }
+    for (int32_t c : rp.cameras) {
+      if (c < 0 || c >= static_cast<int32_t>(cameras_.size())) {
+        throw InputError("new point " + std::to_string(n) + ": camera " + std::to_string(c) +
+                         " out of range");
+      }
+    }
+    if (!((rp.position.array() > box_min_.array()).all() &&
+          (rp.position.array() < box_max_.array()).all())) {
+      ++stats.discarded_outside;
+      continue;
+    }
+    const Point p = ToPoint(rp.position);
+    Locate_type type;
+    int li, lj;
+    const Cell_handle located = dt_.locate(p, type, li, lj, hint);
+    if (type == Delaunay::VERTEX) {
+      ++stats.discarded_duplicate;
+      continue;
+    }
+    if (type == Delaunay::OUTSIDE_CONVEX_HULL || type == Delaunay::OUTSIDE_AFFINE_HULL) {
+      ++stats.discarded_outside;
+      continue;
+    }
+    conflicts.clear();
+    boundary.clear();
+    dt_.find_conflicts(p, located, std::back_inserter(boundary), std::back_inserter(conflicts));
+    if (std::any_of(conflicts.begin(), conflicts.end(),
+                    [&](const Cell_handle& c) { return dt_.is_infinite(c); })) {
+      ++stats.discarded_outside;
+      continue;
+    }
+
+    // Shrink: remove cells of E (D and its neighbourhood) from O where the surface stays
+    // manifold, repeating until nothing changes.
+    // D's cells come first, then the rest of E; stop as soon as D has left O.
+    const uint32_t stamp = NextStamp();
+    shrink_set.clear();
+    const auto add_to_shrink_set = [&](const Cell_handle& c) {
+      if (dt_.is_infinite(c) || c->info().stamp == stamp) return;
+      c->info().stamp = stamp;
+      if (c->info().outside) shrink_set.push_back({Key(c), c});
+    };
+    for (const Cell_handle& c : conflicts) add_to_shrink_set(c);
+    const size_t num_in_d = shrink_set.size();
+    for (const Cell_handle& c : conflicts) {
+      if (options_.shrink_neighbourhood == 0) {
+        for (int i = 0; i < 4; ++i) add_to_shrink_set(c->neighbor(i));
+      } else {
+        for (int i = 0; i < 4; ++i) {
+          around.clear();
+          dt_.incident_cells(c->vertex(i), std::back_inserter(around));
+          for (const Cell_handle& a : around) add_to_shrink_set(a);
+        }
+      }
+    }
+    const auto by_key = [](const auto& x, const auto& y) { return x.first < y.first; };
+    std::sort(shrink_set.begin(), shrink_set.begin() + num_in_d, by_key);
+    std::sort(shrink_set.begin() + num_in_d, shrink_set.end(), by_key);
+    size_t d_in_o = num_in_d;
+    for (bool changed = true; changed && d_in_o > 0;) {
+      changed = false;
+      for (size_t k = 0; k < shrink_set.size() && d_in_o > 0; ++k) {
+        const Cell_handle& c = shrink_set[k].second;
+        if (c->info().outside && FlipKeepsManifold(c)) {
+          SetOutside(c, false);
+          ++stats.shrunk_cells;
+          changed = true;
+          if (k < num_in_d) --d_in_o;
+        }
+      }
+    }
+    if (d_in_o > 0) {
+      ++stats.discarded_conflict;
+      hint = located;
+      continue;
+    }
+
+    // Rays that may cross the hole: conservative box query on the ray index.
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+    for (const Cell_handle& c : conflicts) {
+      if (c->info().has_camera) {
+        for (CameraStart& start : camera_cells_) {
+          if (start.valid && start.cell == c) start.valid = false;
+        }
+      }
+      for (int i = 0; i < 4; ++i) {
+        const Point& q = c->vertex(i)->point();
+        const Eigen::Vector3d x(q.x(), q.y(), q.z());
+        lo = lo.cwiseMin(x);
+        hi = hi.cwiseMax(x);
+      }
+    }
+    candidates.clear();
+    ray_index_->Query(lo, hi, &candidates);
+    stats.candidate_rays += static_cast<int64_t>(candidates.size());
+
+    const Vertex_handle v = dt_.insert_in_hole(p, conflicts.begin(), conflicts.end(),
+                                               boundary.front().first, boundary.front().second);
+    const int32_t id = static_cast<int32_t>(positions_.size());
+    v->info() = VertexInfo{id, 0};
+    new_cells.clear();
+    dt_.incident_cells(v, std::back_inserter(new_cells));
+    for (const Cell_handle& c : new_cells) c->info() = CellInfo{};
+    // New cells take the crossings of the old rays that pass through them (cells outside the
+    // hole keep theirs: their geometry did not change).
+    const double slack = 1e-9 * (hi - lo).norm();
+    for (const RayRef& ray : candidates) {
+      const Eigen::Vector3d& a = cameras_[ray.camera].center;
+      const Eigen::Vector3d& b = positions_[ray.point];
+      // Slab test of the segment against the hole's box.
+      double t0 = 0, t1 = 1;
+      bool misses = false;
+      for (int axis = 0; axis < 3 && !misses; ++axis) {
+        const double d = b[axis] - a[axis];
+        const double l = lo[axis] - slack, h = hi[axis] + slack;
+        if (std::abs(d) < 1e-300) {
+          misses = a[axis] < l || a[axis] > h;
+        } else {
+          double ta = (l - a[axis]) / d, tb = (h - a[axis]) / d;
+          if (ta > tb) std::swap(ta, tb);
+          t0 = std::max(t0, ta);
+          t1 = std::min(t1, tb);
+          misses = t0 > t1 + 1e-12;
+        }
+      }
+      if (misses) continue;
+      const Point pa = camera_points_[ray.camera];
+      const Vertex_handle target = vertex_of_point_[ray.point];
+      const Point pb = target->point();
+      for (const Cell_handle& c : new_cells) {
+        if (SegmentCrossesCell(c, pa, pb)) CountCrossing(c, target);
+      }
+    }
+    // The new point and its own rays.
+    positions_.push_back(rp.position);
+    std::vector<int32_t> cams = rp.cameras;
+    std::sort(cams.begin(), cams.end());
+    cams.erase(std::unique(cams.begin(), cams.end()), cams.end());
+    vertex_of_point_.push_back(v);
+    const auto count = [&](const Cell_handle& c) { CountCrossing(c, v); };
+    for (int32_t c : cams) {
+      Walk(StartOf(c), camera_points_[c], p, count);
+      ray_index_->Add(c, id, rp.position);
+      ++stats.new_rays;
+    }
+    ray_count_ += static_cast<int64_t>(cams.size());
+    point_cameras_.push_back(std::move(cams));
+    ++stats.inserted;
+    hint = v->cell();
+  }
+  stats.seconds_insertion = timer.Seconds();
+
+  // Regrow from the cells on the boundary of O.
+  timer.Restart();
+  Grow(BoundarySeeds());
+  if (outside_count_ == 0) GrowFromHeaviest();
+  stats.outside_cells = outside_count_;
+  stats.seconds_growing = timer.Seconds();
+  spdlog::info(
+      "manifold: {} new points: {} inserted, {} discarded (conflict {}, duplicate {}, outside "
+      "{}), {} cells shrunk; {:.2f} s inserting, {:.2f} s regrowing",
+      stats.requested, stats.inserted,
+      stats.discarded_conflict + stats.discarded_duplicate + stats.discarded_outside,
+      stats.discarded_conflict, stats.discarded_duplicate, stats.discarded_outside,
+      stats.shrunk_cells, stats.seconds_insertion, stats.seconds_growing);
+  if (options_.validate_each_step) {
+    const std::string problem = Validate(true);
+    if (!problem.empty()) throw InternalError("manifold invalid after insertion: " + problem);
+  }
+  return stats;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Surface extraction and validation
+
+Mesh DelaunayManifold::Impl::ExtractSurface(SurfaceInfo* info) const {
+  std::vector<std::array<int32_t, 3>> faces;  // by vertex id
+  std::unordered_map<int32_t, Vertex_handle> used;
+  for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+    if (!c->info().outside) continue;
+    for (int i = 0; i < 4; ++i) {
+      if (InO(c->neighbor(i))) continue;
+      // This vertex order makes the normal point into c, i.e. towards O (free space).
+      std::array<int32_t, 3> face;
+      for (int j = 0; j < 3; ++j) {
+        const Vertex_handle v = c->vertex(Delaunay::vertex_triple_index(i, j));
+        face[j] = v->info().id;
+        used.emplace(face[j], v);
+      }
+      // Rotate so the smallest id leads (keeps orientation), for a canonical order.
+      std::rotate(face.begin(), std::min_element(face.begin(), face.end()), face.end());
+      faces.push_back(face);
+    }
+  }
+  std::vector<int32_t> ids;
+  ids.reserve(used.size());
+  for (const auto& entry : used) ids.push_back(entry.first);
+  std::sort(ids.begin(), ids.end());
+  std::unordered_map<int32_t, int32_t> index_of;
+  Mesh mesh;
+  mesh.vertices.reserve(ids.size());
+  for (int32_t id : ids) {
+    const Point& p = used[id]->point();
+    index_of[id] = static_cast<int32_t>(mesh.vertices.size());
+    mesh.vertices.emplace_back(p.x(), p.y(), p.z());
+  }
+  std::sort(faces.begin(), faces.end());
+  mesh.faces.reserve(faces.size());
+  for (const auto& f : faces) mesh.faces.push_back({index_of[f[0]], index_of[f[1]], index_of[f[2]]});
+  if (info != nullptr) {
+    info->vertex_ids = ids;
+    info->steiner_vertices = std::count_if(ids.begin(), ids.end(), [](int32_t id) { return id < 0; });
+  }
+  return mesh;
+}
+
+std::string DelaunayManifold::Impl::Validate(bool check_weights) const {
+  std::ostringstream problems;
+  if (!dt_.is_valid(false)) problems << "CGAL triangulation invalid; ";
+  std::unordered_map<const void*, int32_t> outside_cells;
+  int64_t outside = 0;
+  for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
+    if (!c->info().outside) continue;
+    if (dt_.is_infinite(c)) {
+      problems << "an infinite cell is in O; ";
+      continue;
+    }
+    ++outside;
+    for (int i = 0; i < 4; ++i) ++outside_cells[&*c->vertex(i)];
+  }
+  if (outside != outside_count_) {
+    problems << "|O| is " << outside << " but bookkeeping says " << outside_count_ << "; ";
+  }
+  int64_t irregular = 0, bad_counts = 0;
+  for (auto v = dt_.finite_vertices_begin(); v != dt_.finite_vertices_end(); ++v) {
+    const auto it = outside_cells.find(&*v);
+    const int32_t expected = it == outside_cells.end() ? 0 : it->second;
+    if (v->info().outside_cells != expected) ++bad_counts;
+    if (!VertexRegular(v, Cell_handle())) ++irregular;
+  }
+  if (bad_counts > 0) problems << bad_counts << " vertices with a wrong count of cells in O; ";
+  if (irregular > 0) problems << irregular << " vertices are not regular (surface not manifold); ";
+  if (check_weights) {
+    std::unordered_map<const void*, std::array<int32_t, 5>> recount;  // crossings, ends[4]
+    auto* self = const_cast<Impl*>(this);
+    for (size_t i = 0; i < positions_.size(); ++i) {
+      const Vertex_handle target_vertex = vertex_of_point_[i];
+      const Point target = target_vertex->point();
+      const auto count = [&](const Cell_handle& c) {
+        auto& entry = recount.try_emplace(&*c, std::array<int32_t, 5>{0, 0, 0, 0, 0}).first->second;
+        ++entry[0];
+        int k;
+        if (c->has_vertex(target_vertex, k)) ++entry[1 + k];
+      };
+      for (int32_t c : point_cameras_[i]) {
+        CameraStart start;
+        start.cell = dt_.locate(camera_points_[c], start.type, start.li, start.lj);
+        start.valid = true;
+        self->Walk(start, camera_points_[c], target, count);
+      }
+    }
+    int64_t wrong = 0;
+    for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
+      const auto it = recount.find(&*c);
+      const std::array<int32_t, 5> expected =
+          it == recount.end() ? std::array<int32_t, 5>{0, 0, 0, 0, 0} : it->second;
+      const CellInfo& info = c->info();
+      if (info.crossings != expected[0] || info.ends[0] != expected[1] ||
+          info.ends[1] != expected[2] || info.ends[2] != expected[3] || info.ends[3] != expected[4]) {
+        ++wrong;
+      }
+    }
+    if (wrong > 0) problems << wrong << " cells whose ray count differs from a recount; ";
+  }
+  return problems.str();
+}
+
+// ---------------------------------------------------------------------------------------------
+
+DelaunayManifold::DelaunayManifold(std::vector<ManifoldCamera> cameras,
+                                   const ManifoldOptions& options)
+    : impl_(std::make_unique<Impl>(std::move(cameras), options)) {}
+DelaunayManifold::~DelaunayManifold() = default;
+BuildStats DelaunayManifold::Build(const std::vector<RayPoint>& points) { return impl_->Build(points); }
+InsertionStats DelaunayManifold::Insert(const std::vector<RayPoint>& points) {
+  return impl_->Insert(points);
+}
+Mesh DelaunayManifold::ExtractSurface(SurfaceInfo* info) const { return impl_->ExtractSurface(info); }
+std::string DelaunayManifold::Validate(bool check_weights) const {
+  return impl_->Validate(check_weights);
+}
+int64_t DelaunayManifold::num_points() const { return impl_->num_points(); }
+int64_t DelaunayManifold::num_vertices() const { return impl_->num_vertices(); }
+int64_t DelaunayManifold::num_cells() const { return impl_->num_cells(); }
+int64_t DelaunayManifold::num_outside_cells() const { return impl_->num_outside_cells(); }
+size_t DelaunayManifold::MemoryBytes() const { return impl_->MemoryBytes(); }
+
+void ManifoldOptions::Check() const {
+  const auto require = [](bool ok, const char* field, const char* rule) {
+    if (!ok) throw InputError(std::string("manifold option ") + field + ": " + rule);
+  };
+  require(std::isfinite(w1) && w1 > 0, "w1", "must be positive");
+  require(std::isfinite(w2) && w2 >= 0, "w2", "must be >= 0");
+  require(std::isfinite(free_threshold) && free_threshold > 0, "free-threshold", "must be positive");
+  require(std::isfinite(steiner_margin) && steiner_margin > 0, "steiner-margin", "must be positive");
+  require(steiner_grid >= 2 && steiner_grid <= 64, "steiner-grid", "must be in [2, 64]");
+  require(shrink_neighbourhood == 0 || shrink_neighbourhood == 1, "shrink-neighbourhood",
+          "must be 0 (face neighbours) or 1 (vertex neighbours)");
+}
+
+}  // namespace ms
+
+// ---------------------------------------------------------------------------------------------
+// Test hooks (coordinator/manifold_internal.h)
+
+namespace ms::manifold_internal {
+namespace {
+
+using PlainDelaunay = Delaunay;
+
+PlainDelaunay Triangulate(const std::vector<Eigen::Vector3d>& points) {
+  std::vector<std::pair<Point, VertexInfo>> vertices;
+  for (size_t i = 0; i < points.size(); ++i) {
+    vertices.push_back({ToPoint(points[i]), {static_cast<int32_t>(i), 0}});
+  }
+  PlainDelaunay dt(vertices.begin(), vertices.end());
+  return dt;
+}
+
+CellVertices SortedIds(const Cell_handle& c) {
+  CellVertices key;
+  for (int i = 0; i < 4; ++i) key[i] = c->vertex(i)->info().id;
+  std::sort(key.begin(), key.end());
+  return key;
+}
+
+}  // namespace
+
+bool SegmentCrossesTetrahedron(std::array<Eigen::Vector3d, 4> tet, const Eigen::Vector3d& a,
+                               const Eigen::Vector3d& b) {
+  std::vector<Eigen::Vector3d> points(tet.begin(), tet.end());
+  PlainDelaunay dt = Triangulate(points);
+  MS_CHECK(dt.number_of_finite_cells() == 1) << "degenerate tetrahedron";
+  return SegmentCrossesCell(dt.finite_cells_begin(), ToPoint(a), ToPoint(b));
+}
+
+std::vector<CellVertices> DelaunayCells(const std::vector<Eigen::Vector3d>& points) {
+  PlainDelaunay dt = Triangulate(points);
+  std::vector<CellVertices> cells;
+  for (auto c = dt.finite_cells_begin(); c != dt.finite_cells_end(); ++c) cells.push_back(SortedIds(c));
+  std::sort(cells.begin(), cells.end());
+  return cells;
+}
+
+}  // namespace ms::manifold_internal
+
+namespace ms {
+
+// Friend of DelaunayManifold::Impl for the hooks that need its internals.
+struct ManifoldTestAccess {
+  static bool IsVertexRegular(const std::vector<Eigen::Vector3d>& points,
+                              const std::vector<manifold_internal::CellVertices>& outside,
+                              int32_t v) {
+    DelaunayManifold::Impl impl({}, ManifoldOptions{});
+    impl.dt_ = manifold_internal::Triangulate(points);
+    Vertex_handle vertex;
+    for (auto c = impl.dt_.finite_cells_begin(); c != impl.dt_.finite_cells_end(); ++c) {
+      if (std::binary_search(outside.begin(), outside.end(), manifold_internal::SortedIds(c))) {
+        impl.SetOutside(c, true);
+      }
+    }
+    for (auto it = impl.dt_.finite_vertices_begin(); it != impl.dt_.finite_vertices_end(); ++it) {
+      if (it->info().id == v) vertex = it;
+    }
+    MS_CHECK(vertex != Vertex_handle()) << "no vertex " << v;
+    return impl.VertexRegular(vertex, Cell_handle());
+  }
+
+  static void CrossedCells(const std::vector<Eigen::Vector3d>& points,
+                           const Eigen::Vector3d& camera, int32_t target,
+                           std::vector<manifold_internal::CellVertices>* walked,
+                           std::vector<manifold_internal::CellVertices>* brute_force) {
+    ManifoldCamera cam;
+    cam.center = camera;
+    DelaunayManifold::Impl impl({cam}, ManifoldOptions{});
+    std::vector<RayPoint> rays(points.size());
+    for (size_t i = 0; i < points.size(); ++i) rays[i].position = points[i];
+    impl.Build(rays);
+    const Point a = impl.camera_points_[0];
+    const Point b = impl.vertex_of_point_[target]->point();
+    walked->clear();
+    impl.Walk(impl.StartOf(0), a, b,
+              [&](const Cell_handle& c) { walked->push_back(manifold_internal::SortedIds(c)); });
+    brute_force->clear();
+    for (auto c = impl.dt_.finite_cells_begin(); c != impl.dt_.finite_cells_end(); ++c) {
+      if (SegmentCrossesCell(c, a, b)) brute_force->push_back(manifold_internal::SortedIds(c));
+    }
+    std::sort(walked->begin(), walked->end());
+    std::sort(brute_force->begin(), brute_force->end());
+  }
+};
+
+namespace manifold_internal {
+bool IsVertexRegular(const std::vector<Eigen::Vector3d>& points,
+                     const std::vector<CellVertices>& outside, int32_t v) {
+  std::vector<CellVertices> sorted = outside;
+  std::sort(sorted.begin(), sorted.end());
+  return ManifoldTestAccess::IsVertexRegular(points, sorted, v);
+}
+void CrossedCells(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& camera,
+                  int32_t target, std::vector<CellVertices>* walked,
+                  std::vector<CellVertices>* brute_force) {
+  ManifoldTestAccess::CrossedCells(points, camera, target, walked, brute_force);
+}
+}  // namespace manifold_internal
+
+}  // namespace ms

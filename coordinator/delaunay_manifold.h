@@ -1,0 +1,108 @@
+// The coordinator's core state: a 3D Delaunay triangulation of the points (CGAL, exact
+// predicates), the visibility weights of its cells, and the set O of "outside" cells whose
+// boundary is the manifold surface (paper section 2.1 and 2.3, docs/manifold.md).
+//
+//   DelaunayManifold manifold(cameras, options);
+//   manifold.Build(points);              // Delaunay, ray tracing, growing
+//   Mesh mesh = manifold.ExtractSurface();
+//   manifold.Insert(new_points);         // shrink, insert or discard, regrow
+//
+// CGAL types stay inside delaunay_manifold.cc.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "coordinator/manifold_options.h"
+#include "mesh/mesh.h"
+
+namespace ms {
+
+// A camera as the manifold needs it: where it is and how it looks (for the ray index).
+struct ManifoldCamera {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // world -> camera
+  // Normalised image-coordinate extent of the camera's view (x/z, y/z), e.g. from intrinsics.
+  double u_min = -1, u_max = 1, v_min = -1, v_max = 1;
+};
+
+// A point and the cameras that see it (its viewing rays run camera centre -> point).
+struct RayPoint {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  std::vector<int32_t> cameras;
+};
+
+struct BuildStats {
+  int64_t points = 0;            // input points
+  int64_t merged_duplicates = 0; // points at the position of an earlier point
+  int64_t steiner_points = 0;
+  int64_t vertices = 0, cells = 0;
+  int64_t rays = 0, ray_cell_steps = 0;
+  int64_t free_cells = 0, outside_cells = 0;
+  double seconds_triangulation = 0, seconds_ray_tracing = 0, seconds_growing = 0;
+};
+
+struct InsertionStats {
+  int64_t requested = 0;
+  int64_t inserted = 0;
+  int64_t discarded_conflict = 0;   // D still met O after shrinking (the paper's rule)
+  int64_t discarded_duplicate = 0;  // same position as an existing vertex
+  int64_t discarded_outside = 0;    // outside the Steiner box
+  int64_t shrunk_cells = 0;         // cells removed from O while shrinking
+  int64_t candidate_rays = 0;       // rays re-examined for new cells
+  int64_t new_rays = 0;
+  int64_t outside_cells = 0;        // |O| after regrowing
+  double seconds_insertion = 0, seconds_growing = 0;
+};
+
+struct SurfaceInfo {
+  // For every mesh vertex: the id of the input point it is (>= 0), or -1 - k for Steiner
+  // point k.
+  std::vector<int32_t> vertex_ids;
+  int64_t steiner_vertices = 0;  // mesh vertices that are Steiner points
+};
+
+class DelaunayManifold {
+ public:
+  DelaunayManifold(std::vector<ManifoldCamera> cameras, const ManifoldOptions& options);
+  ~DelaunayManifold();
+  DelaunayManifold(const DelaunayManifold&) = delete;
+  DelaunayManifold& operator=(const DelaunayManifold&) = delete;
+
+  // Steps (1)-(3) of the paper: Delaunay triangulation of the points and the Steiner points,
+  // visibility ray tracing and weighting, growing of O from the heaviest free cell.
+  // Point ids are their indices in `points`. Throws InputError for a camera index out of
+  // range or non-finite input; may be called once.
+  BuildStats Build(const std::vector<RayPoint>& points);
+
+  // Incremental refinement (section 2.3): for each point in order, shrink O around its
+  // conflict region, discard it if the region still meets O, otherwise insert it and update
+  // the weights of the new cells exactly. Then regrow O from its boundary. New point ids
+  // continue after the existing ones.
+  InsertionStats Insert(const std::vector<RayPoint>& points);
+
+  // The surface between O and the rest, normals towards O (free space). Deterministic:
+  // vertices ordered by point id, faces sorted.
+  Mesh ExtractSurface(SurfaceInfo* info = nullptr) const;
+
+  // Full validity check: triangulation valid, no infinite cell in O, bookkeeping consistent,
+  // every vertex regular (the surface is a closed 2-manifold), and if check_weights the ray
+  // counts of every cell equal a recomputation from scratch. Returns "" if valid.
+  std::string Validate(bool check_weights = true) const;
+
+  int64_t num_points() const;       // input points so far (ids 0..num_points-1)
+  int64_t num_vertices() const;     // finite vertices incl. Steiner
+  int64_t num_cells() const;        // finite cells
+  int64_t num_outside_cells() const;
+  size_t MemoryBytes() const;       // estimate of the triangulation + ray data
+
+ private:
+  class Impl;
+  friend struct ManifoldTestAccess;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ms

@@ -1,0 +1,31 @@
+// Test hooks into delaunay_manifold.cc (no CGAL types). Not for production callers.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace ms::manifold_internal {
+
+using CellVertices = std::array<int32_t, 4>;  // sorted point indices
+
+// Exact: does the open segment (a, b) meet the open tetrahedron? (either orientation)
+bool SegmentCrossesTetrahedron(std::array<Eigen::Vector3d, 4> tet, const Eigen::Vector3d& a,
+                               const Eigen::Vector3d& b);
+
+// Finite cells of the Delaunay triangulation of `points` (no Steiner points).
+std::vector<CellVertices> DelaunayCells(const std::vector<Eigen::Vector3d>& points);
+
+// Is points[v] a regular vertex of the boundary of O when exactly `outside` cells (of
+// DelaunayCells(points)) are in O?
+bool IsVertexRegular(const std::vector<Eigen::Vector3d>& points,
+                     const std::vector<CellVertices>& outside, int32_t v);
+
+// Cells crossed by the open segment camera -> points[target] in a manifold built from
+// `points` (with Steiner points, ids -1-k): as found by the walk and by testing every cell.
+void CrossedCells(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& camera,
+                  int32_t target, std::vector<CellVertices>* walked,
+                  std::vector<CellVertices>* brute_force);
+
+}  // namespace ms::manifold_internal

@@ -1,0 +1,32 @@
+// Options of the manifold reconstruction (paper section 2.1 and 2.3).
+#pragma once
+
+namespace ms {
+
+struct ManifoldOptions {
+  // Ray tracing: every cell crossed by a camera->point segment gets w1, and each of its four
+  // face neighbours gets w2 (per crossing). A cell is free space when weight >= t_w.
+  double w1 = 4.0;              // paper: w_1 = 4.0
+  double w2 = 0.5;              // paper: w_2 = 0.5
+  double free_threshold = 4.0;  // paper: t_w = 4.0
+
+  // Steiner points on the faces of the bounding box of points and cameras, enlarged by
+  // steiner_margin x its diagonal, so flat or tiny inputs still triangulate in 3D and every
+  // camera lies inside the triangulation. steiner_grid points per box edge (>= 2: corners).
+  double steiner_margin = 0.5;
+  int steiner_grid = 3;
+
+  // Incremental insertion: E, the cells shrunk out of O before inserting a point, is the
+  // conflict region D plus its face neighbours (0) or every cell sharing a vertex with D (1).
+  int shrink_neighbourhood = 0;
+
+  // Grow from every free-space component (heaviest first) instead of only the heaviest cell.
+  bool grow_all_components = false;
+
+  // Debug: run the full validity check (labels, weights, manifold) after every step.
+  bool validate_each_step = false;
+
+  void Check() const;  // throws InputError naming the field
+};
+
+}  // namespace ms

@@ -1,0 +1,62 @@
+// Finds the viewing rays (camera -> point segments) that may cross a box, without storing
+// per-cell ray lists: per camera, rays are bucketed by the direction they leave the camera
+// (normalised image coordinates x/z, y/z) and keep the depth of their end point. A query
+// projects the box into each camera and returns the rays of the covered buckets that reach
+// the box's nearest depth. Conservative: it may return rays that miss the box, never omits
+// one that hits it.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace ms {
+
+struct RayRef {
+  int32_t camera;
+  int32_t point;
+  bool operator<(const RayRef& o) const {
+    return camera != o.camera ? camera < o.camera : point < o.point;
+  }
+  bool operator==(const RayRef& o) const { return camera == o.camera && point == o.point; }
+};
+
+class RayIndex {
+ public:
+  struct Camera {
+    Eigen::Matrix3d R;       // world -> camera
+    Eigen::Vector3d center;  // camera centre in world coordinates
+    // Extent of normalised coordinates covered by buckets (e.g. the image's frustum);
+    // rays outside go to an overflow list that every query returns.
+    double u_min = -1, u_max = 1, v_min = -1, v_max = 1;
+  };
+
+  // `grid`: buckets per side of each camera's grid.
+  RayIndex(std::vector<Camera> cameras, int grid = 64);
+
+  void Add(int32_t camera, int32_t point, const Eigen::Vector3d& position);
+  // Appends to `out` every ray that may intersect the closed box [min, max].
+  void Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max, std::vector<RayRef>* out) const;
+
+  size_t size() const { return size_; }
+  size_t MemoryBytes() const;
+  int num_cameras() const { return static_cast<int>(cameras_.size()); }
+
+ private:
+  struct Entry {
+    int32_t point;
+    float depth;  // camera-frame z of the end point
+  };
+  struct CameraBuckets {
+    Camera camera;
+    double du = 1, dv = 1;
+    std::vector<std::vector<Entry>> buckets;  // grid x grid
+    std::vector<Entry> overflow;              // outside the grid, or at depth <= 0
+    size_t count = 0;
+  };
+  std::vector<CameraBuckets> cameras_;
+  int grid_;
+  size_t size_ = 0;
+};
+
+}  // namespace ms

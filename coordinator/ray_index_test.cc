@@ -1,0 +1,78 @@
+#include "coordinator/ray_index.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <random>
+
+namespace ms {
+namespace {
+
+// Brute force: does the segment a-b meet the box? (dense sampling is enough for a superset
+// check because we only assert the index never misses a ray that clearly hits.)
+bool SegmentHitsBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& lo,
+                    const Eigen::Vector3d& hi) {
+  for (int i = 0; i <= 2000; ++i) {
+    const Eigen::Vector3d x = a + (b - a) * (i / 2000.0);
+    if ((x.array() >= lo.array()).all() && (x.array() <= hi.array()).all()) return true;
+  }
+  return false;
+}
+
+TEST(RayIndex, NeverMissesARayThatCrossesTheBox) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<RayIndex::Camera> cameras;
+  for (int c = 0; c < 4; ++c) {
+    RayIndex::Camera cam;
+    const double angle = c * 1.3;
+    cam.center = Eigen::Vector3d(4 * std::cos(angle), 4 * std::sin(angle), 0.5 * c);
+    // Look at the origin.
+    const Eigen::Vector3d z = -cam.center.normalized();
+    const Eigen::Vector3d x = Eigen::Vector3d::UnitZ().cross(z).normalized();
+    const Eigen::Vector3d y = z.cross(x);
+    cam.R.row(0) = x;
+    cam.R.row(1) = y;
+    cam.R.row(2) = z;
+    cam.u_min = cam.v_min = -0.4;
+    cam.u_max = cam.v_max = 0.4;  // some rays fall outside: overflow
+    cameras.push_back(cam);
+  }
+  RayIndex index(cameras, 16);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<RayRef> all;
+  for (int i = 0; i < 600; ++i) {
+    points.emplace_back(u(rng), u(rng), u(rng));
+    for (int c = 0; c < 4; ++c) {
+      if ((i + c) % 2 == 0) {
+        index.Add(c, i, points.back());
+        all.push_back({c, i});
+      }
+    }
+  }
+  EXPECT_EQ(index.size(), all.size());
+  for (int q = 0; q < 40; ++q) {
+    const Eigen::Vector3d center(u(rng), u(rng), u(rng));
+    const Eigen::Vector3d half = Eigen::Vector3d::Constant(0.05 + 0.2 * std::abs(u(rng)));
+    const Eigen::Vector3d lo = center - half, hi = center + half;
+    std::vector<RayRef> found;
+    index.Query(lo, hi, &found);
+    std::sort(found.begin(), found.end());
+    int hits = 0;
+    for (const RayRef& ray : all) {
+      if (SegmentHitsBox(cameras[ray.camera].center, points[ray.point], lo, hi)) {
+        ++hits;
+        EXPECT_TRUE(std::binary_search(found.begin(), found.end(), ray))
+            << "missed camera " << ray.camera << " point " << ray.point;
+      }
+    }
+    // Conservative but selective: far fewer candidates than rays.
+    EXPECT_LT(found.size(), all.size());
+    EXPECT_GE(static_cast<int>(found.size()), hits);
+  }
+}
+
+}  // namespace
+}  // namespace ms
