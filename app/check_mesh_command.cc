@@ -33,14 +33,14 @@ int RunCheckMesh(const CheckMeshCommandOptions& options) {
   const Mesh mesh = ReadMesh(options.mesh);
   const MeshReport report = CheckMesh(mesh, check);
   spdlog::debug("check-mesh: {} checked in {:.2f} s", options.mesh, timer.Seconds());
-  std::fputs(report.ToTable(options.mesh).c_str(), stdout);
-  if (!options.json.empty()) {
+  // With `--json -` stdout carries only the JSON (for jq and scripts); the table goes to stderr.
+  const bool json_to_stdout = options.json == "-";
+  std::fputs(report.ToTable(options.mesh).c_str(), json_to_stdout ? stderr : stdout);
+  if (json_to_stdout) {
+    std::fputs(report.ToJson(options.mesh).c_str(), stdout);
+  } else if (!options.json.empty()) {
     const std::string json = report.ToJson(options.mesh);
-    if (options.json == "-") {
-      std::fputs(json.c_str(), stdout);
-    } else {
-      WriteFileAtomically(options.json, [&](std::ostream& os) { os << json; }, false);
-    }
+    WriteFileAtomically(options.json, [&](std::ostream& os) { os << json; }, /*binary=*/false);
   }
   std::fflush(stdout);
   return report.is_valid ? kExitOk : kExitNotManifold;
@@ -59,7 +59,7 @@ void RegisterCheckMeshCommand(CLI::App& app) {
   cmd->add_flag("--allow-boundary", options->check.allow_boundary,
                 "accept a manifold with boundary (open fans) as valid")
       ->capture_default_str();
-  cmd->add_option("--json", options->json, "also write the report as JSON to this file ('-': stdout)");
+  cmd->add_option("--json", options->json, "also write the report as JSON to this file ('-': stdout, the table then goes to stderr)");
   cmd->add_flag("--no-self-intersections", options->no_self_intersections,
                 "skip the exact self-intersection test (the only slow check)")
       ->capture_default_str();
