@@ -15,7 +15,8 @@
 namespace ms::app {
 namespace {
 
-// Exit code for "read fine, not a valid manifold" (0 valid, 2 unreadable; see docs/mesh-checker.md).
+// Exit code for "read fine, not a valid manifold" (0 valid, 2 unreadable; see
+// docs/mesh-checker.md).
 constexpr int kExitNotManifold = 3;
 
 struct CheckMeshCommandOptions {
@@ -40,7 +41,8 @@ int RunCheckMesh(const CheckMeshCommandOptions& options) {
     std::fputs(report.ToJson(options.mesh).c_str(), stdout);
   } else if (!options.json.empty()) {
     const std::string json = report.ToJson(options.mesh);
-    WriteFileAtomically(options.json, [&](std::ostream& os) { os << json; }, /*binary=*/false);
+    WriteFileAtomically(
+        options.json, [&](std::ostream& os) { os << json; }, /*binary=*/false);
   }
   std::fflush(stdout);
   return report.is_valid ? kExitOk : kExitNotManifold;
@@ -59,7 +61,9 @@ void RegisterCheckMeshCommand(CLI::App& app) {
   cmd->add_flag("--allow-boundary", options->check.allow_boundary,
                 "accept a manifold with boundary (open fans) as valid")
       ->capture_default_str();
-  cmd->add_option("--json", options->json, "also write the report as JSON to this file ('-': stdout, the table then goes to stderr)");
+  cmd->add_option(
+      "--json", options->json,
+      "also write the report as JSON to this file ('-': stdout, the table then goes to stderr)");
   cmd->add_flag("--no-self-intersections", options->no_self_intersections,
                 "skip the exact self-intersection test (the only slow check)")
       ->capture_default_str();

@@ -4,10 +4,10 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/box_intersection_d.h>
 #include <CGAL/intersections.h>
-#include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -26,7 +26,11 @@ using Segment = Kernel::Segment_3;
 
 class DisjointSets {
  public:
-  explicit DisjointSets(size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
+  explicit DisjointSets(size_t n = 0) { Reset(n); }
+  void Reset(size_t n) {
+    parent_.resize(n);
+    std::iota(parent_.begin(), parent_.end(), 0);
+  }
   size_t Find(size_t x) {
     while (parent_[x] != x) {
       parent_[x] = parent_[parent_[x]];
@@ -97,9 +101,9 @@ enum FaceState : uint8_t {
 };
 
 struct HalfEdge {
-  int32_t lo, hi;   // undirected edge, lo < hi
+  int32_t lo, hi;  // undirected edge, lo < hi
   int64_t face;
-  bool forward;     // the face goes lo -> hi
+  bool forward;  // the face goes lo -> hi
 };
 
 struct ComponentAccumulator {
@@ -188,7 +192,8 @@ void FindSelfIntersections(const Mesh& mesh, const std::vector<Point>& points,
   std::sort(found.begin(), found.end());
   found.erase(std::unique(found.begin(), found.end()), found.end());
   report->num_self_intersections = static_cast<int64_t>(found.size());
-  for (const auto& pair : found) AddExample(&report->self_intersection_examples, pair, options.max_examples);
+  for (const auto& pair : found)
+    AddExample(&report->self_intersection_examples, pair, options.max_examples);
   const double seconds = timer.Seconds();
   if (seconds > 1.0) {
     spdlog::info("self-intersections: {} faces, {} box pairs tested, {} intersecting in {:.1f} s",
@@ -380,6 +385,7 @@ MeshReport CheckMesh(const Mesh& mesh, const MeshCheckOptions& options) {
     std::vector<int32_t> nodes;
     std::vector<std::array<int32_t, 2>> link;
     std::vector<int> degree;
+    DisjointSets link_sets;  // reused: one per vertex would allocate a million times
     for (int64_t v = 0; v < nv; ++v) {
       const int64_t begin = offsets[v], end = offsets[v + 1];
       if (begin == end) continue;
@@ -397,7 +403,7 @@ MeshReport CheckMesh(const Mesh& mesh, const MeshCheckOptions& options) {
       std::sort(nodes.begin(), nodes.end());
       nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
       degree.assign(nodes.size(), 0);
-      DisjointSets link_sets(nodes.size());
+      link_sets.Reset(nodes.size());
       size_t link_components = nodes.size();
       for (const auto& e : link) {
         const size_t a = std::lower_bound(nodes.begin(), nodes.end(), e[0]) - nodes.begin();
@@ -468,10 +474,9 @@ MeshReport CheckMesh(const Mesh& mesh, const MeshCheckOptions& options) {
     r.components.push_back(out);
   }
   if (all_have_genus) r.genus = genus_sum;
-  std::stable_sort(r.components.begin(), r.components.end(),
-                   [](const MeshComponent& a, const MeshComponent& b) {
-                     return a.num_faces > b.num_faces;
-                   });
+  std::stable_sort(
+      r.components.begin(), r.components.end(),
+      [](const MeshComponent& a, const MeshComponent& b) { return a.num_faces > b.num_faces; });
 
   // --- Self-intersections. -------------------------------------------------------------------
   r.self_intersections_checked = options.check_self_intersections;
@@ -510,9 +515,10 @@ std::vector<std::string> MeshReport::Problems() const {
         num_non_manifold_vertices, FormatList(non_manifold_vertex_examples)));
   }
   if (num_inconsistent_edges > 0) {
-    p.push_back(fmt::format("{} edges traversed twice in the same direction (e.g. {}): "
-                            "inconsistent orientation",
-                            num_inconsistent_edges, FormatEdges(inconsistent_edge_examples)));
+    p.push_back(
+        fmt::format("{} edges traversed twice in the same direction (e.g. {}): "
+                    "inconsistent orientation",
+                    num_inconsistent_edges, FormatEdges(inconsistent_edge_examples)));
   }
   if (num_degenerate_faces > 0) {
     p.push_back(fmt::format("{} degenerate faces with a repeated vertex or zero area (e.g. {})",
@@ -524,8 +530,8 @@ std::vector<std::string> MeshReport::Problems() const {
   }
   if (num_self_intersections > 0) {
     p.push_back(fmt::format("{}{} pairs of self-intersecting faces (e.g. {})",
-                            self_intersections_truncated ? "at least " : "",
-                            num_self_intersections, FormatPairs(self_intersection_examples)));
+                            self_intersections_truncated ? "at least " : "", num_self_intersections,
+                            FormatPairs(self_intersection_examples)));
   }
   return p;
 }

@@ -17,25 +17,25 @@
 namespace ms {
 
 struct MeshCheckOptions {
-  bool allow_boundary = false;            // valid = manifold with boundary (open fans allowed)
-  bool check_self_intersections = true;   // exact triangle-pair tests; the only slow check
-  int max_examples = 10;                  // indices listed per kind of problem in the report
+  bool allow_boundary = false;              // valid = manifold with boundary (open fans allowed)
+  bool check_self_intersections = true;     // exact triangle-pair tests; the only slow check
+  int max_examples = 10;                    // indices listed per kind of problem in the report
   int64_t max_self_intersections = 100000;  // stop the search after this many pairs
-  void Check() const;                     // throws InputError naming the field
+  void Check() const;                       // throws InputError naming the field
 };
 
 // One connected component: faces that share vertices, directly or through other faces.
 struct MeshComponent {
   int64_t num_vertices = 0;  // referenced by its non-degenerate faces
   int64_t num_edges = 0;
-  int64_t num_faces = 0;     // faces with three distinct indices
+  int64_t num_faces = 0;             // faces with three distinct indices
   int64_t euler_characteristic = 0;  // V - E + F
-  bool closed = false;       // no boundary edge
-  bool manifold = false;     // no non-manifold edge or vertex, no face with a repeated index
-  bool oriented = false;     // every two-face edge traversed once in each direction
-  bool orientable = false;   // faces could be flipped to make it oriented
-  std::optional<int64_t> genus;          // (2 - chi) / 2 when closed, manifold and orientable
-  std::optional<double> signed_volume;   // when closed, manifold and oriented; > 0: outward
+  bool closed = false;               // no boundary edge
+  bool manifold = false;         // no non-manifold edge or vertex, no face with a repeated index
+  bool oriented = false;         // every two-face edge traversed once in each direction
+  bool orientable = false;       // faces could be flipped to make it oriented
+  std::optional<int64_t> genus;  // (2 - chi) / 2 when closed, manifold and orientable
+  std::optional<double> signed_volume;  // when closed, manifold and oriented; > 0: outward
 };
 
 struct MeshReport {
@@ -45,17 +45,17 @@ struct MeshReport {
 
   int64_t num_vertices = 0;
   int64_t num_faces = 0;
-  int64_t num_edges = 0;                  // distinct undirected edges of non-degenerate faces
-  int64_t num_invalid_faces = 0;          // index out of range or a non-finite vertex
-  int64_t num_boundary_edges = 0;         // edges in exactly one face
-  int64_t num_non_manifold_edges = 0;     // edges in three or more faces
-  int64_t num_boundary_vertices = 0;      // regular but open fan (one path): on a boundary
-  int64_t num_non_manifold_vertices = 0;  // opposite edges are not one cycle or one path
-  int64_t num_inconsistent_edges = 0;     // two-face edges traversed twice the same way
-  int64_t num_degenerate_faces = 0;       // repeated index or zero area (exact)
-  int64_t num_duplicate_faces = 0;        // same vertex set as an earlier face
-  int64_t num_unreferenced_vertices = 0;  // in no face
-  int64_t num_self_intersections = 0;     // face pairs that meet other than at shared elements
+  int64_t num_edges = 0;                      // distinct undirected edges of non-degenerate faces
+  int64_t num_invalid_faces = 0;              // index out of range or a non-finite vertex
+  int64_t num_boundary_edges = 0;             // edges in exactly one face
+  int64_t num_non_manifold_edges = 0;         // edges in three or more faces
+  int64_t num_boundary_vertices = 0;          // regular but open fan (one path): on a boundary
+  int64_t num_non_manifold_vertices = 0;      // opposite edges are not one cycle or one path
+  int64_t num_inconsistent_edges = 0;         // two-face edges traversed twice the same way
+  int64_t num_degenerate_faces = 0;           // repeated index or zero area (exact)
+  int64_t num_duplicate_faces = 0;            // same vertex set as an earlier face
+  int64_t num_unreferenced_vertices = 0;      // in no face
+  int64_t num_self_intersections = 0;         // face pairs that meet other than at shared elements
   bool self_intersections_truncated = false;  // stopped at max_self_intersections
   int64_t num_components = 0;
   int64_t euler_characteristic = 0;       // sum over components

@@ -103,9 +103,11 @@ Mesh UvSphere(int rings, int segments) {
   auto id = [&](int r, int s) { return 1 + (r - 1) * segments + (s % segments); };
   for (int s = 0; s < segments; ++s) m.faces.push_back({0, id(1, s), id(1, s + 1)});
   for (int r = 1; r + 1 < rings; ++r) {
-    for (int s = 0; s < segments; ++s) AddQuad(&m, id(r, s), id(r + 1, s), id(r + 1, s + 1), id(r, s + 1));
+    for (int s = 0; s < segments; ++s)
+      AddQuad(&m, id(r, s), id(r + 1, s), id(r + 1, s + 1), id(r, s + 1));
   }
-  for (int s = 0; s < segments; ++s) m.faces.push_back({south, id(rings - 1, s + 1), id(rings - 1, s)});
+  for (int s = 0; s < segments; ++s)
+    m.faces.push_back({south, id(rings - 1, s + 1), id(rings - 1, s)});
   return m;
 }
 
@@ -452,7 +454,7 @@ TEST(MeshChecker, SelfIntersectionsMatchCgalPolygonMeshProcessing) {
       expected.insert({std::min(x, y), std::max(x, y)});
     }
     const std::set<std::array<int64_t, 2>> found(r.self_intersection_examples.begin(),
-                                                  r.self_intersection_examples.end());
+                                                 r.self_intersection_examples.end());
     EXPECT_EQ(found, expected) << "trial " << trial;
     EXPECT_EQ(r.num_self_intersections, static_cast<int64_t>(expected.size()));
     if (!expected.empty()) ++meshes_with_intersections;

@@ -45,8 +45,10 @@ MeshFormat MeshFormatFromPath(const std::string& path) {
 
 Mesh ParseMesh(std::string_view data, MeshFormat format, const std::string& name) {
   switch (format) {
-    case MeshFormat::kPly: return ParsePlyMesh(data, name);
-    case MeshFormat::kObj: return ParseObjMesh(data, name);
+    case MeshFormat::kPly:
+      return ParsePlyMesh(data, name);
+    case MeshFormat::kObj:
+      return ParseObjMesh(data, name);
   }
   throw InternalError("ParseMesh: unknown format");
 }

@@ -18,9 +18,9 @@ enum class MeshFormat { kPly, kObj };
 MeshFormat MeshFormatFromPath(const std::string& path);
 
 struct MeshWriteOptions {
-  bool binary = true;               // PLY: binary_little_endian (default) or ascii. OBJ: ignored.
-  bool float_coordinates = false;   // PLY: x y z as float (half the size) instead of double
-                                    // (exact: a checker then sees what the builder made).
+  bool binary = true;              // PLY: binary_little_endian (default) or ascii. OBJ: ignored.
+  bool float_coordinates = false;  // PLY: x y z as float (half the size) instead of double
+                                   // (exact: a checker then sees what the builder made).
 };
 
 // Reads .ply or .obj by extension. Faces with more than 3 corners are fan-triangulated

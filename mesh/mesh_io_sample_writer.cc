@@ -21,8 +21,7 @@ ms::Mesh SampleMesh() {
     for (int j = 0; j < k; ++j) {
       const double u = 2 * M_PI * i / n, v = 2 * M_PI * j / k;
       m.vertices.emplace_back((3.1 + std::cos(v)) * std::cos(u) + 1.0 / 3.0,
-                              (3.1 + std::cos(v)) * std::sin(u) - 1e3,
-                              std::sin(v) + 0.1 * i);
+                              (3.1 + std::cos(v)) * std::sin(u) - 1e3, std::sin(v) + 0.1 * i);
       m.vertex_colors.push_back({static_cast<uint8_t>(16 * i), static_cast<uint8_t>(28 * j),
                                  static_cast<uint8_t>((7 * i + 3 * j) % 256)});
     }
@@ -87,8 +86,8 @@ int main(int argc, char** argv) {
     ms::WritePointCloud(cloud, (dir / "points_binary.ply").string(), binary);
     ms::WritePointCloud(cloud, (dir / "points_ascii.ply").string(), ascii);
     const nlohmann::json expected = {{"mesh", ToJson(mesh)}, {"points", ToJson(cloud)}};
-    ms::WriteFileAtomically(dir / "expected.json",
-                            [&](std::ostream& os) { os << expected.dump() << "\n"; }, false);
+    ms::WriteFileAtomically(
+        dir / "expected.json", [&](std::ostream& os) { os << expected.dump() << "\n"; }, false);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mesh_io_sample_writer: %s\n", e.what());
     return 1;

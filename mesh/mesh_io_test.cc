@@ -19,7 +19,8 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
 fs::path TempDir() {
-  const fs::path dir = fs::temp_directory_path() / ("ms_mesh_io_test_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("ms_mesh_io_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   return dir;
 }
@@ -116,7 +117,8 @@ TEST(PlyIo, FloatCoordinatesRoundToFloat) {
     ASSERT_EQ(back.vertices.size(), mesh.vertices.size());
     for (size_t i = 0; i < mesh.vertices.size(); ++i) {
       for (int k = 0; k < 3; ++k) {
-        EXPECT_EQ(back.vertices[i][k], static_cast<double>(static_cast<float>(mesh.vertices[i][k])));
+        EXPECT_EQ(back.vertices[i][k],
+                  static_cast<double>(static_cast<float>(mesh.vertices[i][k])));
       }
     }
     EXPECT_EQ(back.faces, mesh.faces);
@@ -212,8 +214,8 @@ TEST(PlyIo, AsciiWithVertexIndexNameIntColoursAndUnknownElements) {
   EXPECT_EQ(m.vertices[4], Eigen::Vector3d(0.5, 0.5, -1));
   EXPECT_EQ(m.vertex_colors[0], (std::array<uint8_t, 3>{255, 0, 128}));
   EXPECT_EQ(m.vertex_colors[4], (std::array<uint8_t, 3>{51, 102, 153}));
-  EXPECT_EQ(m.faces, (std::vector<std::array<int32_t, 3>>{
-                         {0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {4, 3, 2}}));
+  EXPECT_EQ(m.faces,
+            (std::vector<std::array<int32_t, 3>>{{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {4, 3, 2}}));
 }
 
 TEST(PlyIo, PointCloudRoundTrips) {
@@ -288,20 +290,20 @@ TEST(PlyIo, TruncatedFilesFailNamingTheFile) {
 TEST(PlyIo, CountsLargerThanTheFileAreRejectedBeforeAllocating) {
   std::string s = BinaryTriangle();
   s.replace(s.find("vertex 3"), 8, "vertex 5");
-  ExpectInputError([&] { ParseMesh(s, MeshFormat::kPly, "count.ply"); }, "count.ply:3:",
-                   "count 5 needs at least 5 x 12 bytes");
+  ExpectInputError([&] { ParseMesh(s, MeshFormat::kPly, "count.ply"); },
+                   "count.ply:3:", "count 5 needs at least 5 x 12 bytes");
   std::string huge = BinaryTriangle();
   huge.replace(huge.find("face 1"), 6, "face 18446744073709551615");
-  ExpectInputError([&] { ParseMesh(huge, MeshFormat::kPly, "huge.ply"); }, "huge.ply:7:",
-                   "element face: count 18446744073709551615");
+  ExpectInputError([&] { ParseMesh(huge, MeshFormat::kPly, "huge.ply"); },
+                   "huge.ply:7:", "element face: count 18446744073709551615");
   std::string ascii_huge =
       "ply\nformat ascii 1.0\nelement vertex 1000000000000\nproperty float x\nproperty float y\n"
       "property float z\nend_header\n0 0 0\n";
   ExpectInputError([&] { ParseMesh(ascii_huge, MeshFormat::kPly, "ah.ply"); }, "ah.ply",
                    "element vertex: count 1000000000000");
   std::string overflow = "ply\nformat ascii 1.0\nelement vertex 99999999999999999999999\n";
-  ExpectInputError([&] { ParseMesh(overflow, MeshFormat::kPly, "o.ply"); }, "o.ply:3:",
-                   "not a non-negative integer");
+  ExpectInputError([&] { ParseMesh(overflow, MeshFormat::kPly, "o.ply"); },
+                   "o.ply:3:", "not a non-negative integer");
   // A list whose length runs past the data.
   std::string list = BinaryTriangle();
   list[list.size() - 13] = static_cast<char>(200);
@@ -319,8 +321,8 @@ TEST(PlyIo, NonFiniteCoordinatesAreRejected) {
   const std::string ascii =
       "ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty double y\n"
       "property double z\nend_header\n0 inf 0\n";
-  ExpectInputError([&] { ParseMesh(ascii, MeshFormat::kPly, "inf.ply"); }, "inf.ply:8:",
-                   "not finite");
+  ExpectInputError([&] { ParseMesh(ascii, MeshFormat::kPly, "inf.ply"); },
+                   "inf.ply:8:", "not finite");
 }
 
 TEST(PlyIo, BadIndicesAndFacesAreRejected) {
@@ -338,20 +340,20 @@ TEST(PlyIo, BadIndicesAndFacesAreRejected) {
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
       "0 0 0\n1 0 0\n0 1 0\n2 0 1\n";
-  ExpectInputError([&] { ParseMesh(two, MeshFormat::kPly, "two.ply"); }, "two.ply:13:",
-                   "at least 3 vertices");
+  ExpectInputError([&] { ParseMesh(two, MeshFormat::kPly, "two.ply"); },
+                   "two.ply:13:", "at least 3 vertices");
   const std::string neg_count =
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
       "property float z\nelement face 1\nproperty list char int vertex_indices\nend_header\n"
       "0 0 0\n1 0 0\n0 1 0\n-3 0 1 2\n";
-  ExpectInputError([&] { ParseMesh(neg_count, MeshFormat::kPly, "nc.ply"); }, "nc.ply:13:",
-                   "negative list length");
+  ExpectInputError([&] { ParseMesh(neg_count, MeshFormat::kPly, "nc.ply"); },
+                   "nc.ply:13:", "negative list length");
   const std::string range =
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
       "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
       "end_header\n0 0 0 1 2 3\n1 0 0 1 2 3\n0 1 0 1 256 3\n";
-  ExpectInputError([&] { ParseMesh(range, MeshFormat::kPly, "r.ply"); }, "r.ply:13:",
-                   "vertex 2: green: 256 is out of range");
+  ExpectInputError([&] { ParseMesh(range, MeshFormat::kPly, "r.ply"); },
+                   "r.ply:13:", "vertex 2: green: 256 is out of range");
 }
 
 TEST(PlyIo, MalformedHeadersAndLines) {
@@ -365,8 +367,8 @@ TEST(PlyIo, MalformedHeadersAndLines) {
                    "h.ply:2:", "unknown format");
   ExpectInputError([&] { ParseMesh("ply\nformat ascii 2.0\n" + body, MeshFormat::kPly, "h.ply"); },
                    "h.ply:2:", "version");
-  ExpectInputError([&] { ParseMesh("ply\n" + body, MeshFormat::kPly, "h.ply"); }, "h.ply:2:",
-                   "'format' must come before");
+  ExpectInputError([&] { ParseMesh("ply\n" + body, MeshFormat::kPly, "h.ply"); },
+                   "h.ply:2:", "'format' must come before");
   ExpectInputError(
       [&] {
         ParseMesh("ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\nend_header\n",
@@ -375,16 +377,18 @@ TEST(PlyIo, MalformedHeadersAndLines) {
       "h.ply:4:", "unknown type 'float128'");
   ExpectInputError(
       [&] {
-        ParseMesh("ply\nformat ascii 1.0\nelement vertex 1\nproperty list float int x\n"
-                  "end_header\n",
-                  MeshFormat::kPly, "h.ply");
+        ParseMesh(
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty list float int x\n"
+            "end_header\n",
+            MeshFormat::kPly, "h.ply");
       },
       "h.ply:4:", "count type must be an integer");
   ExpectInputError(
       [&] {
-        ParseMesh("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                  "end_header\n0 0\n",
-                  MeshFormat::kPly, "h.ply");
+        ParseMesh(
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+            "end_header\n0 0\n",
+            MeshFormat::kPly, "h.ply");
       },
       "h.ply:3:", "needs scalar properties x, y and z");
   ExpectInputError(
@@ -393,20 +397,23 @@ TEST(PlyIo, MalformedHeadersAndLines) {
                   MeshFormat::kPly, "h.ply");
       },
       "h.ply", "no 'vertex' element");
-  ExpectInputError([&] { ParseMesh("ply\nformat ascii 1.0\n" + body + "1 1 1\n", MeshFormat::kPly, "h.ply"); },
-                   "h.ply", "data continues after the last element");
+  ExpectInputError(
+      [&] { ParseMesh("ply\nformat ascii 1.0\n" + body + "1 1 1\n", MeshFormat::kPly, "h.ply"); },
+      "h.ply", "data continues after the last element");
   ExpectInputError(
       [&] {
-        ParseMesh("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
-                  "property float z\nend_header\n0 0 0 7\n1 1 1\n",
-                  MeshFormat::kPly, "h.ply");
+        ParseMesh(
+            "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+            "property float z\nend_header\n0 0 0 7\n1 1 1\n",
+            MeshFormat::kPly, "h.ply");
       },
       "h.ply:8:", "vertex 0: 4 values on the line, the header describes 3");
   ExpectInputError(
       [&] {
-        ParseMesh("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                  "property float z\nend_header\n0 zero 0\n",
-                  MeshFormat::kPly, "h.ply");
+        ParseMesh(
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+            "property float z\nend_header\n0 zero 0\n",
+            MeshFormat::kPly, "h.ply");
       },
       "h.ply:8:", "y: 'zero' is not a number");
   ExpectInputError(
@@ -417,9 +424,10 @@ TEST(PlyIo, MalformedHeadersAndLines) {
       "h.ply:5:", "declared twice");
   ExpectInputError(
       [&] {
-        ParseMesh("ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
-                  "property float z\nelement face 0\nproperty int foo\nend_header\n",
-                  MeshFormat::kPly, "h.ply");
+        ParseMesh(
+            "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 0\nproperty int foo\nend_header\n",
+            MeshFormat::kPly, "h.ply");
       },
       "h.ply:7:", "no list property vertex_indices");
 }
@@ -467,27 +475,33 @@ TEST(ObjIo, CornerFormsNegativeIndicesPolygonsAndIgnoredStatements) {
 TEST(ObjIo, MalformedFilesFailNamingFileAndLine) {
   ExpectInputError([] { ParseMesh("v 0 0 0\nv 1 0 0\nf 1 2 4\n", MeshFormat::kObj, "a.obj"); },
                    "a.obj:3:", "vertex index 4 is out of range");
-  ExpectInputError([] { ParseMesh("v 0 0 0\nv 1 0 0\nv 1 1 1\nf 1 2 0\n", MeshFormat::kObj, "b.obj"); },
-                   "b.obj:4:", "index 0");
+  ExpectInputError(
+      [] { ParseMesh("v 0 0 0\nv 1 0 0\nv 1 1 1\nf 1 2 0\n", MeshFormat::kObj, "b.obj"); },
+      "b.obj:4:", "index 0");
   ExpectInputError([] { ParseMesh("v 0 0 0\nv 1 0 0\nf -1 -2 -3\n", MeshFormat::kObj, "c.obj"); },
                    "c.obj:3:", "relative index");
-  ExpectInputError([] { ParseMesh("v 0 nan 0\n", MeshFormat::kObj, "d.obj"); }, "d.obj:1:",
-                   "vertex y: 'nan' is not finite");
-  ExpectInputError([] { ParseMesh("v 0 0\n", MeshFormat::kObj, "e.obj"); }, "e.obj:1:",
-                   "found 2 numbers");
+  ExpectInputError([] { ParseMesh("v 0 nan 0\n", MeshFormat::kObj, "d.obj"); },
+                   "d.obj:1:", "vertex y: 'nan' is not finite");
+  ExpectInputError([] { ParseMesh("v 0 0\n", MeshFormat::kObj, "e.obj"); },
+                   "e.obj:1:", "found 2 numbers");
   ExpectInputError([] { ParseMesh("v 0 0 0\nv 1 0 0\nf 1 2\n", MeshFormat::kObj, "f.obj"); },
                    "f.obj:3:", "at least 3 corners");
-  ExpectInputError([] { ParseMesh("v 0 0 0\nv 1 0 0\nv 1 1 1\nf 1 x 3\n", MeshFormat::kObj, "g.obj"); },
-                   "g.obj:4:", "'x' does not start with a vertex index");
   ExpectInputError(
-      [] { ParseMesh("v 0 0 0\nv 1 0 0\nv 1 1 1\nf 1 2 99999999999999999999\n", MeshFormat::kObj, "h.obj"); },
+      [] { ParseMesh("v 0 0 0\nv 1 0 0\nv 1 1 1\nf 1 x 3\n", MeshFormat::kObj, "g.obj"); },
+      "g.obj:4:", "'x' does not start with a vertex index");
+  ExpectInputError(
+      [] {
+        ParseMesh("v 0 0 0\nv 1 0 0\nv 1 1 1\nf 1 2 99999999999999999999\n", MeshFormat::kObj,
+                  "h.obj");
+      },
       "h.obj:4:", "does not start with a vertex index");
 }
 
 TEST(MeshIo, PathsAndExtensions) {
   EXPECT_EQ(MeshFormatFromPath("a/b.PLY"), MeshFormat::kPly);
   EXPECT_EQ(MeshFormatFromPath("x.Obj"), MeshFormat::kObj);
-  ExpectInputError([] { MeshFormatFromPath("mesh.stl"); }, "mesh.stl", "unknown mesh file extension");
+  ExpectInputError([] { MeshFormatFromPath("mesh.stl"); }, "mesh.stl",
+                   "unknown mesh file extension");
   ExpectInputError([] { ReadMesh("/nonexistent/mesh.ply"); }, "/nonexistent/mesh.ply", "not found");
   ExpectInputError([] { WriteMesh(Mesh{}, "out.off"); }, "out.off", "extension");
   Mesh bad = ColoredPyramid();

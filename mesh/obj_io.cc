@@ -39,7 +39,8 @@ int64_t ParseCorner(const TextReader& reader, std::string_view token, int64_t nu
   if (ec != std::errc() || ptr != head.data() + head.size() || head.empty()) {
     reader.Fail("face corner '" + std::string(token) + "' does not start with a vertex index");
   }
-  if (index == 0) reader.Fail("face corner '" + std::string(token) + "': index 0 (OBJ counts from 1)");
+  if (index == 0)
+    reader.Fail("face corner '" + std::string(token) + "': index 0 (OBJ counts from 1)");
   if (index < 0) {
     // Relative to the vertices defined so far: -1 is the last one.
     const int64_t absolute = num_vertices + index + 1;
@@ -91,7 +92,8 @@ Mesh ParseObjMesh(std::string_view data, const std::string& name) {
       }
       const auto num_vertices = static_cast<int64_t>(mesh.vertices.size());
       polygon.clear();
-      for (size_t k = 1; k < f.size(); ++k) polygon.push_back(ParseCorner(reader, f[k], num_vertices));
+      for (size_t k = 1; k < f.size(); ++k)
+        polygon.push_back(ParseCorner(reader, f[k], num_vertices));
       for (size_t k = 1; k + 1 < polygon.size(); ++k) {
         triangles.push_back({polygon[0], polygon[k], polygon[k + 1]});
         triangle_lines.push_back(reader.line_number());

@@ -24,18 +24,31 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Types and header model.
 
-enum class PlyType : uint8_t { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
+enum class PlyType : uint8_t {
+  kInt8,
+  kUint8,
+  kInt16,
+  kUint16,
+  kInt32,
+  kUint32,
+  kFloat32,
+  kFloat64
+};
 
 size_t TypeSize(PlyType t) {
   switch (t) {
     case PlyType::kInt8:
-    case PlyType::kUint8: return 1;
+    case PlyType::kUint8:
+      return 1;
     case PlyType::kInt16:
-    case PlyType::kUint16: return 2;
+    case PlyType::kUint16:
+      return 2;
     case PlyType::kInt32:
     case PlyType::kUint32:
-    case PlyType::kFloat32: return 4;
-    case PlyType::kFloat64: return 8;
+    case PlyType::kFloat32:
+      return 4;
+    case PlyType::kFloat64:
+      return 8;
   }
   return 1;
 }
@@ -44,22 +57,33 @@ bool IsIntegerType(PlyType t) { return t != PlyType::kFloat32 && t != PlyType::k
 
 int64_t TypeMin(PlyType t) {
   switch (t) {
-    case PlyType::kInt8: return INT8_MIN;
-    case PlyType::kInt16: return INT16_MIN;
-    case PlyType::kInt32: return INT32_MIN;
-    default: return 0;
+    case PlyType::kInt8:
+      return INT8_MIN;
+    case PlyType::kInt16:
+      return INT16_MIN;
+    case PlyType::kInt32:
+      return INT32_MIN;
+    default:
+      return 0;
   }
 }
 
 int64_t TypeMax(PlyType t) {
   switch (t) {
-    case PlyType::kInt8: return INT8_MAX;
-    case PlyType::kUint8: return UINT8_MAX;
-    case PlyType::kInt16: return INT16_MAX;
-    case PlyType::kUint16: return UINT16_MAX;
-    case PlyType::kInt32: return INT32_MAX;
-    case PlyType::kUint32: return UINT32_MAX;
-    default: return 0;
+    case PlyType::kInt8:
+      return INT8_MAX;
+    case PlyType::kUint8:
+      return UINT8_MAX;
+    case PlyType::kInt16:
+      return INT16_MAX;
+    case PlyType::kUint16:
+      return UINT16_MAX;
+    case PlyType::kInt32:
+      return INT32_MAX;
+    case PlyType::kUint32:
+      return UINT32_MAX;
+    default:
+      return 0;
   }
 }
 
@@ -77,7 +101,18 @@ std::optional<PlyType> ParseTypeName(std::string_view s) {
 
 // Where a property's value goes.
 enum class Slot : uint8_t {
-  kSkip, kX, kY, kZ, kNx, kNy, kNz, kRed, kGreen, kBlue, kScalar, kIndices
+  kSkip,
+  kX,
+  kY,
+  kZ,
+  kNx,
+  kNy,
+  kNz,
+  kRed,
+  kGreen,
+  kBlue,
+  kScalar,
+  kIndices
 };
 
 struct PlyProperty {
@@ -165,7 +200,8 @@ PlyHeader ParseHeader(std::string_view data, const std::string& name) {
       have_format = true;
       continue;
     }
-    if (!have_format) FailAtLine(name, line_number, "'format' must come before '" + std::string(key) + "'");
+    if (!have_format)
+      FailAtLine(name, line_number, "'format' must come before '" + std::string(key) + "'");
     if (key == "element") {
       if (w.size() != 3) FailAtLine(name, line_number, "expected 'element <name> <count>'");
       PlyElement element;
@@ -247,8 +283,8 @@ uint64_t MinInstanceBytes(const PlyElement& element, PlyEncoding encoding) {
 // Counts claimed by the header must fit in the bytes that follow it.
 void CheckCountsAgainstSize(const PlyHeader& header, size_t data_size, const std::string& name) {
   // An ASCII file may omit the final newline.
-  uint64_t remaining = data_size - header.data_offset +
-                       (header.encoding == PlyEncoding::kAscii ? 1 : 0);
+  uint64_t remaining =
+      data_size - header.data_offset + (header.encoding == PlyEncoding::kAscii ? 1 : 0);
   for (const PlyElement& element : header.elements) {
     const uint64_t each = MinInstanceBytes(element, header.encoding);
     if (each == 0) continue;
@@ -301,12 +337,18 @@ class BinarySource {
   double ReadNumber(PlyType t, const PlyProperty& p) {
     Need(TypeSize(t), p);
     switch (t) {
-      case PlyType::kInt8: return static_cast<int8_t>(Raw<uint8_t>());
-      case PlyType::kUint8: return Raw<uint8_t>();
-      case PlyType::kInt16: return static_cast<int16_t>(Raw<uint16_t>());
-      case PlyType::kUint16: return Raw<uint16_t>();
-      case PlyType::kInt32: return static_cast<int32_t>(Raw<uint32_t>());
-      case PlyType::kUint32: return Raw<uint32_t>();
+      case PlyType::kInt8:
+        return static_cast<int8_t>(Raw<uint8_t>());
+      case PlyType::kUint8:
+        return Raw<uint8_t>();
+      case PlyType::kInt16:
+        return static_cast<int16_t>(Raw<uint16_t>());
+      case PlyType::kUint16:
+        return Raw<uint16_t>();
+      case PlyType::kInt32:
+        return static_cast<int32_t>(Raw<uint32_t>());
+      case PlyType::kUint32:
+        return Raw<uint32_t>();
       case PlyType::kFloat32: {
         const uint32_t u = Raw<uint32_t>();
         float f;
@@ -327,13 +369,20 @@ class BinarySource {
   int64_t ReadInteger(PlyType t, const PlyProperty& p) {
     Need(TypeSize(t), p);
     switch (t) {
-      case PlyType::kInt8: return static_cast<int8_t>(Raw<uint8_t>());
-      case PlyType::kUint8: return Raw<uint8_t>();
-      case PlyType::kInt16: return static_cast<int16_t>(Raw<uint16_t>());
-      case PlyType::kUint16: return Raw<uint16_t>();
-      case PlyType::kInt32: return static_cast<int32_t>(Raw<uint32_t>());
-      case PlyType::kUint32: return Raw<uint32_t>();
-      default: break;
+      case PlyType::kInt8:
+        return static_cast<int8_t>(Raw<uint8_t>());
+      case PlyType::kUint8:
+        return Raw<uint8_t>();
+      case PlyType::kInt16:
+        return static_cast<int16_t>(Raw<uint16_t>());
+      case PlyType::kUint16:
+        return Raw<uint16_t>();
+      case PlyType::kInt32:
+        return static_cast<int32_t>(Raw<uint32_t>());
+      case PlyType::kUint32:
+        return Raw<uint32_t>();
+      default:
+        break;
     }
     Fail(p.name + ": not an integer type");
   }
@@ -349,7 +398,9 @@ class BinarySource {
   }
 
   // Largest list length that can still fit.
-  uint64_t MaxListItems(PlyType item_type) const { return reader_.remaining() / TypeSize(item_type); }
+  uint64_t MaxListItems(PlyType item_type) const {
+    return reader_.remaining() / TypeSize(item_type);
+  }
 
   // Skips whole instances of an element made of scalars only.
   bool TrySkipFixedInstances(const PlyElement& element, uint64_t count) {
@@ -445,8 +496,7 @@ class AsciiSource {
  private:
   std::string_view Next(const PlyProperty& p) {
     if (next_ >= fields_.size()) {
-      Fail(p.name + ": missing (the line has only " + std::to_string(fields_.size()) +
-           " values)");
+      Fail(p.name + ": missing (the line has only " + std::to_string(fields_.size()) + " values)");
     }
     return fields_[next_++];
   }
@@ -519,7 +569,8 @@ PlyProperty* FindProperty(PlyElement& element, std::initializer_list<const char*
 
 // Assigns slots for the properties we keep; leaves the rest kSkip. Returns false for a group
 // (normals, colours) that is incomplete, which is then skipped.
-bool AssignGroup(PlyElement& element, const std::array<std::initializer_list<const char*>, 3>& names,
+bool AssignGroup(PlyElement& element,
+                 const std::array<std::initializer_list<const char*>, 3>& names,
                  const std::array<Slot, 3>& slots) {
   std::array<PlyProperty*, 3> found{};
   for (int i = 0; i < 3; ++i) {
@@ -560,14 +611,14 @@ void ReadElements(Source& source, PlyHeader& header, const PlyWants& wants, PlyD
                    std::to_string(wants.max_vertices) + ")");
   }
   const bool has_normals =
-      wants.normals && AssignGroup(*vertex, {{{"nx", "normal_x"}, {"ny", "normal_y"},
-                                              {"nz", "normal_z"}}},
-                                   {Slot::kNx, Slot::kNy, Slot::kNz});
-  const bool has_colors =
-      wants.colors &&
-      AssignGroup(*vertex, {{{"red", "diffuse_red", "r"}, {"green", "diffuse_green", "g"},
-                             {"blue", "diffuse_blue", "b"}}},
-                  {Slot::kRed, Slot::kGreen, Slot::kBlue});
+      wants.normals &&
+      AssignGroup(*vertex, {{{"nx", "normal_x"}, {"ny", "normal_y"}, {"nz", "normal_z"}}},
+                  {Slot::kNx, Slot::kNy, Slot::kNz});
+  const bool has_colors = wants.colors && AssignGroup(*vertex,
+                                                      {{{"red", "diffuse_red", "r"},
+                                                        {"green", "diffuse_green", "g"},
+                                                        {"blue", "diffuse_blue", "b"}}},
+                                                      {Slot::kRed, Slot::kGreen, Slot::kBlue});
   bool has_scalars = false;
   if (wants.scalars) {
     if (PlyProperty* q = FindProperty(*vertex, {"quality", "scalar"}); q && !q->is_list) {
@@ -582,7 +633,8 @@ void ReadElements(Source& source, PlyHeader& header, const PlyWants& wants, PlyD
                  "element face has no list property vertex_indices (or vertex_index)");
     }
     if (!IsIntegerType(indices->type)) {
-      FailAtLine(name, indices->line, "face " + indices->name + ": index type must be an integer type");
+      FailAtLine(name, indices->line,
+                 "face " + indices->name + ": index type must be an integer type");
     }
     indices->slot = Slot::kIndices;
   }
@@ -696,8 +748,7 @@ PlyData ParsePly(std::string_view data, const std::string& name, const PlyWants&
       throw InputError(name + ": data continues after the last element the header announces");
     }
   } else {
-    BinarySource source(name, data, header.data_offset,
-                        header.encoding == PlyEncoding::kBinaryBig);
+    BinarySource source(name, data, header.data_offset, header.encoding == PlyEncoding::kBinaryBig);
     ReadElements(source, header, wants, &out, name);
     trailing = source.TrailingBytes();
     // Some writers pad; the counts already matched, so a warning is enough.
