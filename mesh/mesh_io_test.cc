@@ -323,6 +323,16 @@ TEST(PlyIo, NonFiniteCoordinatesAreRejected) {
       "property double z\nend_header\n0 inf 0\n";
   ExpectInputError([&] { ParseMesh(ascii, MeshFormat::kPly, "inf.ply"); },
                    "inf.ply:8:", "not finite");
+  std::string overflow = ascii;
+  overflow.replace(overflow.find("0 inf 0"), 7, "0 1e999 0");
+  ExpectInputError([&] { ParseMesh(overflow, MeshFormat::kPly, "big.ply"); },
+                   "big.ply:8:", "y: value is not finite");
+  std::string underflow = ascii;
+  underflow.replace(underflow.find("0 inf 0"), 7, "0 1e-999 4.9e-324");
+  EXPECT_EQ(ParseMesh(underflow, MeshFormat::kPly, "small.ply").vertices[0],
+            Eigen::Vector3d(0, 0, 4.9e-324));
+  ExpectInputError([] { ParseMesh("v 1 -1e400 0\n", MeshFormat::kObj, "big.obj"); },
+                   "big.obj:1:", "not finite");
 }
 
 TEST(PlyIo, BadIndicesAndFacesAreRejected) {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 
 #include "base/error.h"
 #include "base/text_reader.h"
@@ -22,7 +23,9 @@ double ParseObjReal(const TextReader& reader, std::string_view token, const char
   if (!digits.empty() && digits.front() == '+') digits.remove_prefix(1);
   double value = 0;
   const auto [ptr, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
-  if (ec != std::errc() || ptr != digits.data() + digits.size() || digits.empty()) {
+  if (ec == std::errc::result_out_of_range && ptr == digits.data() + digits.size()) {
+    value = std::strtod(std::string(digits).c_str(), nullptr);  // underflow: 0, overflow: inf
+  } else if (ec != std::errc() || ptr != digits.data() + digits.size() || digits.empty()) {
     reader.Fail(std::string(field) + ": '" + std::string(token) + "' is not a number");
   }
   if (!std::isfinite(value)) {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <optional>
@@ -525,8 +526,9 @@ class AsciiSource {
     if (!digits.empty() && digits.front() == '+') digits.remove_prefix(1);
     double value = 0;
     const auto [ptr, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
-    if (ec == std::errc::result_out_of_range) {
-      Fail(p.name + ": '" + std::string(token) + "' is out of range");
+    if (ec == std::errc::result_out_of_range && ptr == digits.data() + digits.size()) {
+      // Underflow reads as 0 (as strtod does), overflow as infinity (rejected where it matters).
+      return std::strtod(std::string(digits).c_str(), nullptr);
     }
     if (ec != std::errc() || ptr != digits.data() + digits.size() || digits.empty()) {
       Fail(p.name + ": '" + std::string(token) + "' is not a number");

@@ -1,11 +1,12 @@
-// libFuzzer target for the OBJ reader. Any input must either parse or throw ms::InputError.
-// Build with -DMANISWEEP_FUZZ=ON (clang), run e.g.
+// libFuzzer target for the OBJ reader and the mesh checker. Any input must either parse or throw
+// ms::InputError. Build with -DMANISWEEP_FUZZ=ON (clang), run e.g.
 //   build-fuzz/mesh/obj_fuzz -max_total_time=60 -rss_limit_mb=2048 corpus/
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
 
 #include "base/error.h"
+#include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -19,6 +20,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     for (const auto& v : mesh.vertices) {
       if (!v.allFinite()) __builtin_trap();
+    }
+    // The checker must digest whatever the reader accepts (non-manifold, degenerate, ...).
+    if (mesh.NumFaces() <= 4096) {
+      const ms::MeshReport report = ms::CheckMesh(mesh);
+      if (report.is_valid && !report.Problems().empty()) __builtin_trap();
+      if (report.ToJson().empty() || report.ToTable().empty()) __builtin_trap();
     }
   } catch (const ms::InputError&) {
   }
