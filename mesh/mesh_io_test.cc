@@ -465,7 +465,7 @@ TEST(ObjIo, CornerFormsNegativeIndicesPolygonsAndIgnoredStatements) {
       "f -4//1 -2//1 -1//1\n"
       "f 1/1 3/1 4/1\n"
       "l 1 2\n"
-      "f 5 6 7\n"
+      "f 5 6 7  # forward references\n"
       "v 0 0 1\nv 1 0 1\nv 0 1 1\n";
   const Mesh m = ParseMesh(s, MeshFormat::kObj, "c.obj");
   EXPECT_EQ(m.NumVertices(), 7u);

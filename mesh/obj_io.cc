@@ -71,7 +71,9 @@ Mesh ParseObjMesh(std::string_view data, const std::string& name) {
   size_t ignored_statements = 0;
   std::string_view line;
   while (reader.NextDataLine(&line, '#')) {
+    line = line.substr(0, line.find('#'));  // a comment may also end a statement
     const std::vector<std::string_view> f = SplitFields(line);
+    if (f.empty()) continue;
     const std::string_view key = f[0];
     if (key == "v") {
       if (f.size() != 4 && f.size() != 5 && f.size() != 7) {
