@@ -117,12 +117,18 @@ std::vector<char> PackStrings(const std::vector<const std::string*>& strings, si
 // a width: FixedStringType.
 H5::DataType FileType(H5Type type) {
   switch (type) {
-    case H5Type::kFloat64: return H5::PredType::IEEE_F64LE;
-    case H5Type::kFloat32: return H5::PredType::IEEE_F32LE;
-    case H5Type::kInt32: return H5::PredType::STD_I32LE;
-    case H5Type::kInt64: return H5::PredType::STD_I64LE;
-    case H5Type::kUInt8: return H5::PredType::STD_U8LE;
-    case H5Type::kString: break;
+    case H5Type::kFloat64:
+      return H5::PredType::IEEE_F64LE;
+    case H5Type::kFloat32:
+      return H5::PredType::IEEE_F32LE;
+    case H5Type::kInt32:
+      return H5::PredType::STD_I32LE;
+    case H5Type::kInt64:
+      return H5::PredType::STD_I64LE;
+    case H5Type::kUInt8:
+      return H5::PredType::STD_U8LE;
+    case H5Type::kString:
+      break;
   }
   MS_CHECK(false) << "bad H5Type";
   return H5::PredType::IEEE_F64LE;
@@ -130,12 +136,18 @@ H5::DataType FileType(H5Type type) {
 
 H5::DataType MemoryType(H5Type type) {
   switch (type) {
-    case H5Type::kFloat64: return H5::PredType::NATIVE_DOUBLE;
-    case H5Type::kFloat32: return H5::PredType::NATIVE_FLOAT;
-    case H5Type::kInt32: return H5::PredType::NATIVE_INT32;
-    case H5Type::kInt64: return H5::PredType::NATIVE_INT64;
-    case H5Type::kUInt8: return H5::PredType::NATIVE_UINT8;
-    case H5Type::kString: break;
+    case H5Type::kFloat64:
+      return H5::PredType::NATIVE_DOUBLE;
+    case H5Type::kFloat32:
+      return H5::PredType::NATIVE_FLOAT;
+    case H5Type::kInt32:
+      return H5::PredType::NATIVE_INT32;
+    case H5Type::kInt64:
+      return H5::PredType::NATIVE_INT64;
+    case H5Type::kUInt8:
+      return H5::PredType::NATIVE_UINT8;
+    case H5Type::kString:
+      break;
   }
   MS_CHECK(false) << "bad H5Type";
   return H5::PredType::NATIVE_DOUBLE;
@@ -143,12 +155,18 @@ H5::DataType MemoryType(H5Type type) {
 
 size_t MemorySize(H5Type type) {
   switch (type) {
-    case H5Type::kFloat64: return 8;
-    case H5Type::kFloat32: return 4;
-    case H5Type::kInt32: return 4;
-    case H5Type::kInt64: return 8;
-    case H5Type::kUInt8: return 1;
-    case H5Type::kString: return sizeof(std::string);
+    case H5Type::kFloat64:
+      return 8;
+    case H5Type::kFloat32:
+      return 4;
+    case H5Type::kInt32:
+      return 4;
+    case H5Type::kInt64:
+      return 8;
+    case H5Type::kUInt8:
+      return 1;
+    case H5Type::kString:
+      return sizeof(std::string);
   }
   return 8;
 }
@@ -157,18 +175,28 @@ size_t MemorySize(H5Type type) {
 std::string DescribeStoredType(const H5::DataType& type) {
   const size_t bits = type.getSize() * 8;
   switch (type.getClass()) {
-    case H5T_FLOAT: return "float" + std::to_string(bits);
+    case H5T_FLOAT:
+      return "float" + std::to_string(bits);
     case H5T_INTEGER:
       return (H5Tget_sign(type.getId()) == H5T_SGN_NONE ? "uint" : "int") + std::to_string(bits);
-    case H5T_STRING: return type.isVariableStr() ? "string" : "fixed-length string";
-    case H5T_COMPOUND: return "compound";
-    case H5T_ENUM: return "enum";
-    case H5T_ARRAY: return "array";
-    case H5T_VLEN: return "variable-length sequence";
-    case H5T_REFERENCE: return "reference";
-    case H5T_OPAQUE: return "opaque";
-    case H5T_BITFIELD: return "bitfield";
-    default: return "unknown type";
+    case H5T_STRING:
+      return type.isVariableStr() ? "string" : "fixed-length string";
+    case H5T_COMPOUND:
+      return "compound";
+    case H5T_ENUM:
+      return "enum";
+    case H5T_ARRAY:
+      return "array";
+    case H5T_VLEN:
+      return "variable-length sequence";
+    case H5T_REFERENCE:
+      return "reference";
+    case H5T_OPAQUE:
+      return "opaque";
+    case H5T_BITFIELD:
+      return "bitfield";
+    default:
+      return "unknown type";
   }
 }
 
@@ -187,8 +215,10 @@ std::optional<H5Type> ExactType(const H5::DataType& type) {
       if (!is_signed && size == 1) return H5Type::kUInt8;
       return std::nullopt;
     }
-    case H5T_STRING: return H5Type::kString;
-    default: return std::nullopt;
+    case H5T_STRING:
+      return H5Type::kString;
+    default:
+      return std::nullopt;
   }
 }
 
@@ -197,8 +227,7 @@ bool Converts(const H5::DataType& stored, H5Type target) {
   const size_t size = stored.getSize();
   switch (stored.getClass()) {
     case H5T_FLOAT:
-      return (target == H5Type::kFloat64 && size <= 8) ||
-             (target == H5Type::kFloat32 && size <= 4);
+      return (target == H5Type::kFloat64 && size <= 8) || (target == H5Type::kFloat32 && size <= 4);
     case H5T_INTEGER: {
       const bool is_signed = H5Tget_sign(stored.getId()) != H5T_SGN_NONE;
       if (target == H5Type::kUInt8) return !is_signed && size <= 1;
@@ -206,8 +235,10 @@ bool Converts(const H5::DataType& stored, H5Type target) {
       const size_t width = MemorySize(target);
       return is_signed ? size <= width : size < width;
     }
-    case H5T_STRING: return target == H5Type::kString;
-    default: return false;
+    case H5T_STRING:
+      return target == H5Type::kString;
+    default:
+      return false;
   }
 }
 
@@ -243,7 +274,8 @@ std::optional<H5Value> WidenTo(const H5Value& value, H5Type column) {
     case H5Type::kInt32:
       if (const uint8_t* u = std::get_if<uint8_t>(&value)) return H5Value(int32_t{*u});
       return std::nullopt;
-    default: return std::nullopt;
+    default:
+      return std::nullopt;
   }
 }
 
@@ -260,12 +292,18 @@ static_assert(std::is_same_v<std::variant_alternative_t<3, H5Value>, int64_t>);
 
 std::string H5TypeName(H5Type type) {
   switch (type) {
-    case H5Type::kFloat64: return "float64";
-    case H5Type::kFloat32: return "float32";
-    case H5Type::kInt32: return "int32";
-    case H5Type::kInt64: return "int64";
-    case H5Type::kUInt8: return "uint8";
-    case H5Type::kString: return "string";
+    case H5Type::kFloat64:
+      return "float64";
+    case H5Type::kFloat32:
+      return "float32";
+    case H5Type::kInt32:
+      return "int32";
+    case H5Type::kInt64:
+      return "int64";
+    case H5Type::kUInt8:
+      return "uint8";
+    case H5Type::kString:
+      return "string";
   }
   return "unknown";
 }
@@ -306,9 +344,9 @@ void H5FileOptions::Check() const {
 // ---------------------------------------------------------------------------------------------
 
 struct H5File::Impl {
-  std::string path;       // what the user named, used in messages
-  fs::path temp_path;     // Create(): where the file is written until Commit()
-  bool pending = false;   // Create() and not yet committed
+  std::string path;      // what the user named, used in messages
+  fs::path temp_path;    // Create(): where the file is written until Commit()
+  bool pending = false;  // Create() and not yet committed
   bool writable = false;
   H5FileOptions options;
   std::optional<H5::H5File> file;
@@ -412,9 +450,14 @@ struct H5File::Impl {
     if (!ExistsChecked(object)) Fail(object, "not found");
     OpenedObject opened;
     switch (ObjectType(object)) {
-      case H5O_TYPE_GROUP: opened.group.emplace(file->openGroup(object)); break;
-      case H5O_TYPE_DATASET: opened.dataset.emplace(file->openDataSet(object)); break;
-      default: Fail(object, "is neither a group nor a dataset");
+      case H5O_TYPE_GROUP:
+        opened.group.emplace(file->openGroup(object));
+        break;
+      case H5O_TYPE_DATASET:
+        opened.dataset.emplace(file->openDataSet(object));
+        break;
+      default:
+        Fail(object, "is neither a group nor a dataset");
     }
     return opened;
   }
@@ -473,7 +516,8 @@ struct H5File::Impl {
 
   // Shape of a simple dataspace with rank 1..kH5MaxRank.
   H5Shape ShapeOf(const std::string& object, const H5::DataSpace& space) const {
-    if (space.getSimpleExtentType() != H5S_SIMPLE) Fail(object, "is a scalar or empty, not an array");
+    if (space.getSimpleExtentType() != H5S_SIMPLE)
+      Fail(object, "is a scalar or empty, not an array");
     const int rank = space.getSimpleExtentNdims();
     if (rank < 1 || rank > kH5MaxRank) {
       Fail(object, "has rank " + std::to_string(rank) + "; 1.." + std::to_string(kH5MaxRank) +
@@ -490,7 +534,8 @@ struct H5File::Impl {
     bool overflow = false;
     const uint64_t n = CheckedProduct(shape, &overflow);
     const auto too_big = [&](uint64_t element_bytes) {
-      return overflow || (element_bytes != 0 && n > std::numeric_limits<uint64_t>::max() / element_bytes);
+      return overflow ||
+             (element_bytes != 0 && n > std::numeric_limits<uint64_t>::max() / element_bytes);
     };
     const std::string claim = "claims shape " + H5ShapeString(shape);
     if (too_big(stored_element_bytes) || too_big(memory_element_bytes)) {
@@ -533,13 +578,13 @@ struct H5File::Impl {
     if (stored.isVariableStr()) {
       const H5::StrType memory = VariableStringType(H5Tget_cset(stored.getId()));
       std::vector<char*> buffer(n, nullptr);
-      dataset.read(buffer.data(), memory, space, space);
-      struct Reclaim {  // frees HDF5's strings even if copying throws
+      struct Reclaim {  // frees HDF5's strings whatever happens (null entries are skipped)
         std::vector<char*>& b;
         const H5::DataType& t;
         const H5::DataSpace& s;
         ~Reclaim() { H5Dvlen_reclaim(t.getId(), s.getId(), H5P_DEFAULT, b.data()); }
       } reclaim{buffer, memory, space};
+      dataset.read(buffer.data(), memory, space, space);
       for (uint64_t i = 0; i < n; ++i) {
         if (buffer[i]) values[i] = buffer[i];
       }
@@ -550,7 +595,8 @@ struct H5File::Impl {
       // the memory type too (HDF5 has no ASCII <-> UTF-8 conversion).
       dataset.read(buffer.data(), stored, space, space);
       const bool space_padded = H5Tget_strpad(stored.getId()) == H5T_STR_SPACEPAD;
-      for (uint64_t i = 0; i < n; ++i) values[i] = FixedString(buffer.data() + i * width, width, space_padded);
+      for (uint64_t i = 0; i < n; ++i)
+        values[i] = FixedString(buffer.data() + i * width, width, space_padded);
     }
     return values;
   }
@@ -568,9 +614,9 @@ struct H5File::Impl {
     if (!owner.attrExists(name)) Fail(object, "attribute '" + name + "' not found");
     auto attribute = std::make_unique<H5::Attribute>(owner.openAttribute(name));
     const H5::DataSpace space = attribute->getSpace();
-    const bool scalar = space.getSimpleExtentType() == H5S_SCALAR ||
-                        (space.getSimpleExtentType() == H5S_SIMPLE &&
-                         space.getSimpleExtentNpoints() == 1);
+    const bool scalar =
+        space.getSimpleExtentType() == H5S_SCALAR ||
+        (space.getSimpleExtentType() == H5S_SIMPLE && space.getSimpleExtentNpoints() == 1);
     if (!scalar) Fail(object, "attribute '" + name + "' is not a single value");
     return attribute;
   }
@@ -611,8 +657,8 @@ struct H5File::Impl {
                           const H5::Attribute& attribute) const {
     const H5::DataType stored = attribute.getDataType();
     if (stored.getClass() != H5T_STRING) {
-      Fail(object, "attribute '" + name + "' is " + DescribeStoredType(stored) +
-                       ", expected a string");
+      Fail(object,
+           "attribute '" + name + "' is " + DescribeStoredType(stored) + ", expected a string");
     }
     if (stored.isVariableStr()) {
       const H5::StrType memory = VariableStringType(H5Tget_cset(stored.getId()));
@@ -768,9 +814,8 @@ bool H5File::Exists(const std::string& object) const {
 bool H5File::IsGroup(const std::string& object) const {
   const Impl& im = impl();
   const std::string name = im.Normalize(object);
-  return im.Guard(name, "cannot look up", [&] {
-    return im.ExistsChecked(name) && im.ObjectType(name) == H5O_TYPE_GROUP;
-  });
+  return im.Guard(name, "cannot look up",
+                  [&] { return im.ExistsChecked(name) && im.ObjectType(name) == H5O_TYPE_GROUP; });
 }
 
 bool H5File::IsDataset(const std::string& object) const {
@@ -809,8 +854,7 @@ void H5File::CreateGroup(const std::string& group) {
 }
 
 template <typename T>
-void H5File::Write(const std::string& dataset, const std::vector<T>& values,
-                   const H5Shape& shape) {
+void H5File::Write(const std::string& dataset, const std::vector<T>& values, const H5Shape& shape) {
   static_assert(kIsH5Element<T>, "H5File::Write: unsupported element type");
   Impl& im = impl();
   const std::string name = im.Normalize(dataset);
@@ -832,8 +876,9 @@ void H5File::Write(const std::string& dataset, const std::vector<T>& values,
   im.Guard(name, "cannot write dataset", [&] {
     const std::vector<hsize_t> dims(shape.begin(), shape.end());
     const H5::DataSpace space(static_cast<int>(dims.size()), dims.data());
-    const H5::DataType file_type =
-        std::is_same_v<T, std::string> ? H5::DataType(FixedStringType(width)) : FileType(TypeOf<T>());
+    const H5::DataType file_type = std::is_same_v<T, std::string>
+                                       ? H5::DataType(FixedStringType(width))
+                                       : FileType(TypeOf<T>());
     const size_t stored_bytes = std::is_same_v<T, std::string> ? width : sizeof(T);
     const H5::DSetCreatPropList dcpl = im.CreationProperties(dims, stored_bytes);
     im.PrepareNewDataset(name);
@@ -865,8 +910,7 @@ std::vector<T> H5File::Read(const std::string& dataset, const H5Shape& expected,
       matches = expected[i] == kH5Any || expected[i] == actual[i];
     }
     if (!matches) {
-      im.Fail(name, "has shape " + H5ShapeString(actual) + ", expected " +
-                        H5ShapeString(expected));
+      im.Fail(name, "has shape " + H5ShapeString(actual) + ", expected " + H5ShapeString(expected));
     }
     const H5::DataType stored = ds.getDataType();
     if (!Converts(stored, TypeOf<T>())) {
@@ -908,8 +952,8 @@ H5DatasetInfo H5File::Info(const std::string& dataset) const {
     info.compressed = dcpl.getNfilters() > 0;
     std::vector<hsize_t> max_dims(info.shape.size());
     space.getSimpleExtentDims(nullptr, max_dims.data());
-    info.extendible = std::any_of(max_dims.begin(), max_dims.end(),
-                                  [](hsize_t d) { return d == H5S_UNLIMITED; });
+    info.extendible =
+        std::any_of(max_dims.begin(), max_dims.end(), [](hsize_t d) { return d == H5S_UNLIMITED; });
     return info;
   });
 }
@@ -921,8 +965,7 @@ void H5File::SetIntAttribute(const std::string& object, const std::string& name,
   im.SetAttribute(im.Normalize(object), name, H5::PredType::STD_I64LE, &value);
 }
 
-void H5File::SetDoubleAttribute(const std::string& object, const std::string& name,
-                                double value) {
+void H5File::SetDoubleAttribute(const std::string& object, const std::string& name, double value) {
   Impl& im = impl();
   im.SetAttribute(im.Normalize(object), name, H5::PredType::IEEE_F64LE, &value);
 }
@@ -960,13 +1003,13 @@ double H5File::ReadDoubleAttribute(const std::string& object, const std::string&
                                          H5::PredType::NATIVE_DOUBLE);
 }
 
-std::string H5File::ReadStringAttribute(const std::string& object,
-                                        const std::string& name) const {
+std::string H5File::ReadStringAttribute(const std::string& object, const std::string& name) const {
   const Impl& im = impl();
   const std::string normalized = im.Normalize(object);
   return im.Guard(normalized, ("cannot read attribute '" + name + "'").c_str(), [&] {
     const Impl::OpenedObject owner = im.OpenObject(normalized);
-    const std::unique_ptr<H5::Attribute> attribute = im.OpenAttribute(normalized, name, owner.get());
+    const std::unique_ptr<H5::Attribute> attribute =
+        im.OpenAttribute(normalized, name, owner.get());
     return im.StringValue(normalized, name, *attribute);
   });
 }
@@ -1033,7 +1076,8 @@ void H5File::CreateTable(const std::string& table, const std::vector<H5Column>& 
       im.Fail(name, "bad column name '" + columns[i].name + "' (use [A-Za-z0-9_])");
     }
     for (size_t j = 0; j < i; ++j) {
-      if (columns[j].name == columns[i].name) im.Fail(name, "duplicate column '" + columns[i].name + "'");
+      if (columns[j].name == columns[i].name)
+        im.Fail(name, "duplicate column '" + columns[i].name + "'");
     }
   }
   im.Guard(name, "cannot create table", [&] {
@@ -1048,8 +1092,9 @@ void H5File::CreateTable(const std::string& table, const std::vector<H5Column>& 
       const hsize_t chunk[1] = {im.options.table_chunk_rows};
       dcpl.setChunk(1, chunk);
       group.createDataSet(column.name,
-                          column.type == H5Type::kString ? H5::DataType(FixedStringType(column.string_width))
-                                                         : FileType(column.type),
+                          column.type == H5Type::kString
+                              ? H5::DataType(FixedStringType(column.string_width))
+                              : FileType(column.type),
                           space, dcpl);
       list += (list.empty() ? "" : ",") + column.name;
     }
@@ -1143,10 +1188,9 @@ std::vector<T> H5File::ReadColumn(const std::string& table, const std::string& c
   return Read<T>(H5Join(impl().Normalize(table), column), {rows});
 }
 
-#define MS_INSTANTIATE_H5(T)                                                                 \
-  template void H5File::Write<T>(const std::string&, const std::vector<T>&, const H5Shape&); \
-  template std::vector<T> H5File::Read<T>(const std::string&, const H5Shape&, H5Shape*)     \
-      const;                                                                                 \
+#define MS_INSTANTIATE_H5(T)                                                                   \
+  template void H5File::Write<T>(const std::string&, const std::vector<T>&, const H5Shape&);   \
+  template std::vector<T> H5File::Read<T>(const std::string&, const H5Shape&, H5Shape*) const; \
   template std::vector<T> H5File::ReadColumn<T>(const std::string&, const std::string&) const;
 MS_INSTANTIATE_H5(double)
 MS_INSTANTIATE_H5(float)

@@ -74,7 +74,8 @@ struct H5Column {
   // back from a variable-length string column written by another tool.
   uint32_t string_width = 64;
   bool operator==(const H5Column& o) const {
-    return name == o.name && type == o.type && (type != H5Type::kString || string_width == o.string_width);
+    return name == o.name && type == o.type &&
+           (type != H5Type::kString || string_width == o.string_width);
   }
 };
 using H5Value = std::variant<double, float, int32_t, int64_t, uint8_t, std::string>;

@@ -7,10 +7,10 @@
 
 #include <cmath>
 #include <cstdlib>
-#include <iostream>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <limits>
 #include <random>
 
@@ -65,8 +65,9 @@ void WriteBytes(const std::string& path, const std::string& bytes) {
 TEST_F(H5FileTest, EveryTypeRoundTripsExactly) {
   const std::string path = Path("sub/dir/all.h5");  // parent directories are created
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  const std::vector<double> doubles = {1.0 / 3,   -0.0,    nan, std::numeric_limits<double>::infinity(),
-                                       1e-310, 1e308, 2.5, -7, 0.1, 0.2, 0.3, 42};
+  const std::vector<double> doubles = {1.0 / 3, -0.0,  nan, std::numeric_limits<double>::infinity(),
+                                       1e-310,  1e308, 2.5, -7,
+                                       0.1,     0.2,   0.3, 42};
   const std::vector<float> floats = {std::nanf("0x123"), -0.0f, 1e-40f, 3.25f};
   const std::vector<int32_t> int32s = {std::numeric_limits<int32_t>::min(), -1, 0,
                                        std::numeric_limits<int32_t>::max()};
@@ -121,7 +122,7 @@ TEST_F(H5FileTest, EveryTypeRoundTripsExactly) {
   EXPECT_FALSE(file.HasAttribute("/missing", "note"));
 
   EXPECT_EQ(file.List("/"), (std::vector<std::string>{"a", "bytes", "empty", "empty_strings",
-                                                       "numbers", "strings"}));
+                                                      "numbers", "strings"}));
   EXPECT_EQ(file.List("/numbers"),
             (std::vector<std::string>{"doubles", "floats", "int32", "int64"}));
   EXPECT_TRUE(file.Exists("/a/b/c"));
@@ -162,7 +163,8 @@ TEST_F(H5FileTest, ReadsForeignStringLayouts) {
     file.createDataSet("spaced", spaced, H5::DataSpace(1, two)).write("ab    cdef  ", spaced);
     H5::StrType terminated(H5::PredType::C_S1, 4);
     terminated.setStrpad(H5T_STR_NULLTERM);
-    file.createDataSet("terminated", terminated, H5::DataSpace(1, two)).write("ab\0\0abc\0", terminated);
+    file.createDataSet("terminated", terminated, H5::DataSpace(1, two))
+        .write("ab\0\0abc\0", terminated);
   }
   const H5File file = H5File::OpenReadOnly(path);
   EXPECT_EQ(file.Read<std::string>("/vlen_utf8", {2}), (std::vector<std::string>{"ünï", ""}));
@@ -239,8 +241,11 @@ TEST_F(H5FileTest, ReadsCheckShapeAndTypeAndWidenLosslessly) {
                    {path, "/d", "has shape (2, 2), expected (4,)"});
   ExpectInputError([&] { file.Read<double>("/d", {2, 3}); }, {path, "/d", "expected (2, 3)"});
   // Narrowing and kind changes are refused.
-  ExpectInputError([&] { file.Read<float>("/d", {2, 2}); },
-                   {path, "/d", "stored as float64", "as float32"});
+  ExpectInputError(
+      [&] {
+        file.Read<float>("/d", {2, 2});
+      },
+      {path, "/d", "stored as float64", "as float32"});
   ExpectInputError([&] { file.Read<int32_t>("/i64", {2}); }, {path, "/i64", "int64"});
   ExpectInputError([&] { file.Read<uint8_t>("/i32", {2}); }, {path, "/i32"});
   ExpectInputError([&] { file.Read<double>("/i32", {2}); }, {path, "/i32"});
@@ -280,7 +285,8 @@ TEST_F(H5FileTest, WriteReplacesDatasetsAndRefusesGroups) {
   file.Write("/x", std::vector<int32_t>{4, 5});
   EXPECT_EQ(file.Read<int32_t>("/x", {2}), (std::vector<int32_t>{4, 5}));
   file.CreateGroup("/g");
-  ExpectInputError([&] { file.Write("/g", std::vector<double>{1}); }, {path, "/g", "not a dataset"});
+  ExpectInputError([&] { file.Write("/g", std::vector<double>{1}); },
+                   {path, "/g", "not a dataset"});
   ExpectInputError([&] { file.CreateGroup("/x"); }, {path, "/x", "not a group"});
   ExpectInputError([&] { file.Write("/s", std::vector<std::string>{std::string("a\0b", 3)}); },
                    {path, "/s", "NUL"});
@@ -335,17 +341,29 @@ TEST_F(H5FileTest, BadRowsChangeNothing) {
   file.CreateTable("/t", {{"a", H5Type::kInt32}, {"b", H5Type::kFloat32}});
   file.AppendRow("/t", {int32_t(1), 1.0f});
   // Narrowing (double -> float32), wrong kind, wrong count: rejected before any write.
-  ExpectInputError([&] { file.AppendRow("/t", {int32_t(2), 2.0}); },
-                   {path, "/t", "column 'b' is float32, got a float64"});
+  ExpectInputError(
+      [&] {
+        file.AppendRow("/t", {int32_t(2), 2.0});
+      },
+      {path, "/t", "column 'b' is float32, got a float64"});
   ExpectInputError([&] { file.AppendRow("/t", {std::string("x"), 1.0f}); }, {path, "column 'a'"});
   ExpectInputError([&] { file.AppendRow("/t", {int32_t(2)}); }, {path, "1 values for 2 columns"});
   EXPECT_EQ(file.NumRows("/t"), 1u);
-  ExpectInputError([&] { file.CreateTable("/t", {{"a", H5Type::kInt32}}); },
-                   {path, "/t", "already exists"});
-  ExpectInputError([&] { file.CreateTable("/u", {{"bad,name", H5Type::kInt32}}); },
-                   {path, "bad column name"});
-  ExpectInputError([&] { file.CreateTable("/u", {{"a", H5Type::kInt32}, {"a", H5Type::kInt64}}); },
-                   {path, "duplicate column 'a'"});
+  ExpectInputError(
+      [&] {
+        file.CreateTable("/t", {{"a", H5Type::kInt32}});
+      },
+      {path, "/t", "already exists"});
+  ExpectInputError(
+      [&] {
+        file.CreateTable("/u", {{"bad,name", H5Type::kInt32}});
+      },
+      {path, "bad column name"});
+  ExpectInputError(
+      [&] {
+        file.CreateTable("/u", {{"a", H5Type::kInt32}, {"a", H5Type::kInt64}});
+      },
+      {path, "duplicate column 'a'"});
   // Columns of different lengths (an interrupted append) are reported, not misread.
   file.Write("/t/b", std::vector<float>{1, 2, 3});
   ExpectInputError([&] { file.NumRows("/t"); }, {path, "/t", "different lengths"});
@@ -458,8 +476,10 @@ TEST_F(H5FileTest, HugeClaimedDatasetIsRefusedBeforeAllocating) {
                    {path, "/contiguous", "claims shape (1073741824,)", "holds 0 bytes"});
   ExpectInputError([&] { file.Read<double>("/compressed", {kH5Any}); },
                    {path, "/compressed", "holds 0 bytes"});
-  ExpectInputError([&] { file.Read<uint8_t>("/chunked", {kH5Any}); }, {path, "/chunked", "holds 0 bytes"});
-  ExpectInputError([&] { file.Read<std::string>("/strings", {kH5Any}); }, {path, "/strings", "holds 0 bytes"});
+  ExpectInputError([&] { file.Read<uint8_t>("/chunked", {kH5Any}); },
+                   {path, "/chunked", "holds 0 bytes"});
+  ExpectInputError([&] { file.Read<std::string>("/strings", {kH5Any}); },
+                   {path, "/strings", "holds 0 bytes"});
   ExpectInputError([&] { file.Read<double>("/tera", {kH5Any}); },
                    {path, "/tera", "claims shape (1099511627776,)", "read limit"});
 
@@ -491,7 +511,8 @@ TEST_F(H5FileTest, PatchedDataspaceIsRefused) {
     dcpl.setDeflate(1);
     std::vector<uint8_t> data(marker % 100000, 7);  // not the full extent: small file
     const hsize_t data_dims[1] = {data.size()};
-    H5::DataSet small = file.createDataSet("small", H5::PredType::STD_U8LE, H5::DataSpace(1, data_dims));
+    H5::DataSet small =
+        file.createDataSet("small", H5::PredType::STD_U8LE, H5::DataSpace(1, data_dims));
     small.write(data.data(), H5::PredType::NATIVE_UINT8);
     file.createDataSet("lazy", H5::PredType::STD_U8LE, H5::DataSpace(1, dims), dcpl);
   }

@@ -133,7 +133,8 @@ Scene ReadSceneH5(const H5File& file, const std::string& group) {
     v.image_path = image_paths[i];
     v.intrinsics.width = widths[i];
     v.intrinsics.height = heights[i];
-    for (size_t f = 0; f < std::size(kViewDoubles); ++f) *ViewDouble(v.intrinsics, f) = doubles[f][i];
+    for (size_t f = 0; f < std::size(kViewDoubles); ++f)
+      *ViewDouble(v.intrinsics, f) = doubles[f][i];
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) v.R(r, c) = rotations[9 * i + 3 * r + c];
       v.t[r] = translations[3 * i + r];
@@ -141,7 +142,8 @@ Scene ReadSceneH5(const H5File& file, const std::string& group) {
   }
 
   H5Shape shape;
-  const std::vector<double> positions = file.Read<double>(at("points/position"), {kH5Any, 3}, &shape);
+  const std::vector<double> positions =
+      file.Read<double>(at("points/position"), {kH5Any, 3}, &shape);
   const uint64_t m = shape[0];
   const std::vector<uint8_t> colors = file.Read<uint8_t>(at("points/color"), {m, 3});
   const std::vector<int64_t> offsets = file.Read<int64_t>(at("observations/offsets"), {m + 1});

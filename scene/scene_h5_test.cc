@@ -6,11 +6,11 @@
 
 #include <cmath>
 #include <cstdlib>
-#include <iostream>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <limits>
 #include <random>
 
@@ -88,14 +88,17 @@ Scene RandomScene(int num_views, int num_points, int max_track, uint32_t seed) {
   for (int i = 0; i < num_points; ++i) {
     ScenePoint p;
     p.position = {unit(rng), unit(rng), unit(rng)};
-    p.color = {static_cast<uint8_t>(rng()), static_cast<uint8_t>(rng()), static_cast<uint8_t>(rng())};
+    p.color = {static_cast<uint8_t>(rng()), static_cast<uint8_t>(rng()),
+               static_cast<uint8_t>(rng())};
     const int track = num_views == 0 ? 0 : static_cast<int>(rng() % (max_track + 1));
-    for (int view = 0; view < num_views && static_cast<int>(p.observations.size()) < track; ++view) {
+    for (int view = 0; view < num_views && static_cast<int>(p.observations.size()) < track;
+         ++view) {
       if (rng() % 2) continue;
       Observation o;
       o.view = view;
       o.x = i % 5 == 0 ? nan_payload : static_cast<float>(640 * (unit(rng) + 1) / 2);
-      o.y = i % 5 == 0 ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(1e-3 * unit(rng));
+      o.y = i % 5 == 0 ? std::numeric_limits<float>::quiet_NaN()
+                       : static_cast<float>(1e-3 * unit(rng));
       p.observations.push_back(o);
     }
     scene.points.push_back(p);
@@ -150,7 +153,8 @@ TEST_F(SceneH5Test, RandomSceneRoundTripsBitForBit) {
 TEST_F(SceneH5Test, EmptyAndDegenerateScenes) {
   for (const auto& [views, points] : {std::pair{0, 0}, std::pair{3, 0}, std::pair{0, 5}}) {
     const Scene scene = RandomScene(views, points, 3, 2);
-    const std::string path = Path("s" + std::to_string(views) + "_" + std::to_string(points) + ".h5");
+    const std::string path =
+        Path("s" + std::to_string(views) + "_" + std::to_string(points) + ".h5");
     WriteSceneH5(scene, path);
     ExpectIdentical(scene, ReadSceneH5(path));
   }
@@ -227,7 +231,8 @@ TEST_F(SceneH5Test, InconsistentContentNamesTheDataset) {
     file.Close();
   };
   damage([](H5File& f) { f.Write("/views/fx", std::vector<double>{1, 2, 3, 4}); });
-  ExpectInputError([&] { ReadSceneH5(path); }, {path, "/views/fx", "has shape (4,), expected (3,)"});
+  ExpectInputError([&] { ReadSceneH5(path); },
+                   {path, "/views/fx", "has shape (4,), expected (3,)"});
 
   damage([](H5File& f) { f.Write("/views/R", std::vector<double>(27, 0.0), {3, 9}); });
   ExpectInputError([&] { ReadSceneH5(path); }, {path, "/views/R"});
@@ -244,9 +249,7 @@ TEST_F(SceneH5Test, InconsistentContentNamesTheDataset) {
   });
   ExpectInputError([&] { ReadSceneH5(path); }, {path, "/observations/offsets", "decreases"});
 
-  damage([&](H5File& f) {
-    f.Write("/observations/offsets", std::vector<int64_t>(21, 0));
-  });
+  damage([&](H5File& f) { f.Write("/observations/offsets", std::vector<int64_t>(21, 0)); });
   ExpectInputError([&] { ReadSceneH5(path); }, {path, "/observations/offsets", "ends at 0"});
 
   damage([&](H5File& f) { f.Write("/observations/view", std::vector<int32_t>(k, 99)); });
@@ -255,7 +258,9 @@ TEST_F(SceneH5Test, InconsistentContentNamesTheDataset) {
   damage([&](H5File& f) { f.Write("/views/width", std::vector<int32_t>{0, 10, 10}); });
   ExpectInputError([&] { ReadSceneH5(path); }, {path, "view 0", "image size"});
 
-  damage([&](H5File& f) { f.Write("/views/t", std::vector<double>{0, 0, NAN, 0, 0, 0, 0, 0, 0}, {3, 3}); });
+  damage([&](H5File& f) {
+    f.Write("/views/t", std::vector<double>{0, 0, NAN, 0, 0, 0, 0, 0, 0}, {3, 3});
+  });
   ExpectInputError([&] { ReadSceneH5(path); }, {path, "translation"});
 }
 
