@@ -126,6 +126,7 @@ class H5File {
   void Write(const std::string& dataset, const std::vector<T>& values, const H5Shape& shape);
   template <typename T>
   void Write(const std::string& dataset, const std::vector<T>& values) {
+    static_assert(kIsH5Element<T>, "H5File: unsupported element type");
     Write(dataset, values, H5Shape{values.size()});
   }
   // Reads a dataset whose shape must match `expected` (same rank; kH5Any matches any extent).
