@@ -13,7 +13,7 @@ PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config git
   # libraries
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libeigen3-dev libopencv-dev
-  libzmq3-dev cppzmq-dev libprotobuf-dev protobuf-compiler libhdf5-dev
+  libzmq3-dev cppzmq-dev libprotobuf-dev protobuf-compiler libhdf5-dev hdf5-tools
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
   libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   # tests, benchmarks, fuzzing

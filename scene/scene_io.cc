@@ -1,8 +1,10 @@
 #include "scene/scene_io.h"
 
+#include <cctype>
 #include <filesystem>
 
 #include "base/error.h"
+#include "scene/scene_h5.h"
 
 namespace fs = std::filesystem;
 
@@ -39,14 +41,21 @@ std::string SceneFormatName(SceneFormat format) {
 }
 
 SceneFormat DetectSceneFormat(const std::string& path) {
+  std::string extension = fs::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension == ".h5" || extension == ".hdf5") return SceneFormat::kManisweepH5;
   throw InputError(path + ": scene formats are not implemented yet");
 }
 
-Scene ReadScene(const std::string& path, const SceneReadOptions&, SceneFormat) {
+Scene ReadScene(const std::string& path, const SceneReadOptions&, SceneFormat format) {
+  if (format == SceneFormat::kAuto) format = DetectSceneFormat(path);
+  if (format == SceneFormat::kManisweepH5) return ReadSceneH5(path);
   throw InputError(path + ": scene formats are not implemented yet");
 }
 
-void WriteScene(const Scene&, const std::string& path, SceneFormat) {
+void WriteScene(const Scene& scene, const std::string& path, SceneFormat format) {
+  if (format == SceneFormat::kAuto) format = DetectSceneFormat(path);
+  if (format == SceneFormat::kManisweepH5) return WriteSceneH5(scene, path);
   throw InputError(path + ": scene formats are not implemented yet");
 }
 
