@@ -73,6 +73,60 @@ TEST(WeightedNcc, MaskVarianceAndWindowWeight) {
   EXPECT_GT(WeightedNcc(faint, faint, mask, window, 1e-8, 0.3, &ncc), 0);
 }
 
+// ---- Reprojection ----
+
+TEST(ReprojectNeighbour, BilinearSamplesAndShadowMapOcclusion) {
+  View camera;
+  camera.intrinsics = {64, 48, 50, 50, 32, 24};
+  View neighbour = camera;
+  neighbour.SetCenter({1, 0, 0});
+  // The neighbour's image is a ramp, so bilinear sampling is exact: value(u, v) at texel
+  // coordinates (u - 0.5, v - 0.5).
+  cv::Mat image(48, 64, CV_32F);
+  for (int r = 0; r < 48; ++r) {
+    for (int c = 0; c < 64; ++c) image.at<float>(r, c) = 0.01f * c + 0.02f * r;
+  }
+  const auto quad = [](SoftwareRasterizer* raster, double z, double x0, double x1, double y0,
+                       double y1, int face) {
+    raster->DrawTriangle({x0, y0, z}, {x1, y0, z}, {x1, y1, z}, face);
+    raster->DrawTriangle({x0, y0, z}, {x1, y1, z}, {x0, y1, z}, face);
+  };
+  SoftwareRasterizer c_raster(camera, 0.01, true);
+  quad(&c_raster, 5, -20, 20, -20, 20, 0);  // the plane z = 5
+  SoftwareRasterizer shadow(neighbour, 0.01, false);
+  quad(&shadow, 5, -20, 20, -20, 20, 0);
+  quad(&shadow, 2.5, 0.8, 1.2, -0.2, 0.2, 1);  // an occluder in front of the neighbour only
+  cv::Mat reprojected, mask;
+  ReprojectNeighbour(c_raster, neighbour, image, shadow, 0.01, &reprojected, &mask);
+  int occluded = 0, valid = 0;
+  for (int r = 0; r < 48; ++r) {
+    for (int c = 0; c < 64; ++c) {
+      const Eigen::Vector3d P = camera.PixelRay({c + 0.5, r + 0.5}) * 5 /
+                                camera.PixelRay({c + 0.5, r + 0.5}).z();
+      Eigen::Vector2d uv;
+      ASSERT_TRUE(neighbour.Project(P, &uv));
+      const double edge = std::min({uv.x() - 0.5, 63.5 - uv.x(), uv.y() - 0.5, 47.5 - uv.y()});
+      if (std::abs(edge) < 1e-6) continue;  // exactly on the valid region's border
+      const bool inside = edge > 0;
+      // Where the segment to the neighbour's centre crosses z = 2.5.
+      const Eigen::Vector3d mid = 0.5 * (P + Eigen::Vector3d(1, 0, 0));
+      const double margin = std::max(std::abs(mid.x() - 1), std::abs(mid.y())) - 0.2;
+      if (std::abs(margin) < 0.02) continue;  // shadow-map texel on the occluder's border
+      const bool blocked = margin < 0;
+      occluded += inside && blocked;
+      const bool expect_valid = inside && !blocked;
+      EXPECT_EQ(mask.at<uint8_t>(r, c) != 0, expect_valid) << c << "," << r;
+      if (expect_valid) {
+        ++valid;
+        EXPECT_NEAR(reprojected.at<float>(r, c),
+                    0.01 * (uv.x() - 0.5) + 0.02 * (uv.y() - 0.5), 1e-5);
+      }
+    }
+  }
+  EXPECT_GT(occluded, 20);
+  EXPECT_GT(valid, 1000);
+}
+
 // ---- Shared preparation ----
 
 TEST(SweepKernel, OffsetsFollowTheStrictInequality) {
@@ -112,6 +166,51 @@ TEST(SweepKernel, GaussianWindowIsNormalised) {
   EXPECT_NEAR(w.at<float>(24) / w.at<float>(32), std::exp(0.5), 1e-5);
 }
 
+TEST(SweepKernel, AutoAlphaGivesTheRequestedParallax) {
+  // C at the origin looking down +z, a neighbour 2 units to the side, a point on the axis at
+  // depth 4: moving it along the ray by s shifts it by f b s / z^2 = 25 s pixels.
+  View camera;
+  camera.intrinsics = {400, 300, 200, 200, 200, 150};
+  View neighbour = camera;
+  neighbour.SetCenter({2, 0, 0});
+  Mesh mesh;
+  mesh.vertices = {{0, 0, 4}};
+  EXPECT_NEAR(AutoSweepAlpha(camera, {neighbour}, mesh, 1.0, 4), 1.0 / 25, 1e-12);
+  EXPECT_NEAR(AutoSweepAlpha(camera, {neighbour}, mesh, 0.5, 4), 0.5 / 25, 1e-12);
+  // Clamped to 2% of the median depth when the parallax is weak.
+  EXPECT_NEAR(AutoSweepAlpha(camera, {neighbour}, mesh, 5.0, 4), 0.08, 1e-12);
+}
+
+TEST(SweepKernel, PrepareSweepChoosesThePyramidLevel) {
+  SweepJob job;
+  job.camera.id = 0;
+  job.camera.view.intrinsics = {3072, 2048, 2760, 2760, 1536.5, 1024.25};
+  job.camera.image = cv::Mat(2048, 3072, CV_32F, cv::Scalar(0.5));
+  SweepCamera neighbour = job.camera;
+  neighbour.id = 1;
+  neighbour.view.SetCenter({1, 0, 0});
+  job.neighbours = {neighbour};
+  job.mesh = MakeFlatSquare(0, 1, 1);
+  for (auto& v : job.mesh.vertices) v.z() = 10;
+  std::swap(job.mesh.faces[0][1], job.mesh.faces[0][2]);  // facing the camera at the origin
+  PreparedSweep prep = PrepareSweep(job);
+  EXPECT_EQ(prep.pyramid_level, 1);
+  EXPECT_EQ(prep.camera.image.size(), cv::Size(1536, 1024));
+  EXPECT_DOUBLE_EQ(prep.camera.view.intrinsics.fx, 1380);
+  EXPECT_DOUBLE_EQ(prep.camera.view.intrinsics.cx, 768.25);
+  EXPECT_DOUBLE_EQ(prep.camera.view.intrinsics.cy, 512.125);
+  EXPECT_EQ(prep.neighbours[0].image.size(), cv::Size(1536, 1024));
+  EXPECT_EQ(prep.tiles.tiles_x, 15);
+  EXPECT_DOUBLE_EQ(prep.median_depth, 10);
+  job.options.alpha = 0.03;
+  job.options.max_image_dimension = 0;
+  prep = PrepareSweep(job);
+  EXPECT_EQ(prep.pyramid_level, 0);
+  EXPECT_EQ(prep.alpha, 0.03);
+  job.options.pyramid_level = 2;
+  EXPECT_EQ(PrepareSweep(job).camera.image.size(), cv::Size(768, 512));
+}
+
 // ---- The pyramid ----
 
 struct PyramidFixture {
@@ -144,7 +243,9 @@ double Quantile(const std::vector<double>& sorted, double q) {
 }
 
 TEST(ReferenceSweep, PyramidFromAFlatSquare) {
-  const PyramidScene scene = MakePyramidScene();
+  PyramidSceneOptions options;
+  options.noise_stddev = 0.01;  // sensor noise, independent per camera
+  const PyramidScene scene = MakePyramidScene(options);
   const Mesh square = MakeFlatSquare(0.15, 1.3, 8);
   const SweepJob job = MakeJob(scene, square);
   ReferenceSweepKernel kernel;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <opencv2/core.hpp>
 
 namespace ms {
 namespace {
@@ -183,6 +184,12 @@ PyramidScene MakePyramidScene(const PyramidSceneOptions& options) {
         }
         camera.image.at<float>(row, col) = static_cast<float>(sum / (ss * ss));
       }
+    }
+    if (options.noise_stddev > 0) {
+      cv::Mat noise(camera.image.size(), CV_32F);
+      cv::RNG rng(1000 + i);
+      rng.fill(noise, cv::RNG::NORMAL, 0.0, options.noise_stddev);
+      camera.image += noise;
     }
     scene.cameras.push_back(std::move(camera));
   }

@@ -18,6 +18,7 @@ struct PyramidSceneOptions {
   double pyramid_height = 0.3;    // apex height above the ground (base: [-1, 1]^2 at z = 0)
   double texture_contrast = 1;    // texture = 0.5 + contrast * (noise - 0.5); 0 = blank
   int supersample = 2;            // rays per pixel per axis
+  double noise_stddev = 0;        // independent Gaussian noise per camera (fixed seeds)
 };
 
 struct PyramidScene {
