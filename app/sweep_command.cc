@@ -31,8 +31,9 @@ struct SweepCommandOptions {
 
 std::unique_ptr<SweepKernel> MakeKernel(bool reference) {
   if (!reference) {
-    throw InputError("sweep: the GLSL kernel is not part of this build yet; pass --reference "
-                     "to use the C++ reference kernel");
+    throw InputError(
+        "sweep: the GLSL kernel is not part of this build yet; pass --reference "
+        "to use the C++ reference kernel");
   }
   return std::make_unique<ReferenceSweepKernel>();
 }
@@ -47,8 +48,8 @@ void RunSweep(const SweepCommandOptions& options) {
   const int camera = options.camera;
   if (camera < 0 || camera >= static_cast<int>(scene.views.size())) {
     throw InputError(options.input + ": --camera " + std::to_string(camera) +
-                     " is not a view of the scene (it has " +
-                     std::to_string(scene.views.size()) + " views)");
+                     " is not a view of the scene (it has " + std::to_string(scene.views.size()) +
+                     " views)");
   }
   const std::vector<int> neighbours = SelectNeighbours(scene, camera, options.neighbours);
   if (neighbours.empty()) {
@@ -75,8 +76,8 @@ void RunSweep(const SweepCommandOptions& options) {
     cloud.scalars.push_back(p.ncc);
   }
   WritePointCloud(cloud, options.output);
-  spdlog::info("sweep: wrote {} ({} points), {:.2f} s in all", options.output,
-               cloud.points.size(), timer.Seconds());
+  spdlog::info("sweep: wrote {} ({} points), {:.2f} s in all", options.output, cloud.points.size(),
+               timer.Seconds());
 }
 
 }  // namespace

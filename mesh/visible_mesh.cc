@@ -57,8 +57,8 @@ VisibleMesh ExtractVisibleMesh(const Mesh& mesh, const View& view,
   options.Check();
   const int64_t num_vertices = static_cast<int64_t>(mesh.vertices.size());
   if (mesh.HasColors() && mesh.vertex_colors.size() != mesh.vertices.size()) {
-    throw InputError("mesh: " + std::to_string(mesh.vertex_colors.size()) +
-                     " vertex colours for " + std::to_string(num_vertices) + " vertices");
+    throw InputError("mesh: " + std::to_string(mesh.vertex_colors.size()) + " vertex colours for " +
+                     std::to_string(num_vertices) + " vertices");
   }
   VisibleMesh out;
   std::vector<int32_t> remap(mesh.vertices.size(), -1);

@@ -31,12 +31,12 @@ void AddTriangle(Mesh* mesh, double x, double y, double z, bool up) {
 
 TEST(ExtractVisibleMesh, KeepsFacingFacesInsideTheFrustum) {
   Mesh mesh;
-  AddTriangle(&mesh, 0, 0, 0, true);     // 0: visible
+  AddTriangle(&mesh, 0, 0, 0, true);       // 0: visible
   AddTriangle(&mesh, 0.5, 0.5, 0, false);  // 1: back-facing
-  AddTriangle(&mesh, 10, 0, 0, true);    // 2: far right of the image (u ~ 250)
-  AddTriangle(&mesh, 0, 0, 6, true);     // 3: behind the camera
+  AddTriangle(&mesh, 10, 0, 0, true);      // 2: far right of the image (u ~ 250)
+  AddTriangle(&mesh, 0, 0, 6, true);       // 3: behind the camera
   AddTriangle(&mesh, -0.5, 0.3, 1, true);  // 4: visible
-  AddTriangle(&mesh, 0, -12, 0, true);   // 5: below the image
+  AddTriangle(&mesh, 0, -12, 0, true);     // 5: below the image
   // 6: straddles the left border (two corners outside): kept.
   mesh.vertices.emplace_back(-2.6, 0, 0);
   mesh.vertices.emplace_back(-2.4, 0, 0);

@@ -55,8 +55,7 @@ std::vector<int> SelectNeighbours(const Scene& scene, int camera, const Neighbou
   return result;
 }
 
-std::vector<int> SelectNeighbours(const Scene& scene, int camera, double max_angle_deg,
-                                  int count) {
+std::vector<int> SelectNeighbours(const Scene& scene, int camera, double max_angle_deg, int count) {
   NeighbourOptions options;
   options.max_angle_deg = max_angle_deg;
   options.count = count;

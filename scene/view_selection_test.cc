@@ -33,9 +33,9 @@ Eigen::Vector3d Direction(double degrees_from_z) {
 TEST(SelectNeighbours, NearestFirstWithinTheAngleBound) {
   Scene scene;
   scene.views.push_back(ViewAt({0, 0, 0}, Direction(0)));
-  scene.views.push_back(ViewAt({3, 0, 0}, Direction(10)));   // far, similar direction
-  scene.views.push_back(ViewAt({1, 0, 0}, Direction(70)));   // near, too oblique
-  scene.views.push_back(ViewAt({0, 2, 0}, Direction(-20)));  // middle
+  scene.views.push_back(ViewAt({3, 0, 0}, Direction(10)));    // far, similar direction
+  scene.views.push_back(ViewAt({1, 0, 0}, Direction(70)));    // near, too oblique
+  scene.views.push_back(ViewAt({0, 2, 0}, Direction(-20)));   // middle
   scene.views.push_back(ViewAt({0, 0, 1.5}, Direction(59)));  // just inside 60
   EXPECT_EQ(SelectNeighbours(scene, 0), (std::vector<int>{4, 3}));
   EXPECT_EQ(SelectNeighbours(scene, 0, 60, 3), (std::vector<int>{4, 3, 1}));
@@ -56,7 +56,7 @@ TEST(SelectNeighbours, AngleBoundIsStrict) {
 TEST(SelectNeighbours, SkipsCamerasAtTheSameCentre) {
   Scene scene;
   scene.views.push_back(ViewAt({1, 1, 1}, Direction(0)));
-  scene.views.push_back(ViewAt({1, 1, 1}, Direction(5)));  // same centre (a rotation only)
+  scene.views.push_back(ViewAt({1, 1, 1}, Direction(5)));          // same centre (a rotation only)
   scene.views.push_back(ViewAt({1, 1, 1 + 1e-12}, Direction(0)));  // same centre up to noise
   scene.views.push_back(ViewAt({2, 1, 1}, Direction(0)));
   EXPECT_EQ(SelectNeighbours(scene, 0), (std::vector<int>{3}));

@@ -83,9 +83,8 @@ namespace {
 constexpr double kVarianceFloor = 1e-5;  // relative to the mean square: float round-off
 }  // namespace
 
-int64_t WeightedNcc(const cv::Mat& I, const cv::Mat& J, const cv::Mat& mask,
-                    const cv::Mat& window, double min_texture_variance, double min_window_weight,
-                    cv::Mat* ncc) {
+int64_t WeightedNcc(const cv::Mat& I, const cv::Mat& J, const cv::Mat& mask, const cv::Mat& window,
+                    double min_texture_variance, double min_window_weight, cv::Mat* ncc) {
   CV_Assert(I.type() == CV_32F && J.type() == CV_32F && mask.type() == CV_8U);
   CV_Assert(I.size() == J.size() && I.size() == mask.size());
   cv::Mat m;

@@ -54,8 +54,7 @@ void ReprojectNeighbour(const SoftwareRasterizer& camera_raster, const View& nei
 // undefined where m = 0 at the pixel itself, W < min_window_weight, or var_I <= max(
 // min_texture_variance, 1e-5 G(mI^2)/W) (the second term: float round-off of a constant
 // window), likewise for J. Returns the number of defined pixels.
-int64_t WeightedNcc(const cv::Mat& I, const cv::Mat& J, const cv::Mat& mask,
-                    const cv::Mat& window, double min_texture_variance, double min_window_weight,
-                    cv::Mat* ncc);
+int64_t WeightedNcc(const cv::Mat& I, const cv::Mat& J, const cv::Mat& mask, const cv::Mat& window,
+                    double min_texture_variance, double min_window_weight, cv::Mat* ncc);
 
 }  // namespace ms

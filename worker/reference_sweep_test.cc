@@ -101,8 +101,8 @@ TEST(ReprojectNeighbour, BilinearSamplesAndShadowMapOcclusion) {
   int occluded = 0, valid = 0;
   for (int r = 0; r < 48; ++r) {
     for (int c = 0; c < 64; ++c) {
-      const Eigen::Vector3d P = camera.PixelRay({c + 0.5, r + 0.5}) * 5 /
-                                camera.PixelRay({c + 0.5, r + 0.5}).z();
+      const Eigen::Vector3d P =
+          camera.PixelRay({c + 0.5, r + 0.5}) * 5 / camera.PixelRay({c + 0.5, r + 0.5}).z();
       Eigen::Vector2d uv;
       ASSERT_TRUE(neighbour.Project(P, &uv));
       const double edge = std::min({uv.x() - 0.5, 63.5 - uv.x(), uv.y() - 0.5, 47.5 - uv.y()});
@@ -118,8 +118,8 @@ TEST(ReprojectNeighbour, BilinearSamplesAndShadowMapOcclusion) {
       EXPECT_EQ(mask.at<uint8_t>(r, c) != 0, expect_valid) << c << "," << r;
       if (expect_valid) {
         ++valid;
-        EXPECT_NEAR(reprojected.at<float>(r, c),
-                    0.01 * (uv.x() - 0.5) + 0.02 * (uv.y() - 0.5), 1e-5);
+        EXPECT_NEAR(reprojected.at<float>(r, c), 0.01 * (uv.x() - 0.5) + 0.02 * (uv.y() - 0.5),
+                    1e-5);
       }
     }
   }
@@ -267,9 +267,10 @@ TEST(ReferenceSweep, PyramidFromAFlatSquare) {
   initial /= 21 * 21;
   const std::vector<double> d = SortedDistances(scene, result);
   const double median = Quantile(d, 0.5), p90 = Quantile(d, 0.9);
-  std::printf("pyramid: %zu points, distance to truth median %.4f p90 %.4f (initial mean %.4f)\n"
-              "  %s\n",
-              result.points.size(), median, p90, initial, s.Summary().c_str());
+  std::printf(
+      "pyramid: %zu points, distance to truth median %.4f p90 %.4f (initial mean %.4f)\n"
+      "  %s\n",
+      result.points.size(), median, p90, initial, s.Summary().c_str());
   EXPECT_LT(median, 0.01);
   EXPECT_LT(p90, 0.03);
   for (const SweepPoint& p : result.points) {
@@ -394,7 +395,8 @@ TEST(ReferenceSweep, BadJobsThrowInputError) {
   ExpectInputError(job, "camera 0 ('pyramid_0'): image missing");
   job = good;
   job.neighbours[1].image = cv::Mat(31, 40, CV_32F, cv::Scalar(0.5));
-  ExpectInputError(job, "neighbour 2 ('pyramid_2'): image is 40x31 but the view's intrinsics say 40x30");
+  ExpectInputError(job,
+                   "neighbour 2 ('pyramid_2'): image is 40x31 but the view's intrinsics say 40x30");
   job = good;
   job.neighbours[0].image.convertTo(job.neighbours[0].image, CV_8U, 255);
   ExpectInputError(job, "CV_32FC1");

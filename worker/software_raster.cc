@@ -65,8 +65,8 @@ void SoftwareRasterizer::DrawTriangle(const Eigen::Vector3d& a, const Eigen::Vec
                                       const Eigen::Vector3d& c, int32_t face) {
   const std::array<ClipVertex, 3> in = {ClipVertex{R_ * a + t_, a}, ClipVertex{R_ * b + t_, b},
                                         ClipVertex{R_ * c + t_, c}};
-  const bool all_in = in[0].camera.z() >= near_ && in[1].camera.z() >= near_ &&
-                      in[2].camera.z() >= near_;
+  const bool all_in =
+      in[0].camera.z() >= near_ && in[1].camera.z() >= near_ && in[2].camera.z() >= near_;
   if (all_in) {
     DrawClipped(in[0], in[1], in[2], face);
     return;

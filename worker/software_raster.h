@@ -37,8 +37,9 @@ class SoftwareRasterizer {
   // World position / face of the nearest surface (keep_world only); face -1 where empty.
   const std::vector<Eigen::Vector3d>& world() const { return world_; }
   const std::vector<int32_t>& face() const { return face_; }
-  bool Covered(int col, int row) const { return face_.empty() ? depth_[Index(col, row)] < kEmpty
-                                                              : face_[Index(col, row)] >= 0; }
+  bool Covered(int col, int row) const {
+    return face_.empty() ? depth_[Index(col, row)] < kEmpty : face_[Index(col, row)] >= 0;
+  }
   size_t Index(int col, int row) const { return static_cast<size_t>(row) * width_ + col; }
 
   static constexpr double kEmpty = std::numeric_limits<double>::infinity();

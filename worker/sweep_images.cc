@@ -22,10 +22,18 @@ cv::Mat ReadGrayImage(const std::string& path) {
   if (raw.empty()) throw InputError(path + ": cannot read image (unknown or corrupt format)");
   cv::Mat gray;
   switch (raw.depth()) {
-    case CV_8U: raw.convertTo(gray, CV_32F, 1.0 / 255.0); break;
-    case CV_16U: raw.convertTo(gray, CV_32F, 1.0 / 65535.0); break;
-    case CV_32F: gray = raw; break;
-    default: raw.convertTo(gray, CV_32F); break;
+    case CV_8U:
+      raw.convertTo(gray, CV_32F, 1.0 / 255.0);
+      break;
+    case CV_16U:
+      raw.convertTo(gray, CV_32F, 1.0 / 65535.0);
+      break;
+    case CV_32F:
+      gray = raw;
+      break;
+    default:
+      raw.convertTo(gray, CV_32F);
+      break;
   }
   if (!cv::checkRange(gray, true)) throw InputError(path + ": image has non-finite pixels");
   return gray;

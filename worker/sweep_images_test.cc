@@ -83,8 +83,8 @@ TEST(SweepImages, UndistortionRestoresThePinholeImage) {
   double worst = 0;
   for (int row = 10; row < k.height - 10; ++row) {
     for (int col = 10; col < k.width - 10; ++col) {
-      worst = std::max(worst, std::abs(undistorted.at<float>(row, col) -
-                                       pattern(col + 0.5, row + 0.5)));
+      worst = std::max(worst,
+                       std::abs(undistorted.at<float>(row, col) - pattern(col + 0.5, row + 0.5)));
     }
   }
   EXPECT_LT(worst, 0.01);
@@ -92,8 +92,8 @@ TEST(SweepImages, UndistortionRestoresThePinholeImage) {
   double uncorrected = 0;
   for (int row = 10; row < k.height - 10; ++row) {
     for (int col = 10; col < k.width - 10; ++col) {
-      uncorrected = std::max(uncorrected, std::abs(distorted.at<float>(row, col) -
-                                                   pattern(col + 0.5, row + 0.5)));
+      uncorrected = std::max(
+          uncorrected, std::abs(distorted.at<float>(row, col) - pattern(col + 0.5, row + 0.5)));
     }
   }
   EXPECT_GT(uncorrected, 0.1);

@@ -29,8 +29,9 @@ void CheckCamera(const SweepCamera& camera, const std::string& job, const char* 
     throw InputError(who + ": principal point not finite");
   }
   if (k.HasDistortion()) {
-    throw InputError(who + ": view has lens distortion; the sweep takes undistorted images and "
-                           "pinhole views (undistort them first)");
+    throw InputError(who +
+                     ": view has lens distortion; the sweep takes undistorted images and "
+                     "pinhole views (undistort them first)");
   }
   if (!camera.view.t.allFinite() || !IsRotation(camera.view.R, 1e-4)) {
     throw InputError(who + ": pose is not a finite proper rotation and translation");
@@ -56,12 +57,15 @@ void SweepOptions::Check() const {
   const auto fail = [](const std::string& field, const std::string& what, double value) {
     throw InputError(fmt::format("sweep.{} {}, got {}", field, what, value));
   };
-  if (num_offsets < 1 || num_offsets > 1000) fail("num_offsets", "must be in [1, 1000]", num_offsets);
-  if (!(std::isfinite(alpha) && alpha >= 0)) fail("alpha", "must be finite and >= 0 (0 = auto)", alpha);
+  if (num_offsets < 1 || num_offsets > 1000)
+    fail("num_offsets", "must be in [1, 1000]", num_offsets);
+  if (!(std::isfinite(alpha) && alpha >= 0))
+    fail("alpha", "must be finite and >= 0 (0 = auto)", alpha);
   if (!(std::isfinite(alpha_parallax_px) && alpha_parallax_px > 0)) {
     fail("alpha_parallax_px", "must be finite and > 0", alpha_parallax_px);
   }
-  if (!(ncc_threshold >= -1 && ncc_threshold <= 1)) fail("ncc_threshold", "must be in [-1, 1]", ncc_threshold);
+  if (!(ncc_threshold >= -1 && ncc_threshold <= 1))
+    fail("ncc_threshold", "must be in [-1, 1]", ncc_threshold);
   if (!(gaussian_sigma_px >= 0.5 && gaussian_sigma_px <= 100)) {
     fail("gaussian_sigma_px", "must be in [0.5, 100]", gaussian_sigma_px);
   }
@@ -75,7 +79,8 @@ void SweepOptions::Check() const {
   if (!(std::isfinite(occlusion_tolerance) && occlusion_tolerance >= 0)) {
     fail("occlusion_tolerance", "must be finite and >= 0", occlusion_tolerance);
   }
-  if (max_image_dimension < 0) fail("max_image_dimension", "must be >= 0 (0 = full size)", max_image_dimension);
+  if (max_image_dimension < 0)
+    fail("max_image_dimension", "must be >= 0 (0 = full size)", max_image_dimension);
   if (pyramid_level < -1 || pyramid_level > 12) {
     fail("pyramid_level", "must be in [-1, 12] (-1 = auto)", pyramid_level);
   }
@@ -120,8 +125,8 @@ void CheckSweepJob(const SweepJob& job) {
     const auto& face = mesh.faces[f];
     for (int32_t v : face) {
       if (v < 0 || v >= num_vertices) {
-        throw InputError(fmt::format("{}: mesh face {} refers to vertex {} of {}", name, f, v,
-                                     num_vertices));
+        throw InputError(
+            fmt::format("{}: mesh face {} refers to vertex {} of {}", name, f, v, num_vertices));
       }
     }
     if (!any_in_front) {
@@ -130,8 +135,9 @@ void CheckSweepJob(const SweepJob& job) {
     }
   }
   if (!any_in_front) {
-    throw InputError(name + ": no face of the mesh is in front of the camera inside its image "
-                            "(camera outside the scene, or the wrong mesh)");
+    throw InputError(name +
+                     ": no face of the mesh is in front of the camera inside its image "
+                     "(camera outside the scene, or the wrong mesh)");
   }
 }
 
@@ -155,8 +161,10 @@ TileGrid TileGrid::Make(int width, int height, int tile_size_px) {
   TileGrid grid;
   grid.width = width;
   grid.height = height;
-  grid.tiles_x = std::max(1, static_cast<int>(std::lround(static_cast<double>(width) / tile_size_px)));
-  grid.tiles_y = std::max(1, static_cast<int>(std::lround(static_cast<double>(height) / tile_size_px)));
+  grid.tiles_x =
+      std::max(1, static_cast<int>(std::lround(static_cast<double>(width) / tile_size_px)));
+  grid.tiles_y =
+      std::max(1, static_cast<int>(std::lround(static_cast<double>(height) / tile_size_px)));
   grid.tiles_x = std::min(grid.tiles_x, std::max(1, width));
   grid.tiles_y = std::min(grid.tiles_y, std::max(1, height));
   return grid;
@@ -242,10 +250,10 @@ PreparedSweep PrepareSweep(const SweepJob& job) {
   };
   prep.camera = scale_camera(job.camera);
   for (const SweepCamera& n : job.neighbours) prep.neighbours.push_back(scale_camera(n));
-  prep.scale_x = static_cast<double>(prep.camera.view.intrinsics.width) /
-                 job.camera.view.intrinsics.width;
-  prep.scale_y = static_cast<double>(prep.camera.view.intrinsics.height) /
-                 job.camera.view.intrinsics.height;
+  prep.scale_x =
+      static_cast<double>(prep.camera.view.intrinsics.width) / job.camera.view.intrinsics.width;
+  prep.scale_y =
+      static_cast<double>(prep.camera.view.intrinsics.height) / job.camera.view.intrinsics.height;
 
   // Median depth of the mesh vertices in front of C.
   std::vector<double> depths;
@@ -271,8 +279,8 @@ PreparedSweep PrepareSweep(const SweepJob& job) {
     prep.alpha = AutoSweepAlpha(prep.camera.view, views, job.mesh, options.alpha_parallax_px,
                                 prep.median_depth);
   }
-  prep.tiles = TileGrid::Make(prep.camera.view.intrinsics.width,
-                              prep.camera.view.intrinsics.height, options.tile_size_px);
+  prep.tiles = TileGrid::Make(prep.camera.view.intrinsics.width, prep.camera.view.intrinsics.height,
+                              options.tile_size_px);
   prep.window = GaussianWindow(options.gaussian_sigma_px);
   return prep;
 }

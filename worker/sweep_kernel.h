@@ -84,14 +84,14 @@ struct SweepPoint {
 struct SweepStats {
   int image_width = 0, image_height = 0;  // swept resolution
   int pyramid_level = 0;
-  double alpha = 0;       // scene units, as used
+  double alpha = 0;         // scene units, as used
   double median_depth = 0;  // of the visible mesh's vertices in C
-  int num_offsets = 0;    // swept meshes (2*floor((N-1)/2)+1)
+  int num_offsets = 0;      // swept meshes (2*floor((N-1)/2)+1)
   int num_neighbours = 0;
   int tiles_x = 0, tiles_y = 0;
-  int64_t covered_pixels = 0;     // C pixels covered by a swept mesh, summed over offsets
-  int64_t hypotheses = 0;         // image pixels x offsets x neighbours (the benchmark's unit)
-  int64_t valid_hypotheses = 0;   // of which got an NCC (covered, visible, textured)
+  int64_t covered_pixels = 0;    // C pixels covered by a swept mesh, summed over offsets
+  int64_t hypotheses = 0;        // image pixels x offsets x neighbours (the benchmark's unit)
+  int64_t valid_hypotheses = 0;  // of which got an NCC (covered, visible, textured)
   double prepare_s = 0, raster_s = 0, reproject_s = 0, ncc_s = 0, reduce_s = 0, total_s = 0;
   std::string Summary() const;  // one line for the log
 };

@@ -52,8 +52,11 @@ bool CastRay(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double height,
              Eigen::Vector3d* hit) {
   double best = std::numeric_limits<double>::infinity();
   // Planes z = a x + b y + c: ground (0,0,0) and the four faces H(1 -+ x), H(1 -+ y).
-  const double planes[5][3] = {
-      {0, 0, 0}, {-height, 0, height}, {height, 0, height}, {0, -height, height}, {0, height, height}};
+  const double planes[5][3] = {{0, 0, 0},
+                               {-height, 0, height},
+                               {height, 0, height},
+                               {0, -height, height},
+                               {0, height, height}};
   for (const auto& p : planes) {
     const double denom = d.z() - p[0] * d.x() - p[1] * d.y();
     if (denom == 0) continue;
@@ -94,8 +97,8 @@ Eigen::Vector3d ClosestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3
 
 }  // namespace
 
-View LookAtView(const Eigen::Vector3d& center, const Eigen::Vector3d& target, int width,
-                int height, double focal_px) {
+View LookAtView(const Eigen::Vector3d& center, const Eigen::Vector3d& target, int width, int height,
+                double focal_px) {
   const Eigen::Vector3d z = (target - center).normalized();
   const Eigen::Vector3d up(0, 1, 0);
   const Eigen::Vector3d y = -(up - up.dot(z) * z).normalized();  // image down = world -y
@@ -121,8 +124,8 @@ double PyramidScene::Distance(const Eigen::Vector3d& p) const {
   double best = std::numeric_limits<double>::infinity();
   for (size_t f = 0; f < truth.faces.size(); ++f) {
     const auto& face = truth.faces[f];
-    const Eigen::Vector3d q = ClosestOnTriangle(p, truth.vertices[face[0]],
-                                                truth.vertices[face[1]], truth.vertices[face[2]]);
+    const Eigen::Vector3d q = ClosestOnTriangle(p, truth.vertices[face[0]], truth.vertices[face[1]],
+                                                truth.vertices[face[2]]);
     best = std::min(best, (p - q).norm());
   }
   return best;
@@ -152,8 +155,8 @@ PyramidScene MakePyramidScene(const PyramidSceneOptions& options) {
   const double h = options.pyramid_height;
   // Truth: apex, base corners, and a ground ring out to +-20 (counter-clockwise from above).
   Mesh& t = scene.truth;
-  t.vertices = {{0, 0, h},  {-1, -1, 0},  {1, -1, 0},   {1, 1, 0},
-                {-1, 1, 0}, {-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}};
+  t.vertices = {{0, 0, h},     {-1, -1, 0},  {1, -1, 0},  {1, 1, 0},   {-1, 1, 0},
+                {-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}};
   t.faces = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 1},  // pyramid sides
              {1, 5, 6}, {1, 6, 2}, {2, 6, 7}, {2, 7, 3},  // ground ring
              {3, 7, 8}, {3, 8, 4}, {4, 8, 5}, {4, 5, 1}};
@@ -176,9 +179,9 @@ PyramidScene MakePyramidScene(const PyramidSceneOptions& options) {
           for (int sx = 0; sx < ss; ++sx) {
             const Eigen::Vector2d pixel(col + (sx + 0.5) / ss, row + (sy + 0.5) / ss);
             Eigen::Vector3d hit;
-            const double value =
-                CastRay(origin, camera.view.PixelRay(pixel), h, &hit) ? Texture(hit.x(), hit.y())
-                                                                      : 0.5;
+            const double value = CastRay(origin, camera.view.PixelRay(pixel), h, &hit)
+                                     ? Texture(hit.x(), hit.y())
+                                     : 0.5;
             sum += 0.5 + options.texture_contrast * (value - 0.5);
           }
         }

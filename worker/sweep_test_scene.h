@@ -37,7 +37,7 @@ PyramidScene MakePyramidScene(const PyramidSceneOptions& options = {});
 Mesh MakeFlatSquare(double z, double half_size, int cells);
 
 // A view at `center` looking at `target`, image y pointing along -world_y as seen from above.
-View LookAtView(const Eigen::Vector3d& center, const Eigen::Vector3d& target, int width,
-                int height, double focal_px);
+View LookAtView(const Eigen::Vector3d& center, const Eigen::Vector3d& target, int width, int height,
+                double focal_px);
 
 }  // namespace ms
