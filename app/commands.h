@@ -9,5 +9,6 @@ namespace ms::app {
 
 void RegisterInfoCommand(CLI::App& app);
 void RegisterCheckMeshCommand(CLI::App& app);
+void RegisterSweepCommand(CLI::App& app);
 
 }  // namespace ms::app

@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
 
   ms::app::RegisterInfoCommand(app);
   ms::app::RegisterCheckMeshCommand(app);
+  ms::app::RegisterSweepCommand(app);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,139 @@
+// `manisweep sweep`: one camera's mesh sweep (paper section 2.2, docs/sweep.md), for debugging
+// and benchmarking: reads the scene and the mesh, picks the camera's neighbours and the part of
+// the mesh it sees, sweeps, and writes the points found (PLY, NCC as the "quality" scalar).
+#include <fmt/ranges.h>
+
+#include <memory>
+#include <string>
+
+#include "app/commands.h"
+#include "base/error.h"
+#include "base/log.h"
+#include "mesh/mesh_io.h"
+#include "mesh/visible_mesh.h"
+#include "scene/scene_io.h"
+#include "scene/view_selection.h"
+#include "worker/reference_sweep.h"
+#include "worker/sweep_images.h"
+
+namespace ms::app {
+namespace {
+
+struct SweepCommandOptions {
+  std::string input;
+  std::string mesh;
+  int camera = 0;
+  std::string output;
+  bool reference = false;
+  NeighbourOptions neighbours;
+  SweepOptions sweep;
+};
+
+std::unique_ptr<SweepKernel> MakeKernel(bool reference) {
+  if (!reference) {
+    throw InputError(
+        "sweep: the GLSL kernel is not part of this build yet; pass --reference "
+        "to use the C++ reference kernel");
+  }
+  return std::make_unique<ReferenceSweepKernel>();
+}
+
+void RunSweep(const SweepCommandOptions& options) {
+  options.sweep.Check();
+  options.neighbours.Check();
+  std::unique_ptr<SweepKernel> kernel = MakeKernel(options.reference);
+  Timer timer;
+  Scene scene = ReadScene(options.input);
+  scene.Validate();
+  const int camera = options.camera;
+  if (camera < 0 || camera >= static_cast<int>(scene.views.size())) {
+    throw InputError(options.input + ": --camera " + std::to_string(camera) +
+                     " is not a view of the scene (it has " + std::to_string(scene.views.size()) +
+                     " views)");
+  }
+  const std::vector<int> neighbours = SelectNeighbours(scene, camera, options.neighbours);
+  if (neighbours.empty()) {
+    throw InputError(options.input + ": camera " + std::to_string(camera) +
+                     " has no neighbour within the viewing-angle bound");
+  }
+  const Mesh mesh = ReadMesh(options.mesh);
+  SweepJob job;
+  job.camera = LoadSweepCamera(camera, scene.views[camera]);
+  for (int n : neighbours) job.neighbours.push_back(LoadSweepCamera(n, scene.views[n]));
+  job.mesh = ExtractVisibleMesh(mesh, job.camera.view).mesh;
+  job.options = options.sweep;
+  spdlog::info("sweep: camera {} with neighbours {}; {} of {} faces visible; loaded in {:.2f} s",
+               camera, fmt::join(neighbours, ", "), job.mesh.NumFaces(), mesh.NumFaces(),
+               timer.Seconds());
+
+  const SweepResult result = kernel->Run(job);
+  spdlog::info("sweep ({}): {} points; {}", kernel->Name(), result.points.size(),
+               result.stats.Summary());
+
+  PointCloud cloud;
+  for (const SweepPoint& p : result.points) {
+    cloud.points.push_back(p.position);
+    cloud.scalars.push_back(p.ncc);
+  }
+  WritePointCloud(cloud, options.output);
+  spdlog::info("sweep: wrote {} ({} points), {:.2f} s in all", options.output, cloud.points.size(),
+               timer.Seconds());
+}
+
+}  // namespace
+
+void RegisterSweepCommand(CLI::App& app) {
+  auto options = std::make_shared<SweepCommandOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "sweep", "Mesh sweeping for one camera: new 3D points near the mesh (paper section 2.2)");
+  cmd->add_option("-i,--input", options->input, "scene (any supported format)")->required();
+  cmd->add_option("-m,--mesh", options->mesh, "current mesh (.ply or .obj)")->required();
+  cmd->add_option("-c,--camera", options->camera, "index of the camera C to sweep from")
+      ->capture_default_str();
+  cmd->add_option("-o,--output", options->output, "points found (.ply, NCC as 'quality')")
+      ->required();
+  cmd->add_flag("--reference", options->reference,
+                "use the C++ reference kernel (the only kernel in this build)");
+  NeighbourOptions& n = options->neighbours;
+  cmd->add_option("--neighbours.count", n.count, "neighbour cameras to match against")
+      ->capture_default_str();
+  cmd->add_option("--neighbours.max-angle-deg", n.max_angle_deg,
+                  "neighbours' viewing directions differ from C's by less than this")
+      ->capture_default_str();
+  SweepOptions& s = options->sweep;
+  cmd->add_option("--sweep.num-offsets", s.num_offsets, "N: sweep offsets k with -N/2 < k < N/2")
+      ->capture_default_str();
+  cmd->add_option("--sweep.alpha", s.alpha,
+                  "sweep step in scene units; 0 = auto from the parallax (0.03 = the paper's 3 cm "
+                  "in a metric scene)")
+      ->capture_default_str();
+  cmd->add_option("--sweep.alpha-parallax-px", s.alpha_parallax_px,
+                  "auto alpha: pixels of parallax in the neighbours per step at the median depth")
+      ->capture_default_str();
+  cmd->add_option("--sweep.ncc-threshold", s.ncc_threshold, "t_NCC: keep tile winners above this")
+      ->capture_default_str();
+  cmd->add_option("--sweep.gaussian-sigma-px", s.gaussian_sigma_px,
+                  "sigma of the NCC's Gaussian window (swept-resolution pixels)")
+      ->capture_default_str();
+  cmd->add_option("--sweep.tile-size-px", s.tile_size_px,
+                  "tile size (swept-resolution pixels); one point per tile at most")
+      ->capture_default_str();
+  cmd->add_option("--sweep.min-texture-variance", s.min_texture_variance,
+                  "textureless below this weighted variance (gray in [0, 1])")
+      ->capture_default_str();
+  cmd->add_option("--sweep.min-window-weight", s.min_window_weight,
+                  "fraction of the Gaussian window that must be valid")
+      ->capture_default_str();
+  cmd->add_option("--sweep.occlusion-tolerance", s.occlusion_tolerance,
+                  "relative depth tolerance of the neighbours' shadow maps")
+      ->capture_default_str();
+  cmd->add_option("--sweep.max-image-dimension", s.max_image_dimension,
+                  "halve images until their longest side fits (0 = full size)")
+      ->capture_default_str();
+  cmd->add_option("--sweep.pyramid-level", s.pyramid_level,
+                  "sweep at this pyramid level (-1 = from max-image-dimension, 0 = full size)")
+      ->capture_default_str();
+  cmd->callback([options] { RunSweep(*options); });
+}
+
+}  // namespace ms::app

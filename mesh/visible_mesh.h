@@ -1,0 +1,49 @@
+// The part of a mesh a camera may see, for a sweep job: faces inside the camera's frustum that
+// face the camera. Occlusion is not decided here; the sweep settles it by depth testing.
+// Shared code: the coordinator calls it to build sweep jobs.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "mesh/mesh.h"
+#include "scene/camera.h"
+
+namespace ms {
+
+struct VisibleMeshOptions {
+  // Widens the image rectangle of the frustum test by this many pixels on every side (lens
+  // distortion is ignored by the test, so a margin keeps faces at the border).
+  double margin_px = 0;
+  // Faces whose vertices all lie closer than this (camera z, scene units) are outside. 0 keeps
+  // everything in front of the camera centre.
+  double near = 0;
+  // Keep faces that turn their back to the camera (for meshes of unknown orientation).
+  bool keep_back_facing = false;
+  void Check() const;  // throws InputError naming the field
+};
+
+struct VisibleMesh {
+  Mesh mesh;                        // compact: only kept faces and the vertices they use
+  std::vector<int32_t> face_ids;    // original face index of each face of `mesh`
+  std::vector<int32_t> vertex_ids;  // original vertex index of each vertex of `mesh`
+};
+
+// True if triangle (a, b, c) (world coordinates) is not entirely outside one plane of the
+// view's pinhole frustum (near plane at `near`, image rectangle widened by `margin_px`). A
+// conservative test: a face that straddles a corner of the frustum may be kept.
+bool TriangleInFrustum(const View& view, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                       const Eigen::Vector3d& c, double margin_px = 0, double near = 0);
+
+// True if the face's front side (counter-clockwise side, docs/conventions.md) faces the camera
+// centre. Degenerate faces face nothing.
+bool TriangleFacesCamera(const View& view, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                         const Eigen::Vector3d& c);
+
+// Faces of `mesh` inside the frustum of `view` and facing it, re-indexed into a compact mesh
+// (vertex colours kept). Throws InputError if a face refers to a missing vertex.
+VisibleMesh ExtractVisibleMesh(const Mesh& mesh, const View& view,
+                               const VisibleMeshOptions& options = {});
+
+}  // namespace ms

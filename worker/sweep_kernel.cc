@@ -1,0 +1,288 @@
+#include "worker/sweep_kernel.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "base/error.h"
+#include "mesh/visible_mesh.h"
+#include "scene/camera.h"
+
+namespace ms {
+namespace {
+
+std::string CameraName(const SweepCamera& camera, const char* role) {
+  return fmt::format("{} {} ('{}')", role, camera.id, camera.view.name);
+}
+
+void CheckCamera(const SweepCamera& camera, const std::string& job, const char* role) {
+  const std::string who = job + ": " + CameraName(camera, role);
+  const Intrinsics& k = camera.view.intrinsics;
+  if (!(k.width > 0 && k.height > 0)) throw InputError(who + ": image size must be positive");
+  if (!(std::isfinite(k.fx) && std::isfinite(k.fy) && k.fx > 0 && k.fy > 0)) {
+    throw InputError(who + ": focal length must be finite and positive");
+  }
+  if (!(std::isfinite(k.cx) && std::isfinite(k.cy))) {
+    throw InputError(who + ": principal point not finite");
+  }
+  if (k.HasDistortion()) {
+    throw InputError(who +
+                     ": view has lens distortion; the sweep takes undistorted images and "
+                     "pinhole views (undistort them first)");
+  }
+  if (!camera.view.t.allFinite() || !IsRotation(camera.view.R, 1e-4)) {
+    throw InputError(who + ": pose is not a finite proper rotation and translation");
+  }
+  const cv::Mat& image = camera.image;
+  if (image.empty()) throw InputError(who + ": image missing");
+  if (image.type() != CV_32FC1) {
+    throw InputError(who + ": image must be single-channel float (CV_32FC1), got type " +
+                     std::to_string(image.type()));
+  }
+  if (image.cols != k.width || image.rows != k.height) {
+    throw InputError(fmt::format("{}: image is {}x{} but the view's intrinsics say {}x{}", who,
+                                 image.cols, image.rows, k.width, k.height));
+  }
+  if (!cv::checkRange(image, /*quiet=*/true)) {
+    throw InputError(who + ": image has non-finite pixels");
+  }
+}
+
+}  // namespace
+
+void SweepOptions::Check() const {
+  const auto fail = [](const std::string& field, const std::string& what, double value) {
+    throw InputError(fmt::format("sweep.{} {}, got {}", field, what, value));
+  };
+  if (num_offsets < 1 || num_offsets > 1000)
+    fail("num_offsets", "must be in [1, 1000]", num_offsets);
+  if (!(std::isfinite(alpha) && alpha >= 0))
+    fail("alpha", "must be finite and >= 0 (0 = auto)", alpha);
+  if (!(std::isfinite(alpha_parallax_px) && alpha_parallax_px > 0)) {
+    fail("alpha_parallax_px", "must be finite and > 0", alpha_parallax_px);
+  }
+  if (!(ncc_threshold >= -1 && ncc_threshold <= 1))
+    fail("ncc_threshold", "must be in [-1, 1]", ncc_threshold);
+  if (!(gaussian_sigma_px >= 0.5 && gaussian_sigma_px <= 100)) {
+    fail("gaussian_sigma_px", "must be in [0.5, 100]", gaussian_sigma_px);
+  }
+  if (tile_size_px < 1) fail("tile_size_px", "must be >= 1", tile_size_px);
+  if (!(std::isfinite(min_texture_variance) && min_texture_variance >= 0)) {
+    fail("min_texture_variance", "must be finite and >= 0", min_texture_variance);
+  }
+  if (!(min_window_weight > 0 && min_window_weight <= 1)) {
+    fail("min_window_weight", "must be in (0, 1]", min_window_weight);
+  }
+  if (!(std::isfinite(occlusion_tolerance) && occlusion_tolerance >= 0)) {
+    fail("occlusion_tolerance", "must be finite and >= 0", occlusion_tolerance);
+  }
+  if (max_image_dimension < 0)
+    fail("max_image_dimension", "must be >= 0 (0 = full size)", max_image_dimension);
+  if (pyramid_level < -1 || pyramid_level > 12) {
+    fail("pyramid_level", "must be in [-1, 12] (-1 = auto)", pyramid_level);
+  }
+}
+
+std::string SweepStats::Summary() const {
+  return fmt::format(
+      "{}x{} (level {}), alpha {:.4g}, {} offsets x {} neighbours, {} tiles, {:.3g} hypotheses "
+      "({:.3g} valid) in {:.3f} s ({:.3g}/s; prepare {:.3f}, raster {:.3f}, reproject {:.3f}, "
+      "ncc {:.3f}, reduce {:.3f})",
+      image_width, image_height, pyramid_level, alpha, num_offsets, num_neighbours,
+      tiles_x * tiles_y, static_cast<double>(hypotheses), static_cast<double>(valid_hypotheses),
+      total_s, total_s > 0 ? hypotheses / total_s : 0.0, prepare_s, raster_s, reproject_s, ncc_s,
+      reduce_s);
+}
+
+void CheckSweepJob(const SweepJob& job) {
+  job.options.Check();
+  const std::string name = fmt::format("sweep job for camera {}", job.camera.id);
+  CheckCamera(job.camera, name, "camera");
+  if (job.neighbours.empty()) throw InputError(name + ": no neighbour cameras");
+  const Eigen::Vector3d center = job.camera.view.Center();
+  for (const SweepCamera& n : job.neighbours) {
+    CheckCamera(n, name, "neighbour");
+    if (n.id == job.camera.id) throw InputError(name + ": the camera is its own neighbour");
+    const double baseline = (n.view.Center() - center).norm();
+    if (!(baseline > 1e-12 * std::max(1.0, center.norm()))) {
+      throw InputError(name + ": " + CameraName(n, "neighbour") +
+                       " is at the camera's centre (no parallax)");
+    }
+  }
+  const Mesh& mesh = job.mesh;
+  if (mesh.faces.empty()) throw InputError(name + ": mesh has no faces");
+  const int64_t num_vertices = static_cast<int64_t>(mesh.vertices.size());
+  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    if (!mesh.vertices[v].allFinite()) {
+      throw InputError(fmt::format("{}: mesh vertex {} is not finite", name, v));
+    }
+  }
+  bool any_in_front = false;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& face = mesh.faces[f];
+    for (int32_t v : face) {
+      if (v < 0 || v >= num_vertices) {
+        throw InputError(
+            fmt::format("{}: mesh face {} refers to vertex {} of {}", name, f, v, num_vertices));
+      }
+    }
+    if (!any_in_front) {
+      any_in_front = TriangleInFrustum(job.camera.view, mesh.vertices[face[0]],
+                                       mesh.vertices[face[1]], mesh.vertices[face[2]]);
+    }
+  }
+  if (!any_in_front) {
+    throw InputError(name +
+                     ": no face of the mesh is in front of the camera inside its image "
+                     "(camera outside the scene, or the wrong mesh)");
+  }
+}
+
+std::vector<int> SweepOffsets(int num_offsets) {
+  const int k_max = (num_offsets - 1) / 2;
+  std::vector<int> offsets;
+  for (int k = -k_max; k <= k_max; ++k) offsets.push_back(k);
+  return offsets;
+}
+
+Eigen::Vector3d SweepVertex(const Eigen::Vector3d& v, const Eigen::Vector3d& n,
+                            const Eigen::Vector3d& c, double alpha_k) {
+  const Eigen::Vector3d ray = v - c;
+  const double length = ray.norm();
+  if (!(length > 0)) return v;
+  const Eigen::Vector3d d = ray / length;
+  return v + alpha_k * std::abs(n.dot(d)) * d;
+}
+
+TileGrid TileGrid::Make(int width, int height, int tile_size_px) {
+  TileGrid grid;
+  grid.width = width;
+  grid.height = height;
+  grid.tiles_x =
+      std::max(1, static_cast<int>(std::lround(static_cast<double>(width) / tile_size_px)));
+  grid.tiles_y =
+      std::max(1, static_cast<int>(std::lround(static_cast<double>(height) / tile_size_px)));
+  grid.tiles_x = std::min(grid.tiles_x, std::max(1, width));
+  grid.tiles_y = std::min(grid.tiles_y, std::max(1, height));
+  return grid;
+}
+
+cv::Mat GaussianWindow(double sigma_px) {
+  const int radius = static_cast<int>(std::ceil(3 * sigma_px));
+  cv::Mat window(2 * radius + 1, 1, CV_32F);
+  double sum = 0;
+  std::vector<double> w(2 * radius + 1);
+  for (int i = -radius; i <= radius; ++i) {
+    w[i + radius] = std::exp(-0.5 * i * i / (sigma_px * sigma_px));
+    sum += w[i + radius];
+  }
+  for (int i = 0; i <= 2 * radius; ++i) window.at<float>(i) = static_cast<float>(w[i] / sum);
+  return window;
+}
+
+double AutoSweepAlpha(const View& camera, const std::vector<View>& neighbours, const Mesh& mesh,
+                      double parallax_px, double median_depth) {
+  const Eigen::Vector3d center = camera.Center();
+  // Up to ~4096 vertices, evenly strided: the median needs no more.
+  const size_t stride = std::max<size_t>(1, mesh.vertices.size() / 4096);
+  std::vector<double> rates;
+  for (size_t i = 0; i < mesh.vertices.size(); i += stride) {
+    const Eigen::Vector3d& X = mesh.vertices[i];
+    if (!(camera.ToCamera(X).z() > 0)) continue;
+    const Eigen::Vector3d d = (X - center).normalized();
+    for (const View& n : neighbours) {
+      const Eigen::Vector3d x = n.ToCamera(X);
+      if (!(x.z() > 0)) continue;
+      const Eigen::Vector3d dx = n.R * d;  // d(x)/ds
+      const double z2 = x.z() * x.z();
+      const double du = n.intrinsics.fx * (dx.x() * x.z() - x.x() * dx.z()) / z2;
+      const double dv = n.intrinsics.fy * (dx.y() * x.z() - x.y() * dx.z()) / z2;
+      rates.push_back(std::hypot(du, dv));
+    }
+  }
+  const double max_alpha = 0.02 * median_depth;
+  if (rates.empty()) return max_alpha;
+  auto mid = rates.begin() + rates.size() / 2;
+  std::nth_element(rates.begin(), mid, rates.end());
+  const double rate = *mid;
+  if (!(rate > 0)) return max_alpha;
+  return std::min(parallax_px / rate, max_alpha);
+}
+
+PreparedSweep PrepareSweep(const SweepJob& job) {
+  CheckSweepJob(job);
+  const SweepOptions& options = job.options;
+  PreparedSweep prep;
+
+  // Resolution: one level for the whole job so all cameras share the same pixel scale.
+  int level = options.pyramid_level;
+  if (level < 0) {
+    level = 0;
+    if (options.max_image_dimension > 0) {
+      int longest = std::max(job.camera.view.intrinsics.width, job.camera.view.intrinsics.height);
+      for (const SweepCamera& n : job.neighbours) {
+        longest = std::max({longest, n.view.intrinsics.width, n.view.intrinsics.height});
+      }
+      while ((longest >> level) > options.max_image_dimension && level < 12) ++level;
+    }
+  }
+  prep.pyramid_level = level;
+  const auto scale_camera = [level](const SweepCamera& in) {
+    SweepCamera out = in;
+    if (level == 0) return out;
+    Intrinsics& k = out.view.intrinsics;
+    const double factor = std::ldexp(1.0, -level);
+    const int width = std::max(1, static_cast<int>(std::lround(k.width * factor)));
+    const int height = std::max(1, static_cast<int>(std::lround(k.height * factor)));
+    const double sx = static_cast<double>(width) / k.width;
+    const double sy = static_cast<double>(height) / k.height;
+    k.fx *= sx;
+    k.cx *= sx;
+    k.fy *= sy;
+    k.cy *= sy;
+    k.width = width;
+    k.height = height;
+    cv::resize(in.image, out.image, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+    return out;
+  };
+  prep.camera = scale_camera(job.camera);
+  for (const SweepCamera& n : job.neighbours) prep.neighbours.push_back(scale_camera(n));
+  prep.scale_x =
+      static_cast<double>(prep.camera.view.intrinsics.width) / job.camera.view.intrinsics.width;
+  prep.scale_y =
+      static_cast<double>(prep.camera.view.intrinsics.height) / job.camera.view.intrinsics.height;
+
+  // Median depth of the mesh vertices in front of C.
+  std::vector<double> depths;
+  for (const Eigen::Vector3d& v : job.mesh.vertices) {
+    const double z = job.camera.view.ToCamera(v).z();
+    if (z > 0) depths.push_back(z);
+  }
+  if (depths.empty()) {
+    throw InputError(fmt::format("sweep job for camera {}: no mesh vertex in front of the camera",
+                                 job.camera.id));
+  }
+  auto mid = depths.begin() + depths.size() / 2;
+  std::nth_element(depths.begin(), mid, depths.end());
+  prep.median_depth = *mid;
+  prep.near = 1e-3 * prep.median_depth;
+
+  prep.offsets = SweepOffsets(options.num_offsets);
+  if (options.alpha > 0) {
+    prep.alpha = options.alpha;
+  } else {
+    std::vector<View> views;
+    for (const SweepCamera& n : prep.neighbours) views.push_back(n.view);
+    prep.alpha = AutoSweepAlpha(prep.camera.view, views, job.mesh, options.alpha_parallax_px,
+                                prep.median_depth);
+  }
+  prep.tiles = TileGrid::Make(prep.camera.view.intrinsics.width, prep.camera.view.intrinsics.height,
+                              options.tile_size_px);
+  prep.window = GaussianWindow(options.gaussian_sigma_px);
+  return prep;
+}
+
+}  // namespace ms

@@ -1,0 +1,170 @@
+// The mesh-sweeping kernel (paper section 2.2, docs/sweep.md): given a camera C, its neighbour
+// cameras, their images and the part of the mesh C sees, sweep every facet along C's viewing
+// rays, match C's image against each neighbour's image reprojected through every swept mesh
+// (Gaussian-weighted NCC) and return the best point of every image tile.
+//
+// This header holds what every implementation shares: the job, its options and result, the
+// interface, and the preparation (checks, resolution, alpha, tiles) so that the C++ reference
+// and the GLSL kernel sweep exactly the same hypotheses.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <opencv2/core/mat.hpp>
+#include <string>
+#include <vector>
+
+#include "mesh/mesh.h"
+#include "scene/camera.h"
+
+namespace ms {
+
+struct SweepOptions {
+  // N: sweep positions k with -N/2 < k < N/2 (N = 20 gives k = -9..9, 19 swept meshes).
+  int num_offsets = 20;
+  // alpha: sweep step in scene units (facet vertex v moves by alpha*k*|cos(theta)| along C's
+  // ray). 0 = derive from the job (alpha_parallax_px below; docs/sweep.md). The paper's 3 cm is
+  // alpha = 0.03 for a scene in metres.
+  double alpha = 0;
+  // Automatic alpha: one step moves a point at the job's median depth by this many pixels of
+  // parallax in the neighbour images (pixels of the swept resolution).
+  double alpha_parallax_px = 1.0;
+  // t_NCC: a tile's best pixel becomes a point only if its NCC is strictly above this.
+  double ncc_threshold = 0.98;
+  // sigma of the Gaussian NCC window, in pixels of the swept resolution.
+  double gaussian_sigma_px = 8;
+  // Target tile size in pixels of the swept resolution; the image is split into
+  // round(W/size) x round(H/size) tiles (at least 1 x 1).
+  int tile_size_px = 100;
+  // Pixels whose weighted variance in C's image or in the reprojected image is below this are
+  // textureless and never match (images are gray in [0, 1]; 1e-4 is a std of 2.55/255).
+  double min_texture_variance = 1e-4;
+  // A pixel's NCC counts only if the valid pixels carry at least this fraction of the Gaussian
+  // window's weight (the window is cut by the mesh's silhouette, the images' borders, occlusion).
+  double min_window_weight = 0.5;
+  // Occlusion test in a neighbour: a point is visible if its depth is at most the shadow map's
+  // depth times (1 + this).
+  double occlusion_tolerance = 0.01;
+  // Resolution: images larger than this (longest side, pixels) are swept at a pyramid level,
+  // halving until they fit (3072x2048 -> 1536x1024). 0 = always full size.
+  int max_image_dimension = 1600;
+  // Pyramid level to sweep at: -1 = choose from max_image_dimension; 0 = full size; L = images
+  // and intrinsics scaled by 2^-L.
+  int pyramid_level = -1;
+  void Check() const;  // throws InputError naming the field
+};
+
+// A camera of a job: its scene index, calibration and image (gray CV_32FC1 in [0, 1], exactly
+// intrinsics.width x intrinsics.height, undistorted: the kernel takes pinhole views only).
+struct SweepCamera {
+  int32_t id = -1;
+  View view;
+  cv::Mat image;
+};
+
+struct SweepJob {
+  SweepCamera camera;                   // C
+  std::vector<SweepCamera> neighbours;  // usually two (scene/view_selection.h)
+  Mesh mesh;  // the part of the mesh C sees (mesh/visible_mesh.h); no need to be manifold
+  SweepOptions options;
+};
+
+struct SweepPoint {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // on the swept mesh that matched
+  float ncc = 0;
+  // Centre of the winning pixel in C's full-resolution image (corner-origin convention).
+  Eigen::Vector2f pixel = Eigen::Vector2f::Zero();
+  int32_t offset = 0;  // k of the swept mesh
+  int32_t face = -1;   // face of the job's mesh that produced it
+  // C's id first, then the neighbour that won, then any other neighbour whose NCC at the same
+  // pixel and offset is also above the threshold.
+  std::vector<int32_t> cameras;
+};
+
+struct SweepStats {
+  int image_width = 0, image_height = 0;  // swept resolution
+  int pyramid_level = 0;
+  double alpha = 0;         // scene units, as used
+  double median_depth = 0;  // of the visible mesh's vertices in C
+  int num_offsets = 0;      // swept meshes (2*floor((N-1)/2)+1)
+  int num_neighbours = 0;
+  int tiles_x = 0, tiles_y = 0;
+  int64_t covered_pixels = 0;    // C pixels covered by a swept mesh, summed over offsets
+  int64_t hypotheses = 0;        // image pixels x offsets x neighbours (the benchmark's unit)
+  int64_t valid_hypotheses = 0;  // of which got an NCC (covered, visible, textured)
+  double prepare_s = 0, raster_s = 0, reproject_s = 0, ncc_s = 0, reduce_s = 0, total_s = 0;
+  std::string Summary() const;  // one line for the log
+};
+
+struct SweepResult {
+  std::vector<SweepPoint> points;  // at most one per tile, in tile order (row-major)
+  SweepStats stats;
+};
+
+class SweepKernel {
+ public:
+  virtual ~SweepKernel() = default;
+  // Throws InputError for a bad job (see CheckSweepJob), never crashes on one.
+  virtual SweepResult Run(const SweepJob& job) = 0;
+  virtual std::string Name() const = 0;
+};
+
+// ---- Shared preparation: every kernel must sweep exactly these hypotheses. ----
+
+// Throws InputError naming the camera and the problem: bad options, an empty or malformed mesh,
+// no neighbour, a neighbour at C's centre, an invalid or distorted view, a missing image, an
+// image not CV_32FC1 or of a size other than its view's, non-finite pixels, or a mesh with no
+// face in front of C inside its image.
+void CheckSweepJob(const SweepJob& job);
+
+// The offsets k, ascending: -K..K with K = floor((N-1)/2), i.e. every integer in (-N/2, N/2).
+std::vector<int> SweepOffsets(int num_offsets);
+
+// The swept position of vertex v of a facet with unit normal n, for camera centre c:
+// v + alpha_k |cos(theta)| d, d = (v - c)/|v - c|, cos(theta) = n.d. Positive alpha_k moves the
+// vertex away from the camera whatever the facet's orientation; a degenerate facet (n = 0)
+// does not move.
+Eigen::Vector3d SweepVertex(const Eigen::Vector3d& v, const Eigen::Vector3d& n,
+                            const Eigen::Vector3d& c, double alpha_k);
+
+// Tile t covers columns [x_begin(t), x_begin(t+1)) with x_begin(t) = floor(t*W/tiles_x), and
+// likewise rows.
+struct TileGrid {
+  int width = 0, height = 0, tiles_x = 1, tiles_y = 1;
+  static TileGrid Make(int width, int height, int tile_size_px);
+  int XBegin(int tx) const { return static_cast<int>(int64_t{tx} * width / tiles_x); }
+  int YBegin(int ty) const { return static_cast<int>(int64_t{ty} * height / tiles_y); }
+  int NumTiles() const { return tiles_x * tiles_y; }
+};
+
+// The Gaussian window weights w_i = exp(-i^2 / (2 sigma^2)), i = -r..r with r = ceil(3 sigma),
+// normalised to sum 1 (CV_32F column vector).
+cv::Mat GaussianWindow(double sigma_px);
+
+// A job ready to sweep: views and images at the swept resolution, alpha, offsets, tiles.
+struct PreparedSweep {
+  int pyramid_level = 0;
+  double scale_x = 1, scale_y = 1;  // swept / full-resolution pixel coordinates
+  SweepCamera camera;               // at the swept resolution (id and pose as in the job)
+  std::vector<SweepCamera> neighbours;
+  std::vector<int> offsets;
+  double alpha = 0;
+  double median_depth = 0;
+  // Near clipping plane for every rendering (camera z, scene units): 1e-3 x median depth.
+  double near = 0;
+  TileGrid tiles;
+  cv::Mat window;  // GaussianWindow(options.gaussian_sigma_px)
+};
+
+// Checks the job (CheckSweepJob), picks the pyramid level, resizes images (cv::INTER_AREA) and
+// scales intrinsics (fx, cx by the width ratio, fy, cy by the height ratio: exact with the
+// corner-origin convention), and derives alpha (docs/sweep.md).
+PreparedSweep PrepareSweep(const SweepJob& job);
+
+// The automatic alpha: alpha_parallax_px / median over visible vertices X and neighbours j of
+// |d pi_j(X + s d) / ds| at s = 0 (pixels per scene unit moved along C's ray), clamped to at
+// most 0.02 x median depth. Views must be at the swept resolution.
+double AutoSweepAlpha(const View& camera, const std::vector<View>& neighbours, const Mesh& mesh,
+                      double parallax_px, double median_depth);
+
+}  // namespace ms

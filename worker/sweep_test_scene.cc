@@ -1,0 +1,202 @@
+#include "worker/sweep_test_scene.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <opencv2/core.hpp>
+
+namespace ms {
+namespace {
+
+// Deterministic lattice hash -> [0, 1).
+double LatticeValue(int64_t x, int64_t y, uint32_t seed) {
+  uint64_t h = static_cast<uint64_t>(x) * 0x9E3779B97F4A7C15ull ^
+               static_cast<uint64_t>(y) * 0xC2B2AE3D27D4EB4Full ^ (uint64_t{seed} << 32);
+  h ^= h >> 33;
+  h *= 0xFF51AFD7ED558CCDull;
+  h ^= h >> 33;
+  h *= 0xC4CEB9FE1A85EC53ull;
+  h ^= h >> 33;
+  return static_cast<double>(h >> 11) / static_cast<double>(uint64_t{1} << 53);
+}
+
+double Smooth(double t) { return t * t * t * (t * (t * 6 - 15) + 10); }
+
+double ValueNoise(double x, double y, uint32_t seed) {
+  const double fx = std::floor(x), fy = std::floor(y);
+  const int64_t ix = static_cast<int64_t>(fx), iy = static_cast<int64_t>(fy);
+  const double sx = Smooth(x - fx), sy = Smooth(y - fy);
+  const double a = LatticeValue(ix, iy, seed), b = LatticeValue(ix + 1, iy, seed);
+  const double c = LatticeValue(ix, iy + 1, seed), d = LatticeValue(ix + 1, iy + 1, seed);
+  return (a + sx * (b - a)) + sy * ((c + sx * (d - c)) - (a + sx * (b - a)));
+}
+
+// Multi-scale texture on the ground-plane coordinates, in [0, 1].
+double Texture(double x, double y) {
+  double sum = 0, norm = 0, wavelength = 0.05, amplitude = 1;
+  for (int octave = 0; octave < 5; ++octave) {
+    sum += amplitude * ValueNoise(x / wavelength, y / wavelength, 17 + octave);
+    norm += amplitude;
+    wavelength *= 2;
+    amplitude *= 0.8;
+  }
+  // Stretch the (centre-heavy) sum so the texture uses most of [0, 1].
+  return std::clamp(0.5 + 2.0 * (sum / norm - 0.5), 0.0, 1.0);
+}
+
+// First hit of the ray o + t d (t > 0) with the heightfield h(x, y) = max(0, H (1 - max(|x|,
+// |y|))): the nearest hit on the five planes that lies on the surface.
+bool CastRay(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double height,
+             Eigen::Vector3d* hit) {
+  double best = std::numeric_limits<double>::infinity();
+  // Planes z = a x + b y + c: ground (0,0,0) and the four faces H(1 -+ x), H(1 -+ y).
+  const double planes[5][3] = {{0, 0, 0},
+                               {-height, 0, height},
+                               {height, 0, height},
+                               {0, -height, height},
+                               {0, height, height}};
+  for (const auto& p : planes) {
+    const double denom = d.z() - p[0] * d.x() - p[1] * d.y();
+    if (denom == 0) continue;
+    const double t = (p[0] * o.x() + p[1] * o.y() + p[2] - o.z()) / denom;
+    if (!(t > 0 && t < best)) continue;
+    const Eigen::Vector3d q = o + t * d;
+    const double surface = std::max(0.0, height * (1 - std::max(std::abs(q.x()), std::abs(q.y()))));
+    if (std::abs(q.z() - surface) <= 1e-9 * (1 + std::abs(q.z()))) best = t;
+  }
+  if (!std::isfinite(best)) return false;
+  *hit = o + best * d;
+  return true;
+}
+
+// Closest point on triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5).
+Eigen::Vector3d ClosestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                  const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  }
+  const double denom = 1 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+}  // namespace
+
+View LookAtView(const Eigen::Vector3d& center, const Eigen::Vector3d& target, int width, int height,
+                double focal_px) {
+  const Eigen::Vector3d z = (target - center).normalized();
+  const Eigen::Vector3d up(0, 1, 0);
+  const Eigen::Vector3d y = -(up - up.dot(z) * z).normalized();  // image down = world -y
+  const Eigen::Vector3d x = y.cross(z);
+  View view;
+  view.R.row(0) = x.transpose();
+  view.R.row(1) = y.transpose();
+  view.R.row(2) = z.transpose();
+  view.SetCenter(center);
+  view.intrinsics.width = width;
+  view.intrinsics.height = height;
+  view.intrinsics.fx = view.intrinsics.fy = focal_px;
+  view.intrinsics.cx = width / 2.0;
+  view.intrinsics.cy = height / 2.0;
+  return view;
+}
+
+double PyramidScene::Height(double x, double y) const {
+  return std::max(0.0, pyramid_height * (1 - std::max(std::abs(x), std::abs(y))));
+}
+
+double PyramidScene::Distance(const Eigen::Vector3d& p) const {
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t f = 0; f < truth.faces.size(); ++f) {
+    const auto& face = truth.faces[f];
+    const Eigen::Vector3d q = ClosestOnTriangle(p, truth.vertices[face[0]], truth.vertices[face[1]],
+                                                truth.vertices[face[2]]);
+    best = std::min(best, (p - q).norm());
+  }
+  return best;
+}
+
+Mesh MakeFlatSquare(double z, double half_size, int cells) {
+  Mesh mesh;
+  for (int r = 0; r <= cells; ++r) {
+    for (int c = 0; c <= cells; ++c) {
+      mesh.vertices.emplace_back(-half_size + 2 * half_size * c / cells,
+                                 -half_size + 2 * half_size * r / cells, z);
+    }
+  }
+  for (int r = 0; r < cells; ++r) {
+    for (int c = 0; c < cells; ++c) {
+      const int32_t a = r * (cells + 1) + c, b = a + 1, d = a + cells + 1, e = d + 1;
+      mesh.faces.push_back({a, b, e});  // counter-clockwise seen from +z
+      mesh.faces.push_back({a, e, d});
+    }
+  }
+  return mesh;
+}
+
+PyramidScene MakePyramidScene(const PyramidSceneOptions& options) {
+  PyramidScene scene;
+  scene.pyramid_height = options.pyramid_height;
+  const double h = options.pyramid_height;
+  // Truth: apex, base corners, and a ground ring out to +-20 (counter-clockwise from above).
+  Mesh& t = scene.truth;
+  t.vertices = {{0, 0, h},     {-1, -1, 0},  {1, -1, 0},  {1, 1, 0},   {-1, 1, 0},
+                {-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}};
+  t.faces = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 1},  // pyramid sides
+             {1, 5, 6}, {1, 6, 2}, {2, 6, 7}, {2, 7, 3},  // ground ring
+             {3, 7, 8}, {3, 8, 4}, {4, 8, 5}, {4, 5, 1}};
+
+  const double focal = options.focal_px * options.width / 160.0;
+  const Eigen::Vector3d target(0, 0, 0.1);
+  const Eigen::Vector3d centers[3] = {{0.05, -0.1, 2.6}, {0.6, 0.05, 2.5}, {-0.55, 0.15, 2.7}};
+  const int ss = std::max(1, options.supersample);
+  for (int i = 0; i < 3; ++i) {
+    SweepCamera camera;
+    camera.id = i;
+    camera.view = LookAtView(centers[i], target, options.width, options.height, focal);
+    camera.view.name = "pyramid_" + std::to_string(i);
+    camera.image.create(options.height, options.width, CV_32F);
+    const Eigen::Vector3d origin = camera.view.Center();
+    for (int row = 0; row < options.height; ++row) {
+      for (int col = 0; col < options.width; ++col) {
+        double sum = 0;
+        for (int sy = 0; sy < ss; ++sy) {
+          for (int sx = 0; sx < ss; ++sx) {
+            const Eigen::Vector2d pixel(col + (sx + 0.5) / ss, row + (sy + 0.5) / ss);
+            Eigen::Vector3d hit;
+            const double value = CastRay(origin, camera.view.PixelRay(pixel), h, &hit)
+                                     ? Texture(hit.x(), hit.y())
+                                     : 0.5;
+            sum += 0.5 + options.texture_contrast * (value - 0.5);
+          }
+        }
+        camera.image.at<float>(row, col) = static_cast<float>(sum / (ss * ss));
+      }
+    }
+    if (options.noise_stddev > 0) {
+      cv::Mat noise(camera.image.size(), CV_32F);
+      cv::RNG rng(1000 + i);
+      rng.fill(noise, cv::RNG::NORMAL, 0.0, options.noise_stddev);
+      camera.image += noise;
+    }
+    scene.cameras.push_back(std::move(camera));
+  }
+  return scene;
+}
+
+}  // namespace ms

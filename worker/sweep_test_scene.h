@@ -1,0 +1,43 @@
+// Synthetic scenes for the sweep's tests and benchmark: a textured pyramid on a textured ground
+// plane (the paper's simulated dataset: 2 x 2 base, 0.3 high), seen from three cameras looking
+// down, rendered analytically (each pixel's rays cast against the exact surface, textured with
+// procedural multi-scale value noise, 2 x 2 supersampled).
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "mesh/mesh.h"
+#include "worker/sweep_kernel.h"
+
+namespace ms {
+
+struct PyramidSceneOptions {
+  int width = 160, height = 120;  // every camera's image size
+  double focal_px = 150;          // at 160 px wide; scaled with width
+  double pyramid_height = 0.3;    // apex height above the ground (base: [-1, 1]^2 at z = 0)
+  double texture_contrast = 1;    // texture = 0.5 + contrast * (noise - 0.5); 0 = blank
+  int supersample = 2;            // rays per pixel per axis
+  double noise_stddev = 0;        // independent Gaussian noise per camera (fixed seeds)
+};
+
+struct PyramidScene {
+  std::vector<SweepCamera> cameras;  // 0 = C, 1 and 2 its neighbours; ids 0, 1, 2
+  Mesh truth;                        // the pyramid and the ground around it, triangulated
+  // Height of the true surface at (x, y).
+  double Height(double x, double y) const;
+  // Euclidean distance from p to the true surface.
+  double Distance(const Eigen::Vector3d& p) const;
+  double pyramid_height = 0.3;
+};
+
+PyramidScene MakePyramidScene(const PyramidSceneOptions& options = {});
+
+// A flat square [-half, half]^2 at height z, split into cells x cells x 2 triangles facing +z.
+Mesh MakeFlatSquare(double z, double half_size, int cells);
+
+// A view at `center` looking at `target`, image y pointing along -world_y as seen from above.
+View LookAtView(const Eigen::Vector3d& center, const Eigen::Vector3d& target, int width, int height,
+                double focal_px);
+
+}  // namespace ms
