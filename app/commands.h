@@ -8,5 +8,7 @@
 namespace ms::app {
 
 void RegisterInfoCommand(CLI::App& app);
+void RegisterSynthCommand(CLI::App& app);
+void RegisterEvaluateCommand(CLI::App& app);
 
 }  // namespace ms::app

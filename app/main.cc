@@ -29,6 +29,8 @@ int main(int argc, char** argv) {
   help->add_option("command", help_topic, "command to describe");
 
   ms::app::RegisterInfoCommand(app);
+  ms::app::RegisterSynthCommand(app);
+  ms::app::RegisterEvaluateCommand(app);
 
   try {
     app.parse(argc, argv);

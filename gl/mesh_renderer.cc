@@ -128,7 +128,9 @@ bool GpuMesh::DepthBounds(const View& view, double* near, double* far) const {
   if (!(z_max > 0)) return false;
   // Reversed-Z float depth keeps relative precision down to tiny near planes; 1e-6 of the far
   // distance still leaves ~1e-7 relative depth resolution over the range.
-  const double pad = 1e-3 * (z_max - z_min) + 1e-9 * z_max;
+  // Pad so that float rounding in the vertex stage never clips a surface lying at the box's
+  // extremes (a plane facing the camera has z_min == z_max).
+  const double pad = 1e-3 * (z_max - z_min) + 1e-3 * z_max;
   *near = std::max(z_min - pad, z_max * 1e-6);
   *far = z_max + pad;
   return true;

@@ -47,8 +47,9 @@ void main() {
   vec3 p = v_world + u_origin;
 
   float period = max(m.noise_photo.x, 1e-6);
-  // fbm has a standard deviation of ~0.15; scale it to ~0.4 before applying the contrast.
-  float detail = clamp(2.5 * ms_fbm(p / period, u_octaves, 0.6, u_seed), -1.0, 1.0);
+  // fbm has a standard deviation of ~0.15; scale it to ~0.35 before applying the contrast. The
+  // gain of 0.72 keeps the fine octaves strong enough for window-based matching.
+  float detail = clamp(2.2 * ms_fbm(p / period, u_octaves, 0.72, u_seed), -1.0, 1.0);
   float hue = clamp(2.5 * ms_fbm(p / (period * 1.7) + vec3(17.0), 3, 0.5, u_seed + 1000u),
                     -1.0, 1.0);
   vec3 albedo = m.color_contrast.rgb *
