@@ -85,6 +85,20 @@ TEST_F(GlTest, SecondContextCoexists) {
   EXPECT_EQ(still_works.size(), 16u);
 }
 
+TEST(GlContextTest, MissingBackendGivesAClearError) {
+  GlContextOptions options;
+  options.backend = GlBackend::kDevice;
+  options.device_index = 99;
+  try {
+    GlContext context(options);
+    FAIL() << "got a context on EGL device 99";
+  } catch (const InternalError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("no usable OpenGL 4.3+ core context"));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("device"));
+  }
+  EXPECT_THAT(DescribeGl(options), ::testing::StartsWith("unavailable: "));
+}
+
 TEST(GlContextOptions, RejectsOldVersionsAndUnknownBackends) {
   GlContextOptions options;
   options.min_minor = 2;

@@ -351,7 +351,7 @@ SynthDataset MakeSynthDataset(const SynthOptions& options, const gl::GlContext* 
 void WriteSynthDataset(const SynthDataset& d, const std::string& directory) {
   const fs::path dir(directory);
   std::error_code ec;
-  fs::create_directories(dir / "images", ec);
+  fs::create_directories(d.images.empty() ? dir : dir / "images", ec);
   if (ec) throw InputError(directory + ": cannot create the dataset directory: " + ec.message());
   Scene scene = d.scene;
   for (View& view : scene.views) view.image_path = (dir / "images" / view.name).string();
