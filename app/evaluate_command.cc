@@ -55,9 +55,8 @@ void RunEvaluate(const EvaluateCommandOptions& o) {
     meshes.push_back(ReadMesh(o.meshes[i]));
   }
   for (size_t i = 0; i < meshes.size(); ++i) {
-    const std::string label = o.labels.empty()
-                                  ? std::filesystem::path(o.meshes[i]).filename().string()
-                                  : o.labels[i];
+    const std::string label =
+        o.labels.empty() ? std::filesystem::path(o.meshes[i]).filename().string() : o.labels[i];
     labeled.push_back({label, &meshes[i]});
   }
   const Scene scene = ReadScene(o.input);
@@ -88,8 +87,9 @@ void RegisterEvaluateCommand(CLI::App& app) {
       "MRE, RMS, coverage and the cumulative error distribution (docs/evaluation.md)");
   cmd->add_option("-m,--mesh", o->meshes, "mesh(es) to evaluate (.ply/.obj); repeat to compare")
       ->required();
-  cmd->add_option("--label", o->labels, "names of the meshes in tables and figures (default: "
-                                        "file names)");
+  cmd->add_option("--label", o->labels,
+                  "names of the meshes in tables and figures (default: "
+                  "file names)");
   cmd->add_option("-g,--ground-truth", o->ground_truth, "ground-truth mesh (.ply/.obj)")
       ->required();
   cmd->add_option("-i,--input", o->input, "scene with the cameras (any supported format)")

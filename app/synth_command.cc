@@ -31,10 +31,11 @@ void RunSynth(SynthCommandOptions options) {
   }
   const SynthDataset dataset = MakeSynthDataset(options.synth, context ? &*context : nullptr);
   WriteSynthDataset(dataset, options.output);
-  spdlog::info("synth {}: wrote {} in {:.1f} s (geometry {:.2f} s, points {:.2f} s, images "
-               "{:.2f} s)",
-               dataset.scene_name, options.output, timer.Seconds(), dataset.seconds_geometry,
-               dataset.seconds_points, dataset.seconds_images);
+  spdlog::info(
+      "synth {}: wrote {} in {:.1f} s (geometry {:.2f} s, points {:.2f} s, images "
+      "{:.2f} s)",
+      dataset.scene_name, options.output, timer.Seconds(), dataset.seconds_geometry,
+      dataset.seconds_points, dataset.seconds_images);
 }
 
 }  // namespace
@@ -77,8 +78,7 @@ void RegisterSynthCommand(CLI::App& app) {
                   "a point is seen only if its surface is within this angle (degrees) of facing "
                   "the camera")
       ->capture_default_str();
-  cmd->add_option("--supersampling", s.supersampling,
-                  "anti-aliasing: k x k samples per pixel")
+  cmd->add_option("--supersampling", s.supersampling, "anti-aliasing: k x k samples per pixel")
       ->capture_default_str();
   cmd->add_option("--texture-photos", s.texture_photos,
                   "photographs (files or directories of .jpg/.png) mixed into the procedural "

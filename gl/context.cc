@@ -28,22 +28,38 @@ bool HasExtension(const char* list, const char* name) {
 
 std::string EglErrorName(EGLint error) {
   switch (error) {
-    case EGL_SUCCESS: return "EGL_SUCCESS";
-    case EGL_NOT_INITIALIZED: return "EGL_NOT_INITIALIZED";
-    case EGL_BAD_ACCESS: return "EGL_BAD_ACCESS";
-    case EGL_BAD_ALLOC: return "EGL_BAD_ALLOC";
-    case EGL_BAD_ATTRIBUTE: return "EGL_BAD_ATTRIBUTE";
-    case EGL_BAD_CONFIG: return "EGL_BAD_CONFIG";
-    case EGL_BAD_CONTEXT: return "EGL_BAD_CONTEXT";
-    case EGL_BAD_CURRENT_SURFACE: return "EGL_BAD_CURRENT_SURFACE";
-    case EGL_BAD_DISPLAY: return "EGL_BAD_DISPLAY";
-    case EGL_BAD_MATCH: return "EGL_BAD_MATCH";
-    case EGL_BAD_NATIVE_PIXMAP: return "EGL_BAD_NATIVE_PIXMAP";
-    case EGL_BAD_NATIVE_WINDOW: return "EGL_BAD_NATIVE_WINDOW";
-    case EGL_BAD_PARAMETER: return "EGL_BAD_PARAMETER";
-    case EGL_BAD_SURFACE: return "EGL_BAD_SURFACE";
-    case EGL_CONTEXT_LOST: return "EGL_CONTEXT_LOST";
-    default: return "EGL error 0x" + fmt::format("{:x}", error);
+    case EGL_SUCCESS:
+      return "EGL_SUCCESS";
+    case EGL_NOT_INITIALIZED:
+      return "EGL_NOT_INITIALIZED";
+    case EGL_BAD_ACCESS:
+      return "EGL_BAD_ACCESS";
+    case EGL_BAD_ALLOC:
+      return "EGL_BAD_ALLOC";
+    case EGL_BAD_ATTRIBUTE:
+      return "EGL_BAD_ATTRIBUTE";
+    case EGL_BAD_CONFIG:
+      return "EGL_BAD_CONFIG";
+    case EGL_BAD_CONTEXT:
+      return "EGL_BAD_CONTEXT";
+    case EGL_BAD_CURRENT_SURFACE:
+      return "EGL_BAD_CURRENT_SURFACE";
+    case EGL_BAD_DISPLAY:
+      return "EGL_BAD_DISPLAY";
+    case EGL_BAD_MATCH:
+      return "EGL_BAD_MATCH";
+    case EGL_BAD_NATIVE_PIXMAP:
+      return "EGL_BAD_NATIVE_PIXMAP";
+    case EGL_BAD_NATIVE_WINDOW:
+      return "EGL_BAD_NATIVE_WINDOW";
+    case EGL_BAD_PARAMETER:
+      return "EGL_BAD_PARAMETER";
+    case EGL_BAD_SURFACE:
+      return "EGL_BAD_SURFACE";
+    case EGL_CONTEXT_LOST:
+      return "EGL_CONTEXT_LOST";
+    default:
+      return "EGL error 0x" + fmt::format("{:x}", error);
   }
 }
 
@@ -107,15 +123,24 @@ const char* GlString(GLenum name) {
 
 std::string GlErrorName(GLenum error) {
   switch (error) {
-    case GL_NO_ERROR: return "GL_NO_ERROR";
-    case GL_INVALID_ENUM: return "GL_INVALID_ENUM";
-    case GL_INVALID_VALUE: return "GL_INVALID_VALUE";
-    case GL_INVALID_OPERATION: return "GL_INVALID_OPERATION";
-    case GL_INVALID_FRAMEBUFFER_OPERATION: return "GL_INVALID_FRAMEBUFFER_OPERATION";
-    case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
-    case GL_STACK_UNDERFLOW: return "GL_STACK_UNDERFLOW";
-    case GL_STACK_OVERFLOW: return "GL_STACK_OVERFLOW";
-    default: return fmt::format("GL error 0x{:x}", error);
+    case GL_NO_ERROR:
+      return "GL_NO_ERROR";
+    case GL_INVALID_ENUM:
+      return "GL_INVALID_ENUM";
+    case GL_INVALID_VALUE:
+      return "GL_INVALID_VALUE";
+    case GL_INVALID_OPERATION:
+      return "GL_INVALID_OPERATION";
+    case GL_INVALID_FRAMEBUFFER_OPERATION:
+      return "GL_INVALID_FRAMEBUFFER_OPERATION";
+    case GL_OUT_OF_MEMORY:
+      return "GL_OUT_OF_MEMORY";
+    case GL_STACK_UNDERFLOW:
+      return "GL_STACK_UNDERFLOW";
+    case GL_STACK_OVERFLOW:
+      return "GL_STACK_OVERFLOW";
+    default:
+      return fmt::format("GL error 0x{:x}", error);
   }
 }
 
@@ -139,9 +164,12 @@ GlBackend ParseGlBackend(const std::string& name, const std::string& field) {
 
 std::string GlBackendName(GlBackend backend) {
   switch (backend) {
-    case GlBackend::kAuto: return "auto";
-    case GlBackend::kDevice: return "device";
-    case GlBackend::kSurfaceless: return "surfaceless";
+    case GlBackend::kAuto:
+      return "auto";
+    case GlBackend::kDevice:
+      return "device";
+    case GlBackend::kSurfaceless:
+      return "surfaceless";
   }
   return "unknown";
 }
@@ -296,16 +324,16 @@ GlContext::GlContext(const GlContextOptions& options) : impl_(std::make_unique<I
   };
   std::vector<Device> hardware, software;
   const bool device_platform =
-      HasExtension(egl.client_extensions.c_str(), "EGL_EXT_platform_device") &&
-      egl.query_devices && egl.get_platform_display;
+      HasExtension(egl.client_extensions.c_str(), "EGL_EXT_platform_device") && egl.query_devices &&
+      egl.get_platform_display;
   if (want_devices && !device_platform) {
     failures.push_back("EGL devices: EGL_EXT_device_enumeration/EGL_EXT_platform_device missing");
   } else if (want_devices) {
     EGLint count = 0;
     std::vector<EGLDeviceEXT> devices(16);
     if (!egl.query_devices(static_cast<EGLint>(devices.size()), devices.data(), &count)) {
-      failures.push_back("EGL devices: eglQueryDevicesEXT failed (" +
-                         EglErrorName(eglGetError()) + ")");
+      failures.push_back("EGL devices: eglQueryDevicesEXT failed (" + EglErrorName(eglGetError()) +
+                         ")");
       count = 0;
     }
     if (count == 0 && failures.empty()) failures.push_back("EGL devices: none found");
@@ -324,8 +352,8 @@ GlContext::GlContext(const GlContextOptions& options) : impl_(std::make_unique<I
       (is_software ? software : hardware).push_back({devices[i], i, label});
     }
     if (options.device_index >= 0 && options.device_index >= count) {
-      failures.push_back(fmt::format("EGL device {}: only {} device(s)", options.device_index,
-                                     count));
+      failures.push_back(
+          fmt::format("EGL device {}: only {} device(s)", options.device_index, count));
     }
   }
   auto try_device = [&](const Device& device) {
@@ -359,8 +387,8 @@ GlContext::GlContext(const GlContextOptions& options) : impl_(std::make_unique<I
   if (impl_->display == EGL_NO_DISPLAY) {
     std::string message = "no usable OpenGL " + std::to_string(options.min_major) + "." +
                           std::to_string(options.min_minor) +
-                          "+ core context through EGL (backend " +
-                          GlBackendName(options.backend) + "):";
+                          "+ core context through EGL (backend " + GlBackendName(options.backend) +
+                          "):";
     for (const std::string& f : failures) message += " [" + f + "]";
     message +=
         ". A GPU needs its vendor's EGL driver (NVIDIA: libnvidia-egl); without one, install "

@@ -23,8 +23,8 @@ std::string GlBackendName(GlBackend backend);
 
 struct GlContextOptions {
   GlBackend backend = GlBackend::kAuto;  // see the list above
-  int device_index = -1;   // with kDevice: the EGL device to use (-1: the first that works)
-  int min_major = 4;       // the oldest core profile accepted; 4.3 has compute shaders and SSBOs
+  int device_index = -1;  // with kDevice: the EGL device to use (-1: the first that works)
+  int min_major = 4;      // the oldest core profile accepted; 4.3 has compute shaders and SSBOs
   int min_minor = 3;
   bool debug_output = false;  // a debug context whose KHR_debug messages go to the log (slow)
   void Check() const;

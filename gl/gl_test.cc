@@ -51,8 +51,10 @@ Mesh FacingQuad(const View& view, double depth, double tilt_x = 0, double tilt_y
   const Intrinsics& k = view.intrinsics;
   Mesh mesh;
   const double margin = 5;
-  for (auto [u, v] : {std::pair{-margin, -margin}, {k.width + margin, -margin},
-                      {k.width + margin, k.height + margin}, {-margin, k.height + margin}}) {
+  for (auto [u, v] : {std::pair{-margin, -margin},
+                      {k.width + margin, -margin},
+                      {k.width + margin, k.height + margin},
+                      {-margin, k.height + margin}}) {
     // Plane z = depth + tilt_x * x + tilt_y * y in camera coordinates, along the pixel ray.
     const double a = (u - k.cx) / k.fx, b = (v - k.cy) / k.fy;
     const double z = depth / (1 - tilt_x * a - tilt_y * b);
@@ -348,7 +350,7 @@ TEST_F(GlTest, TexturesRoundTripAndFramebuffersReadSubRectangles) {
   program.Use();
   empty.DrawTriangles(3);
   const cv::Mat all = fb.Read(0);
-  EXPECT_FLOAT_EQ(all.at<float>(0, 0), 0.5f + 50.0f);   // row 0 = framebuffer row 0
+  EXPECT_FLOAT_EQ(all.at<float>(0, 0), 0.5f + 50.0f);  // row 0 = framebuffer row 0
   EXPECT_FLOAT_EQ(all.at<float>(7, 3), 3.5f + 750.0f);
   EXPECT_EQ(cv::norm(fb.Read(0, rect), all(rect), cv::NORM_INF), 0);
 }

@@ -19,15 +19,17 @@ void CheckView(const View& view, const GlContext& context, int scale = 1) {
   const Intrinsics& k = view.intrinsics;
   if (!(k.width > 0 && k.height > 0 && k.fx > 0 && k.fy > 0 && std::isfinite(k.fx) &&
         std::isfinite(k.fy) && std::isfinite(k.cx) && std::isfinite(k.cy))) {
-    throw InputError(fmt::format("view '{}': cannot render with intrinsics {}x{} f=({}, {}) "
-                                 "c=({}, {})",
-                                 view.name, k.width, k.height, k.fx, k.fy, k.cx, k.cy));
+    throw InputError(
+        fmt::format("view '{}': cannot render with intrinsics {}x{} f=({}, {}) "
+                    "c=({}, {})",
+                    view.name, k.width, k.height, k.fx, k.fy, k.cx, k.cy));
   }
   const int limit = context.info().max_texture_size;
   if (limit > 0 && (int64_t{k.width} * scale > limit || int64_t{k.height} * scale > limit)) {
-    throw InputError(fmt::format("view '{}': {}x{} (x{} supersampling) exceeds the renderer's "
-                                 "limit of {} pixels per side",
-                                 view.name, k.width, k.height, scale, limit));
+    throw InputError(
+        fmt::format("view '{}': {}x{} (x{} supersampling) exceeds the renderer's "
+                    "limit of {} pixels per side",
+                    view.name, k.width, k.height, scale, limit));
   }
   if (!view.R.allFinite() || !view.t.allFinite()) {
     throw InputError("view '" + view.name + "': pose is not finite");
@@ -35,8 +37,8 @@ void CheckView(const View& view, const GlContext& context, int scale = 1) {
 }
 
 // Depth range for a render: the options' if given, else the mesh bounds'.
-bool ChooseDepthRange(const GpuMesh& mesh, const View& view, double near_option,
-                      double far_option, double* near, double* far) {
+bool ChooseDepthRange(const GpuMesh& mesh, const View& view, double near_option, double far_option,
+                      double* near, double* far) {
   double auto_near = 0, auto_far = 0;
   if (!mesh.DepthBounds(view, &auto_near, &auto_far)) return false;
   *near = near_option > 0 ? near_option : auto_near;
@@ -144,9 +146,7 @@ void DepthRenderOptions::Check() const {
   if (near > 0 && far > 0 && far <= near) throw InputError("depth.far: must exceed depth.near");
 }
 
-int64_t DepthMaps::CountValid() const {
-  return depth.empty() ? 0 : cv::countNonZero(depth > 0);
-}
+int64_t DepthMaps::CountValid() const { return depth.empty() ? 0 : cv::countNonZero(depth > 0); }
 
 struct MeshRenderer::Impl {
   const GlContext* context;
@@ -203,8 +203,7 @@ DepthMaps MeshRenderer::Render(const View& view, const DepthRenderOptions& optio
 
   const ShaderProgram& program = impl_->program;
   program.Set("u_model_view", ModelView(view, impl_->mesh.origin()).cast<float>().eval());
-  program.Set("u_projection",
-              GlProjection(view.intrinsics, near, far, range).cast<float>().eval());
+  program.Set("u_projection", GlProjection(view.intrinsics, near, far, range).cast<float>().eval());
   program.Set("u_origin", impl_->mesh.origin().cast<float>().eval());
   program.Use();
   impl_->mesh.Draw();
@@ -267,8 +266,8 @@ void SurfaceTexture::Check(size_t num_faces) const {
   }
   for (size_t f = 0; f < face_material.size(); ++f) {
     if (face_material[f] < 0 || face_material[f] >= static_cast<int32_t>(materials.size())) {
-      throw InputError(fmt::format("texture.face_material[{}]: {} is not a material", f,
-                                   face_material[f]));
+      throw InputError(
+          fmt::format("texture.face_material[{}]: {} is not a material", f, face_material[f]));
     }
   }
   for (size_t i = 0; i < photos.size(); ++i) {

@@ -48,8 +48,8 @@ class GpuMesh {
 };
 
 struct DepthRenderOptions {
-  double near = 0;  // nearest depth kept; 0: from the mesh bounding box (see GpuMesh)
-  double far = 0;   // farthest depth kept; 0: from the mesh bounding box
+  double near = 0;               // nearest depth kept; 0: from the mesh bounding box (see GpuMesh)
+  double far = 0;                // farthest depth kept; 0: from the mesh bounding box
   bool cull_back_faces = false;  // drop faces seen from behind (conventions: CCW from outside)
   bool world_positions = true;   // fill DepthMaps::world
   bool face_ids = true;          // fill DepthMaps::face_id
@@ -57,9 +57,9 @@ struct DepthRenderOptions {
 };
 
 struct DepthMaps {
-  cv::Mat depth;    // CV_32F, camera z of the nearest surface; 0 where none
-  cv::Mat world;    // CV_32FC3 world position (x,y,z); 0 where none; empty if not asked
-  cv::Mat face_id;  // CV_32S mesh face index; -1 where none; empty if not asked
+  cv::Mat depth;               // CV_32F, camera z of the nearest surface; 0 where none
+  cv::Mat world;               // CV_32FC3 world position (x,y,z); 0 where none; empty if not asked
+  cv::Mat face_id;             // CV_32S mesh face index; -1 where none; empty if not asked
   int64_t CountValid() const;  // pixels with depth > 0
 };
 
@@ -83,15 +83,15 @@ class MeshRenderer {
 // What a surface looks like. Colours are linear RGB in [0,1]; lengths are in scene units.
 struct SurfaceMaterial {
   Eigen::Vector3f color{0.6f, 0.55f, 0.5f};  // mean albedo
-  float noise_contrast = 0.6f;  // amplitude of the multi-scale noise (0 = flat colour)
-  float noise_period = 1.0f;    // size of the coarsest noise octave
-  int photo = -1;               // index into SurfaceTexture::photos; -1: noise only
-  float photo_period = 2.0f;    // world size one photo covers (tri-planar projection)
-  float photo_weight = 0.8f;    // share of the photo in the albedo
-  float window_spacing = 0;     // facade windows every this much along walls; 0 = none
-  float floor_height = 3.0f;    // window rows every this much upwards
-  float window_width = 0.45f;   // window width as a share of window_spacing
-  float window_height = 0.5f;   // window height as a share of floor_height
+  float noise_contrast = 0.6f;               // amplitude of the multi-scale noise (0 = flat colour)
+  float noise_period = 1.0f;                 // size of the coarsest noise octave
+  int photo = -1;                            // index into SurfaceTexture::photos; -1: noise only
+  float photo_period = 2.0f;                 // world size one photo covers (tri-planar projection)
+  float photo_weight = 0.8f;                 // share of the photo in the albedo
+  float window_spacing = 0;                  // facade windows every this much along walls; 0 = none
+  float floor_height = 3.0f;                 // window rows every this much upwards
+  float window_width = 0.45f;                // window width as a share of window_spacing
+  float window_height = 0.5f;                // window height as a share of floor_height
   void Check(const std::string& field) const;  // throws InputError naming field.<member>
 };
 

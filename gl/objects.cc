@@ -17,10 +17,14 @@ namespace {
 
 GLenum StageEnum(ShaderStage stage) {
   switch (stage) {
-    case ShaderStage::kVertex: return GL_VERTEX_SHADER;
-    case ShaderStage::kGeometry: return GL_GEOMETRY_SHADER;
-    case ShaderStage::kFragment: return GL_FRAGMENT_SHADER;
-    case ShaderStage::kCompute: return GL_COMPUTE_SHADER;
+    case ShaderStage::kVertex:
+      return GL_VERTEX_SHADER;
+    case ShaderStage::kGeometry:
+      return GL_GEOMETRY_SHADER;
+    case ShaderStage::kFragment:
+      return GL_FRAGMENT_SHADER;
+    case ShaderStage::kCompute:
+      return GL_COMPUTE_SHADER;
   }
   return GL_VERTEX_SHADER;
 }
@@ -108,12 +112,18 @@ std::string InsertDefines(const std::string& text, const std::vector<std::string
 
 GLenum UsageEnum(BufferUsage usage) {
   switch (usage) {
-    case BufferUsage::kStaticDraw: return GL_STATIC_DRAW;
-    case BufferUsage::kDynamicDraw: return GL_DYNAMIC_DRAW;
-    case BufferUsage::kStreamDraw: return GL_STREAM_DRAW;
-    case BufferUsage::kStaticRead: return GL_STATIC_READ;
-    case BufferUsage::kDynamicRead: return GL_DYNAMIC_READ;
-    case BufferUsage::kDynamicCopy: return GL_DYNAMIC_COPY;
+    case BufferUsage::kStaticDraw:
+      return GL_STATIC_DRAW;
+    case BufferUsage::kDynamicDraw:
+      return GL_DYNAMIC_DRAW;
+    case BufferUsage::kStreamDraw:
+      return GL_STREAM_DRAW;
+    case BufferUsage::kStaticRead:
+      return GL_STATIC_READ;
+    case BufferUsage::kDynamicRead:
+      return GL_DYNAMIC_READ;
+    case BufferUsage::kDynamicCopy:
+      return GL_DYNAMIC_COPY;
   }
   return GL_STATIC_DRAW;
 }
@@ -128,13 +138,20 @@ struct FormatInfo {
 
 FormatInfo Info(TextureFormat format) {
   switch (format) {
-    case TextureFormat::kR8: return {GL_R8, GL_RED, GL_UNSIGNED_BYTE, CV_8UC1, 1};
-    case TextureFormat::kRGBA8: return {GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, CV_8UC4, 4};
-    case TextureFormat::kR32F: return {GL_R32F, GL_RED, GL_FLOAT, CV_32FC1, 4};
-    case TextureFormat::kRG32F: return {GL_RG32F, GL_RG, GL_FLOAT, CV_32FC2, 8};
-    case TextureFormat::kRGBA32F: return {GL_RGBA32F, GL_RGBA, GL_FLOAT, CV_32FC4, 16};
-    case TextureFormat::kR32I: return {GL_R32I, GL_RED_INTEGER, GL_INT, CV_32SC1, 4};
-    case TextureFormat::kR32UI: return {GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, CV_32SC1, 4};
+    case TextureFormat::kR8:
+      return {GL_R8, GL_RED, GL_UNSIGNED_BYTE, CV_8UC1, 1};
+    case TextureFormat::kRGBA8:
+      return {GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, CV_8UC4, 4};
+    case TextureFormat::kR32F:
+      return {GL_R32F, GL_RED, GL_FLOAT, CV_32FC1, 4};
+    case TextureFormat::kRG32F:
+      return {GL_RG32F, GL_RG, GL_FLOAT, CV_32FC2, 8};
+    case TextureFormat::kRGBA32F:
+      return {GL_RGBA32F, GL_RGBA, GL_FLOAT, CV_32FC4, 16};
+    case TextureFormat::kR32I:
+      return {GL_R32I, GL_RED_INTEGER, GL_INT, CV_32SC1, 4};
+    case TextureFormat::kR32UI:
+      return {GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, CV_32SC1, 4};
     case TextureFormat::kDepth32F:
       return {GL_DEPTH_COMPONENT32F, GL_DEPTH_COMPONENT, GL_FLOAT, CV_32FC1, 4};
   }
@@ -184,10 +201,14 @@ void ApplyWrap(GLenum target, TextureWrap wrap) {
 
 std::string ShaderStageName(ShaderStage stage) {
   switch (stage) {
-    case ShaderStage::kVertex: return "vertex";
-    case ShaderStage::kGeometry: return "geometry";
-    case ShaderStage::kFragment: return "fragment";
-    case ShaderStage::kCompute: return "compute";
+    case ShaderStage::kVertex:
+      return "vertex";
+    case ShaderStage::kGeometry:
+      return "geometry";
+    case ShaderStage::kFragment:
+      return "fragment";
+    case ShaderStage::kCompute:
+      return "compute";
   }
   return "unknown";
 }
@@ -271,7 +292,9 @@ ShaderProgram ShaderProgram::FromEmbedded(const std::vector<std::string>& names,
 ShaderProgram::~ShaderProgram() { Release(); }
 
 ShaderProgram::ShaderProgram(ShaderProgram&& o) noexcept
-    : id_(std::exchange(o.id_, 0)), name_(std::move(o.name_)), locations_(std::move(o.locations_)) {}
+    : id_(std::exchange(o.id_, 0)),
+      name_(std::move(o.name_)),
+      locations_(std::move(o.locations_)) {}
 
 ShaderProgram& ShaderProgram::operator=(ShaderProgram&& o) noexcept {
   if (this != &o) {
@@ -330,8 +353,7 @@ void ShaderProgram::Set(const std::string& u, const std::vector<float>& values) 
 }
 
 void ShaderProgram::Dispatch(int x, int y, int z) const {
-  MS_CHECK(x >= 1 && y >= 1 && z >= 1) << name_ << ": empty dispatch " << x << "x" << y << "x"
-                                       << z;
+  MS_CHECK(x >= 1 && y >= 1 && z >= 1) << name_ << ": empty dispatch " << x << "x" << y << "x" << z;
   Use();
   glDispatchCompute(static_cast<GLuint>(x), static_cast<GLuint>(y), static_cast<GLuint>(z));
 }
@@ -355,7 +377,8 @@ Buffer::Buffer(size_t bytes, const void* data, BufferUsage usage) : Buffer() {
 }
 
 Buffer::~Buffer() { Release(); }
-Buffer::Buffer(Buffer&& o) noexcept : id_(std::exchange(o.id_, 0)), size_(std::exchange(o.size_, 0)) {}
+Buffer::Buffer(Buffer&& o) noexcept
+    : id_(std::exchange(o.id_, 0)), size_(std::exchange(o.size_, 0)) {}
 Buffer& Buffer::operator=(Buffer&& o) noexcept {
   if (this != &o) {
     Release();
@@ -377,8 +400,8 @@ void Buffer::Allocate(size_t bytes, const void* data, BufferUsage usage) {
 }
 
 void Buffer::Upload(size_t offset, size_t bytes, const void* data) {
-  MS_CHECK(offset + bytes <= size_) << "buffer upload past the end: " << offset << "+" << bytes
-                                    << " > " << size_;
+  MS_CHECK(offset + bytes <= size_)
+      << "buffer upload past the end: " << offset << "+" << bytes << " > " << size_;
   if (bytes == 0) return;
   glBindBuffer(GL_COPY_WRITE_BUFFER, id_);
   glBufferSubData(GL_COPY_WRITE_BUFFER, static_cast<GLintptr>(offset),
@@ -386,8 +409,8 @@ void Buffer::Upload(size_t offset, size_t bytes, const void* data) {
 }
 
 void Buffer::Download(size_t offset, size_t bytes, void* out) const {
-  MS_CHECK(offset + bytes <= size_) << "buffer download past the end: " << offset << "+" << bytes
-                                    << " > " << size_;
+  MS_CHECK(offset + bytes <= size_)
+      << "buffer download past the end: " << offset << "+" << bytes << " > " << size_;
   if (bytes == 0) return;
   glBindBuffer(GL_COPY_READ_BUFFER, id_);
   glGetBufferSubData(GL_COPY_READ_BUFFER, static_cast<GLintptr>(offset),
@@ -437,8 +460,8 @@ void VertexArray::SetFloatAttribute(int location, const Buffer& buffer, int comp
   glBindVertexArray(0);
 }
 
-void VertexArray::SetIntAttribute(int location, const Buffer& buffer, int components,
-                                  size_t stride, size_t offset) {
+void VertexArray::SetIntAttribute(int location, const Buffer& buffer, int components, size_t stride,
+                                  size_t offset) {
   glBindVertexArray(id_);
   glBindBuffer(GL_ARRAY_BUFFER, buffer.id());
   glEnableVertexAttribArray(static_cast<GLuint>(location));
@@ -477,14 +500,22 @@ int CvTypeOf(TextureFormat format) { return Info(format).cv_type; }
 
 std::string TextureFormatName(TextureFormat format) {
   switch (format) {
-    case TextureFormat::kR8: return "R8";
-    case TextureFormat::kRGBA8: return "RGBA8";
-    case TextureFormat::kR32F: return "R32F";
-    case TextureFormat::kRG32F: return "RG32F";
-    case TextureFormat::kRGBA32F: return "RGBA32F";
-    case TextureFormat::kR32I: return "R32I";
-    case TextureFormat::kR32UI: return "R32UI";
-    case TextureFormat::kDepth32F: return "DEPTH32F";
+    case TextureFormat::kR8:
+      return "R8";
+    case TextureFormat::kRGBA8:
+      return "RGBA8";
+    case TextureFormat::kR32F:
+      return "R32F";
+    case TextureFormat::kRG32F:
+      return "RG32F";
+    case TextureFormat::kRGBA32F:
+      return "RGBA32F";
+    case TextureFormat::kR32I:
+      return "R32I";
+    case TextureFormat::kR32UI:
+      return "R32UI";
+    case TextureFormat::kDepth32F:
+      return "DEPTH32F";
   }
   return "unknown";
 }
@@ -503,13 +534,16 @@ Texture2D::Texture2D(int width, int height, TextureFormat format, int levels)
   ApplyFilter(GL_TEXTURE_2D, TextureFilter::kNearest);
   ApplyWrap(GL_TEXTURE_2D, TextureWrap::kClampToEdge);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, levels - 1);
-  CheckGlError(fmt::format("creating a {}x{} {} texture", width, height,
-                           TextureFormatName(format)).c_str());
+  CheckGlError(
+      fmt::format("creating a {}x{} {} texture", width, height, TextureFormatName(format)).c_str());
 }
 
 Texture2D::~Texture2D() { Release(); }
 Texture2D::Texture2D(Texture2D&& o) noexcept
-    : id_(std::exchange(o.id_, 0)), width_(o.width_), height_(o.height_), levels_(o.levels_),
+    : id_(std::exchange(o.id_, 0)),
+      width_(o.width_),
+      height_(o.height_),
+      levels_(o.levels_),
       format_(o.format_) {}
 Texture2D& Texture2D::operator=(Texture2D&& o) noexcept {
   if (this != &o) {
@@ -582,15 +616,13 @@ void Texture2D::BindImage(int unit, ImageAccess access, int level) const {
                      Info(format_).internal_format);
 }
 
-Texture2DArray::Texture2DArray(int width, int height, int layers, TextureFormat format,
-                               int levels)
+Texture2DArray::Texture2DArray(int width, int height, int layers, TextureFormat format, int levels)
     : width_(width), height_(height), layers_(layers), levels_(levels), format_(format) {
   MS_CHECK(width > 0 && height > 0 && layers > 0 && levels >= 1)
       << "texture array " << width << "x" << height << "x" << layers;
   glGenTextures(1, &id_);
   glBindTexture(GL_TEXTURE_2D_ARRAY, id_);
-  glTexStorage3D(GL_TEXTURE_2D_ARRAY, levels, Info(format).internal_format, width, height,
-                 layers);
+  glTexStorage3D(GL_TEXTURE_2D_ARRAY, levels, Info(format).internal_format, width, height, layers);
   ApplyFilter(GL_TEXTURE_2D_ARRAY, TextureFilter::kNearest);
   ApplyWrap(GL_TEXTURE_2D_ARRAY, TextureWrap::kClampToEdge);
   glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, levels - 1);
@@ -598,8 +630,12 @@ Texture2DArray::Texture2DArray(int width, int height, int layers, TextureFormat 
 }
 Texture2DArray::~Texture2DArray() { Release(); }
 Texture2DArray::Texture2DArray(Texture2DArray&& o) noexcept
-    : id_(std::exchange(o.id_, 0)), width_(o.width_), height_(o.height_), layers_(o.layers_),
-      levels_(o.levels_), format_(o.format_) {}
+    : id_(std::exchange(o.id_, 0)),
+      width_(o.width_),
+      height_(o.height_),
+      layers_(o.layers_),
+      levels_(o.levels_),
+      format_(o.format_) {}
 Texture2DArray& Texture2DArray::operator=(Texture2DArray&& o) noexcept {
   if (this != &o) {
     Release();
@@ -673,16 +709,19 @@ Framebuffer::Framebuffer(int width, int height, const std::vector<TextureFormat>
   const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
   if (status != GL_FRAMEBUFFER_COMPLETE) {
     Release();
-    throw InternalError(fmt::format("{}x{} framebuffer incomplete (status 0x{:x})", width, height,
-                                    status));
+    throw InternalError(
+        fmt::format("{}x{} framebuffer incomplete (status 0x{:x})", width, height, status));
   }
   CheckGlError("creating a framebuffer");
 }
 
 Framebuffer::~Framebuffer() { Release(); }
 Framebuffer::Framebuffer(Framebuffer&& o) noexcept
-    : id_(std::exchange(o.id_, 0)), width_(o.width_), height_(o.height_),
-      colors_(std::move(o.colors_)), depth_(std::move(o.depth_)) {}
+    : id_(std::exchange(o.id_, 0)),
+      width_(o.width_),
+      height_(o.height_),
+      colors_(std::move(o.colors_)),
+      depth_(std::move(o.depth_)) {}
 Framebuffer& Framebuffer::operator=(Framebuffer&& o) noexcept {
   if (this != &o) {
     Release();

@@ -100,8 +100,14 @@ void Finish();
 // ---------------------------------------------------------------------------------------------
 // Buffers
 
-enum class BufferUsage { kStaticDraw, kDynamicDraw, kStreamDraw, kStaticRead, kDynamicRead,
-                         kDynamicCopy };
+enum class BufferUsage {
+  kStaticDraw,
+  kDynamicDraw,
+  kStreamDraw,
+  kStaticRead,
+  kDynamicRead,
+  kDynamicCopy
+};
 
 class Buffer {
  public:
@@ -191,7 +197,7 @@ int CvTypeOf(TextureFormat format);
 std::string TextureFormatName(TextureFormat format);
 bool IsIntegerFormat(TextureFormat format);
 
-enum class TextureFilter { kNearest, kLinear, kLinearMipmap };  // kLinearMipmap = trilinear
+enum class TextureFilter { kNearest, kLinear, kLinearMipmap };     // kLinearMipmap = trilinear
 enum class TextureWrap { kClampToEdge, kRepeat, kClampToBorder };  // border = transparent black
 enum class ImageAccess { kReadOnly, kWriteOnly, kReadWrite };
 

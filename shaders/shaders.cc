@@ -48,9 +48,8 @@ void ExpandInto(std::string_view name, int string_number, std::vector<std::strin
     }
     const std::string target_name(target);
     if (stack->count(target_name)) {
-      throw InternalError("shader '" + std::string(name) + "' line " +
-                          std::to_string(line_number) + ": recursive #include \"" +
-                          target_name + "\"");
+      throw InternalError("shader '" + std::string(name) + "' line " + std::to_string(line_number) +
+                          ": recursive #include \"" + target_name + "\"");
     }
     if (std::find(names->begin(), names->end(), target_name) == names->end()) {
       names->push_back(target_name);
@@ -60,8 +59,8 @@ void ExpandInto(std::string_view name, int string_number, std::vector<std::strin
       ExpandInto(target_name, number, names, stack, out);
       stack->erase(target_name);
     }
-    out->append("#line " + std::to_string(line_number + 1) + " " +
-                std::to_string(string_number) + "\n");
+    out->append("#line " + std::to_string(line_number + 1) + " " + std::to_string(string_number) +
+                "\n");
   }
 }
 

@@ -41,8 +41,8 @@ TEST(Shaders, ExpandInsertsIncludesWithLineDirectives) {
   // The main file resumes at the line after the #include.
   const std::string source(Source("surface.frag"));
   const size_t include = source.find("#include");
-  const int include_line = 1 + static_cast<int>(std::count(source.begin(),
-                                                           source.begin() + include, '\n'));
+  const int include_line =
+      1 + static_cast<int>(std::count(source.begin(), source.begin() + include, '\n'));
   EXPECT_THAT(expanded, ::testing::HasSubstr("#line " + std::to_string(include_line + 1) + " 0\n"));
 }
 

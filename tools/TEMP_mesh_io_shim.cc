@@ -73,10 +73,11 @@ Mesh ReadPly(const std::string& path, bool faces_required) {
     if (static_cast<int64_t>(f.size()) < n + 1) reader.Fail("face: too few indices");
     std::vector<int32_t> corners;
     for (int64_t k = 0; k < n; ++k) {
-      corners.push_back(static_cast<int32_t>(
-          reader.ParseInt(f[k + 1], "vertex index", 0, static_cast<int64_t>(mesh.vertices.size()) - 1)));
+      corners.push_back(static_cast<int32_t>(reader.ParseInt(
+          f[k + 1], "vertex index", 0, static_cast<int64_t>(mesh.vertices.size()) - 1)));
     }
-    for (int64_t k = 1; k + 1 < n; ++k) mesh.faces.push_back({corners[0], corners[k], corners[k + 1]});
+    for (int64_t k = 1; k + 1 < n; ++k)
+      mesh.faces.push_back({corners[0], corners[k], corners[k + 1]});
   }
   return mesh;
 }
@@ -91,24 +92,29 @@ Mesh ReadMesh(const std::string& path) {
 }
 
 void WriteMesh(const Mesh& mesh, const std::string& path, const MeshWriteOptions&) {
-  WriteFileAtomically(path, [&](std::ostream& out) {
-    out << "ply\nformat ascii 1.0\ncomment manisweep (temporary ASCII writer)\n";
-    out << "element vertex " << mesh.vertices.size() << "\nproperty double x\nproperty double y\n"
-        << "property double z\n";
-    if (mesh.HasColors()) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-    out << "element face " << mesh.faces.size() << "\nproperty list uchar int vertex_indices\n"
-        << "end_header\n";
-    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-      const Eigen::Vector3d& v = mesh.vertices[i];
-      out << fmt::format("{:.17g} {:.17g} {:.17g}", v.x(), v.y(), v.z());
-      if (mesh.HasColors()) {
-        const auto& c = mesh.vertex_colors[i];
-        out << ' ' << int{c[0]} << ' ' << int{c[1]} << ' ' << int{c[2]};
-      }
-      out << '\n';
-    }
-    for (const auto& f : mesh.faces) out << "3 " << f[0] << ' ' << f[1] << ' ' << f[2] << '\n';
-  }, /*binary=*/false);
+  WriteFileAtomically(
+      path,
+      [&](std::ostream& out) {
+        out << "ply\nformat ascii 1.0\ncomment manisweep (temporary ASCII writer)\n";
+        out << "element vertex " << mesh.vertices.size()
+            << "\nproperty double x\nproperty double y\n"
+            << "property double z\n";
+        if (mesh.HasColors())
+          out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+        out << "element face " << mesh.faces.size() << "\nproperty list uchar int vertex_indices\n"
+            << "end_header\n";
+        for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+          const Eigen::Vector3d& v = mesh.vertices[i];
+          out << fmt::format("{:.17g} {:.17g} {:.17g}", v.x(), v.y(), v.z());
+          if (mesh.HasColors()) {
+            const auto& c = mesh.vertex_colors[i];
+            out << ' ' << int{c[0]} << ' ' << int{c[1]} << ' ' << int{c[2]};
+          }
+          out << '\n';
+        }
+        for (const auto& f : mesh.faces) out << "3 " << f[0] << ' ' << f[1] << ' ' << f[2] << '\n';
+      },
+      /*binary=*/false);
 }
 
 PointCloud ReadPointCloud(const std::string& path) {
@@ -119,22 +125,25 @@ PointCloud ReadPointCloud(const std::string& path) {
 
 void WritePointCloud(const PointCloud& cloud, const std::string& path, const MeshWriteOptions&) {
   const bool colors = cloud.colors.size() == cloud.points.size() && !cloud.points.empty();
-  WriteFileAtomically(path, [&](std::ostream& out) {
-    out << "ply\nformat ascii 1.0\ncomment manisweep (temporary ASCII writer)\n";
-    out << "element vertex " << cloud.points.size()
-        << "\nproperty double x\nproperty double y\nproperty double z\n";
-    if (colors) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-    out << "end_header\n";
-    for (size_t i = 0; i < cloud.points.size(); ++i) {
-      const Eigen::Vector3d& p = cloud.points[i];
-      out << fmt::format("{:.17g} {:.17g} {:.17g}", p.x(), p.y(), p.z());
-      if (colors) {
-        out << ' ' << int{cloud.colors[i][0]} << ' ' << int{cloud.colors[i][1]} << ' '
-            << int{cloud.colors[i][2]};
-      }
-      out << '\n';
-    }
-  }, /*binary=*/false);
+  WriteFileAtomically(
+      path,
+      [&](std::ostream& out) {
+        out << "ply\nformat ascii 1.0\ncomment manisweep (temporary ASCII writer)\n";
+        out << "element vertex " << cloud.points.size()
+            << "\nproperty double x\nproperty double y\nproperty double z\n";
+        if (colors) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+        out << "end_header\n";
+        for (size_t i = 0; i < cloud.points.size(); ++i) {
+          const Eigen::Vector3d& p = cloud.points[i];
+          out << fmt::format("{:.17g} {:.17g} {:.17g}", p.x(), p.y(), p.z());
+          if (colors) {
+            out << ' ' << int{cloud.colors[i][0]} << ' ' << int{cloud.colors[i][1]} << ' '
+                << int{cloud.colors[i][2]};
+          }
+          out << '\n';
+        }
+      },
+      /*binary=*/false);
 }
 
 }  // namespace ms

@@ -172,8 +172,9 @@ Evaluation EvaluateMeshes(const gl::GlContext& context, const std::vector<Labele
       }
       progress.Finish(static_cast<int64_t>(e.views.size()));
       if (samples.empty()) {
-        throw InputError("the ground-truth mesh covers no pixel of the evaluated view(s): wrong "
-                         "scene, or the mesh is not in the scene's coordinates");
+        throw InputError(
+            "the ground-truth mesh covers no pixel of the evaluated view(s): wrong "
+            "scene, or the mesh is not in the scene's coordinates");
       }
       std::nth_element(samples.begin(), samples.begin() + samples.size() / 2, samples.end());
       e.median_gt_depth = samples[samples.size() / 2];
@@ -181,8 +182,8 @@ Evaluation EvaluateMeshes(const gl::GlContext& context, const std::vector<Labele
   }
   if (options.sigma == 0) {
     e.sigma = e.median_gt_depth / kSigmaDepthRatio;
-    e.sigma_rule = fmt::format("median ground-truth depth / {:g} = {:.4g} / {:g}",
-                               kSigmaDepthRatio, e.median_gt_depth, kSigmaDepthRatio);
+    e.sigma_rule = fmt::format("median ground-truth depth / {:g} = {:.4g} / {:g}", kSigmaDepthRatio,
+                               e.median_gt_depth, kSigmaDepthRatio);
   }
 
   // Pass 2: every mesh against the ground truth, view by view.
@@ -208,8 +209,9 @@ Evaluation EvaluateMeshes(const gl::GlContext& context, const std::vector<Labele
   }
   progress.Finish(static_cast<int64_t>(e.views.size()));
   if (gt_pixels == 0) {
-    throw InputError("the ground-truth mesh covers no pixel of the evaluated view(s): wrong "
-                     "scene, or the mesh is not in the scene's coordinates");
+    throw InputError(
+        "the ground-truth mesh covers no pixel of the evaluated view(s): wrong "
+        "scene, or the mesh is not in the scene's coordinates");
   }
   for (size_t m = 0; m < meshes.size(); ++m) e.meshes[m].total = totals[m].Finish();
   return e;
@@ -223,12 +225,14 @@ std::string FormatEvaluationTable(const Evaluation& e) {
   if (e.views.size() > 8) views += fmt::format(",... ({} views)", e.views.size());
   std::string out;
   const int64_t gt_pixels = e.meshes.empty() ? 0 : e.meshes.front().total.gt_pixels;
-  out += fmt::format("depth ({}) errors from view {}: {} ground-truth pixels, Sigma = {:.4g} ({})\n",
-                     e.measure == DepthMeasure::kRange ? "distance from the camera" : "camera z",
-                     views, gt_pixels, e.sigma, e.sigma_rule);
+  out +=
+      fmt::format("depth ({}) errors from view {}: {} ground-truth pixels, Sigma = {:.4g} ({})\n",
+                  e.measure == DepthMeasure::kRange ? "distance from the camera" : "camera z",
+                  views, gt_pixels, e.sigma, e.sigma_rule);
   size_t label_width = 12;
   for (const MeshEvaluation& m : e.meshes) label_width = std::max(label_width, m.label.size());
-  const int multiples = e.meshes.empty() ? 0 : static_cast<int>(e.meshes[0].total.cumulative.size());
+  const int multiples =
+      e.meshes.empty() ? 0 : static_cast<int>(e.meshes[0].total.cumulative.size());
   std::string header = fmt::format("{:<{}}  {:>9} {:>9} {:>9} {:>8}", "mesh", label_width, "MAE",
                                    "MRE", "RMS", "coverage");
   for (int m = 1; m <= multiples; ++m) header += fmt::format(" {:>5}", fmt::format("<{}S", m));
@@ -247,16 +251,20 @@ std::string FormatEvaluationTable(const Evaluation& e) {
       }
     }
   }
-  out += "(MAE, RMS in scene units; MRE = mean |d-d*|/d*; <mS = share of ground-truth pixels "
-         "with error below m*Sigma)\n";
+  out +=
+      "(MAE, RMS in scene units; MRE = mean |d-d*|/d*; <mS = share of ground-truth pixels "
+      "with error below m*Sigma)\n";
   return out;
 }
 
 nlohmann::json EvaluationToJson(const Evaluation& e) {
   auto stats = [](const DepthErrorStats& s) {
-    return nlohmann::json{{"gt_pixels", s.gt_pixels}, {"covered_pixels", s.covered_pixels},
-                          {"mae", s.mae},             {"mre", s.mre},
-                          {"rms", s.rms},             {"coverage", s.coverage},
+    return nlohmann::json{{"gt_pixels", s.gt_pixels},
+                          {"covered_pixels", s.covered_pixels},
+                          {"mae", s.mae},
+                          {"mre", s.mre},
+                          {"rms", s.rms},
+                          {"coverage", s.coverage},
                           {"cumulative", s.cumulative}};
   };
   nlohmann::json meshes = nlohmann::json::array();
@@ -284,8 +292,9 @@ void WriteEvaluationFiles(const Evaluation& e, const EvaluationFiles& files) {
     nlohmann::json json = EvaluationToJson(e);
     if (!files.ground_truth_name.empty()) json["ground_truth"] = files.ground_truth_name;
     if (!files.scene_name.empty()) json["scene"] = files.scene_name;
-    WriteFileAtomically(files.json, [&](std::ostream& out) { out << json.dump(2) << "\n"; },
-                        /*binary=*/false);
+    WriteFileAtomically(
+        files.json, [&](std::ostream& out) { out << json.dump(2) << "\n"; },
+        /*binary=*/false);
   }
   if (!files.error_image.empty()) {
     std::vector<ErrorPanel> panels;
@@ -297,9 +306,8 @@ void WriteEvaluationFiles(const Evaluation& e, const EvaluationFiles& files) {
     std::vector<PlotCurve> curves;
     for (const MeshEvaluation& m : e.meshes) curves.push_back({m.label, m.total.cumulative});
     const std::string title =
-        e.views.size() == 1
-            ? fmt::format("Cumulative depth error from view {}", e.views[0])
-            : fmt::format("Cumulative depth error over {} views", e.views.size());
+        e.views.size() == 1 ? fmt::format("Cumulative depth error from view {}", e.views[0])
+                            : fmt::format("Cumulative depth error over {} views", e.views.size());
     WritePng(files.plot, CumulativePlot(curves, e.sigma, title));
   }
 }

@@ -37,8 +37,8 @@ struct EvaluateOptions {
   bool all_views = false;  // every view of the scene (overrides `views`)
   double sigma = 0;        // Sigma of the cumulative curve; 0: median ground-truth depth / 20
   DepthMeasure measure = DepthMeasure::kCameraZ;  // what d and d* are
-  int max_multiple = 10;   // cumulative shares for m = 1..max_multiple
-  void Check() const;      // throws InputError naming the field
+  int max_multiple = 10;                          // cumulative shares for m = 1..max_multiple
+  void Check() const;                             // throws InputError naming the field
 };
 
 constexpr double kSigmaDepthRatio = 20;  // Sigma = median depth / this when not given
@@ -47,7 +47,7 @@ struct DepthErrorStats {
   int64_t gt_pixels = 0;       // |G|
   int64_t covered_pixels = 0;  // |C|
   double mae = 0, mre = 0, rms = 0, coverage = 0;
-  std::vector<double> cumulative;    // share of G with error < m Sigma, m = 1..max_multiple
+  std::vector<double> cumulative;  // share of G with error < m Sigma, m = 1..max_multiple
 };
 
 // Sums that combine over views; Finish turns them into DepthErrorStats.
@@ -88,9 +88,9 @@ struct MeshEvaluation {
 };
 
 struct Evaluation {
-  std::vector<int> views;      // evaluated view indices
+  std::vector<int> views;  // evaluated view indices
   double sigma = 0;
-  std::string sigma_rule;      // "given" or "median ground-truth depth / 20 = ..."
+  std::string sigma_rule;  // "given" or "median ground-truth depth / 20 = ..."
   DepthMeasure measure = DepthMeasure::kCameraZ;
   double median_gt_depth = 0;  // over G (0 when Sigma was given and there are > 8 views)
   cv::Mat first_gt_depth;      // ground-truth depth of the first evaluated view

@@ -1,9 +1,8 @@
 #include "tools/evaluate.h"
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-
-#include <fmt/format.h>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -124,11 +123,12 @@ TEST_F(EvaluateTest, FlatBaseSquareAgainstThePyramidsIsOnTheOrderOfTheirHeight) 
       const Evaluation e =
           EvaluateMeshes(*context_, {{"base", &base}}, g.mesh, SceneOf(g), options);
       const DepthErrorStats& s = e.meshes[0].total;
-      std::printf("pyramid-%s, base square from view 0 (%s): MAE %.4f MRE %.4f RMS %.4f "
-                  "coverage %.3f, <1..3 Sigma %.2f %.2f %.2f (median depth %.3f)\n",
-                  up ? "up" : "down", DepthMeasureName(measure).c_str(), s.mae, s.mre, s.rms,
-                  s.coverage, s.cumulative[0], s.cumulative[1], s.cumulative[2],
-                  e.median_gt_depth);
+      std::fputs(FormatEvaluationTable(e).c_str(), stdout);
+      std::printf(
+          "pyramid-%s, base square from view 0 (%s): MAE %.4f MRE %.4f RMS %.4f "
+          "coverage %.3f, <1..3 Sigma %.2f %.2f %.2f (median depth %.3f)\n",
+          up ? "up" : "down", DepthMeasureName(measure).c_str(), s.mae, s.mre, s.rms, s.coverage,
+          s.cumulative[0], s.cumulative[1], s.cumulative[2], e.median_gt_depth);
       EXPECT_GT(s.mae, 0.07);
       EXPECT_LT(s.mae, 0.16);
       EXPECT_GT(s.mre, up ? 0.08 : 0.05);  // paper: 0.114 (up), 0.072 (down)
@@ -163,8 +163,7 @@ TEST_F(EvaluateTest, BadViewsAndEmptyGroundTruthAreInputErrors) {
                InputError);
   Mesh far_away = g.mesh;
   for (Eigen::Vector3d& v : far_away.vertices) v.z() += 100;  // behind every camera
-  EXPECT_THROW(EvaluateMeshes(*context_, {{"gt", &g.mesh}}, far_away, SceneOf(g), {}),
-               InputError);
+  EXPECT_THROW(EvaluateMeshes(*context_, {{"gt", &g.mesh}}, far_away, SceneOf(g), {}), InputError);
 }
 
 TEST_F(EvaluateTest, TableAndJsonCarryTheNumbers) {
@@ -173,8 +172,8 @@ TEST_F(EvaluateTest, TableAndJsonCarryTheNumbers) {
   EvaluateOptions options;
   options.sigma = 0.06;
   options.all_views = true;
-  const Evaluation e = EvaluateMeshes(*context_, {{"base.ply", &base}, {"gt.ply", &g.mesh}},
-                                      g.mesh, SceneOf(g), options);
+  const Evaluation e = EvaluateMeshes(*context_, {{"base.ply", &base}, {"gt.ply", &g.mesh}}, g.mesh,
+                                      SceneOf(g), options);
   const std::string table = FormatEvaluationTable(e);
   EXPECT_THAT(table, ::testing::HasSubstr("base.ply"));
   EXPECT_THAT(table, ::testing::HasSubstr("MAE"));
@@ -193,8 +192,8 @@ TEST_F(EvaluateTest, WritesJsonAndFigures) {
   const Mesh base = PyramidBaseSquare();
   EvaluateOptions options;
   options.sigma = 0.06;
-  const Evaluation e = EvaluateMeshes(*context_, {{"base square", &base}, {"ground truth", &g.mesh}},
-                                      g.mesh, SceneOf(g), options);
+  const Evaluation e = EvaluateMeshes(
+      *context_, {{"base square", &base}, {"ground truth", &g.mesh}}, g.mesh, SceneOf(g), options);
   const std::string dir = ::testing::TempDir() + "/evaluate_files";
   EvaluationFiles files;
   files.json = dir + "/eval.json";
@@ -214,9 +213,9 @@ TEST_F(EvaluateTest, WritesJsonAndFigures) {
 
 TEST(Plot, ErrorImageColoursAndKey) {
   cv::Mat gt(2, 2, CV_32F, cv::Scalar(1.0f)), depth(2, 2, CV_32F, cv::Scalar(1.0f));
-  gt.at<float>(0, 1) = 0;      // no ground truth -> black
-  depth.at<float>(1, 0) = 0;   // missing -> white
-  depth.at<float>(1, 1) = 2;   // error 1 = max -> red
+  gt.at<float>(0, 1) = 0;     // no ground truth -> black
+  depth.at<float>(1, 0) = 0;  // missing -> white
+  depth.at<float>(1, 1) = 2;  // error 1 = max -> red
   const cv::Mat image = ErrorImage(depth, gt, 1.0);
   ASSERT_EQ(image.type(), CV_8UC3);
   EXPECT_EQ(image.at<cv::Vec3b>(0, 1), cv::Vec3b(0, 0, 0));
@@ -230,9 +229,10 @@ TEST(Plot, ErrorImageColoursAndKey) {
 }
 
 TEST(Plot, CumulativePlotDrawsCurvesInTheirColours) {
-  const cv::Mat plot = CumulativePlot({{"initial", {0.1, 0.2, 0.4, 0.6, 0.7, 0.8, 0.85, 0.9, 0.92, 0.95}},
-                                       {"final", {0.5, 0.8, 0.9, 0.95, 1, 1, 1, 1, 1, 1}}},
-                                      0.06, "test", cv::Size(600, 400));
+  const cv::Mat plot =
+      CumulativePlot({{"initial", {0.1, 0.2, 0.4, 0.6, 0.7, 0.8, 0.85, 0.9, 0.92, 0.95}},
+                      {"final", {0.5, 0.8, 0.9, 0.95, 1, 1, 1, 1, 1, 1}}},
+                     0.06, "test", cv::Size(600, 400));
   ASSERT_EQ(plot.size(), cv::Size(600, 400));
   // Both palette colours appear (first two: BGR (200,80,30) and (30,30,200)).
   cv::Mat first, second;

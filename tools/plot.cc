@@ -101,8 +101,8 @@ cv::Mat ErrorFigure(const std::vector<ErrorPanel>& panels, const cv::Mat& gt, do
   for (int k = 0; k <= 4; ++k) {
     const int y = title + static_cast<int>(std::lround((1 - k / 4.0) * (panel.height - 1)));
     cv::line(figure, {bx + bar_width, y}, {bx + bar_width + 5, y}, ink);
-    PutText(figure, Number(max_error * k / 4.0) + (k == 4 ? "+" : ""),
-            {bx + bar_width + 8, y + 5}, 0.45, ink);
+    PutText(figure, Number(max_error * k / 4.0) + (k == 4 ? "+" : ""), {bx + bar_width + 8, y + 5},
+            0.45, ink);
   }
   PutText(figure, "|d - d*|", {bx - 2, title - 10}, 0.5, ink);
   // Key for the pixels that are not errors.
@@ -115,8 +115,8 @@ cv::Mat ErrorFigure(const std::vector<ErrorPanel>& panels, const cv::Mat& gt, do
   return figure;
 }
 
-cv::Mat CumulativePlot(const std::vector<PlotCurve>& curves, double sigma,
-                       const std::string& title, cv::Size size) {
+cv::Mat CumulativePlot(const std::vector<PlotCurve>& curves, double sigma, const std::string& title,
+                       cv::Size size) {
   const cv::Scalar background(255, 255, 255), ink(30, 30, 30), grid(225, 225, 225);
   cv::Mat plot(size, CV_8UC3, background);
   const int left = 80, right = 30, top = 50, bottom = 70;
@@ -165,8 +165,8 @@ cv::Mat CumulativePlot(const std::vector<PlotCurve>& curves, double sigma,
   }
   PutCentered(plot, title, size.width / 2, 30, 0.65, ink, 1);
   // Curves, starting at (0, 0): no pixel has an error below 0.
-  const cv::Scalar palette[] = {{200, 80, 30},  {30, 30, 200},  {40, 150, 40},  {0, 140, 230},
-                                {160, 50, 160}, {120, 120, 0},  {80, 80, 80},   {0, 200, 200}};
+  const cv::Scalar palette[] = {{200, 80, 30},  {30, 30, 200}, {40, 150, 40}, {0, 140, 230},
+                                {160, 50, 160}, {120, 120, 0}, {80, 80, 80},  {0, 200, 200}};
   for (size_t i = 0; i < curves.size(); ++i) {
     const cv::Scalar color = palette[i % 8];
     std::vector<cv::Point> points{to_pixel(0, 0)};

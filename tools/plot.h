@@ -28,8 +28,8 @@ struct PlotCurve {
 };
 // Cumulative error plot: x = m (threshold m * sigma), y = percentage of ground-truth pixels;
 // axes, ticks, grid, axis labels, a title and a legend. CV_8UC3 BGR, white background.
-cv::Mat CumulativePlot(const std::vector<PlotCurve>& curves, double sigma,
-                       const std::string& title, cv::Size size = cv::Size(900, 600));
+cv::Mat CumulativePlot(const std::vector<PlotCurve>& curves, double sigma, const std::string& title,
+                       cv::Size size = cv::Size(900, 600));
 
 // Encodes `image` as PNG and writes it atomically; throws InputError naming the path on failure.
 void WritePng(const std::string& path, const cv::Mat& image);

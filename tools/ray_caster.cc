@@ -49,7 +49,8 @@ int32_t RayCaster::Build(int32_t first, int32_t count, int depth) {
   Eigen::Vector3d cmin = min, cmax = max;
   for (int32_t i = first; i < first + count; ++i) {
     const Triangle& t = triangles_[i];
-    for (const Eigen::Vector3d& p : {t.a, Eigen::Vector3d(t.a + t.e1), Eigen::Vector3d(t.a + t.e2)}) {
+    for (const Eigen::Vector3d& p :
+         {t.a, Eigen::Vector3d(t.a + t.e1), Eigen::Vector3d(t.a + t.e2)}) {
       min = min.cwiseMin(p);
       max = max.cwiseMax(p);
     }

@@ -62,7 +62,8 @@ TEST(RayCaster, MatchesBruteForceOnRandomTriangles) {
       const Eigen::Vector3d p = o + hit.t * d;
       // The reported face contains the hit point.
       const auto& f = mesh.faces[hit.face];
-      const Eigen::Vector3d a = mesh.vertices[f[0]], b = mesh.vertices[f[1]], c = mesh.vertices[f[2]];
+      const Eigen::Vector3d a = mesh.vertices[f[0]], b = mesh.vertices[f[1]],
+                            c = mesh.vertices[f[2]];
       EXPECT_NEAR(std::abs((b - a).cross(c - a).normalized().dot(p - a)), 0, 1e-9);
     }
   }
@@ -71,8 +72,8 @@ TEST(RayCaster, MatchesBruteForceOnRandomTriangles) {
 
 TEST(RayCaster, OccludedIgnoresTheTargetsOwnSurface) {
   Mesh mesh;
-  mesh.vertices = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {-1, -1, 1}, {1, -1, 1},
-                   {1, 1, 1}};
+  mesh.vertices = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0},
+                   {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}};
   mesh.faces = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}};  // a square at z=0, a triangle at z=1
   const RayCaster caster(mesh);
   const Eigen::Vector3d target(-0.5, 0.5, 0);  // on the square, not under the triangle

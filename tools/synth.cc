@@ -84,8 +84,8 @@ class VisibilityTester {
         return;
       }
       if (caster_.Occluded(centers_[i], p, 1e-6 * distance + 1e-9 * scale_)) return;
-      out.push_back({static_cast<int32_t>(i), static_cast<float>(pixel.x()),
-                     static_cast<float>(pixel.y())});
+      out.push_back(
+          {static_cast<int32_t>(i), static_cast<float>(pixel.x()), static_cast<float>(pixel.y())});
     };
     if (max_distance_ > 0) {
       const Eigen::Vector3i c = Cell(p);
@@ -94,8 +94,8 @@ class VisibilityTester {
         for (int dy = -1; dy <= 1; ++dy) {
           for (int dz = -1; dz <= 1; ++dz) {
             auto it = grid_.find(Key(c + Eigen::Vector3i(dx, dy, dz)));
-            if (it != grid_.end()) candidates.insert(candidates.end(), it->second.begin(),
-                                                     it->second.end());
+            if (it != grid_.end())
+              candidates.insert(candidates.end(), it->second.begin(), it->second.end());
           }
         }
       }
@@ -373,34 +373,36 @@ void WriteSynthDataset(const SynthDataset& d, const std::string& directory) {
   WritePointCloud(cloud, (dir / "sparse.ply").string());
 
   const SynthOptions& o = d.options;
-  nlohmann::json json = {
-      {"generator", "manisweep synth"},
-      {"scene", d.scene_name},
-      {"seed", o.seed},
-      {"views", scene.views.size()},
-      {"width", o.width},
-      {"height", o.height},
-      {"points", scene.points.size()},
-      {"observations", scene.NumObservations()},
-      {"image_noise", o.image_noise},
-      {"point_noise", o.point_noise},
-      {"min_track", o.min_track},
-      {"max_grazing_deg", o.max_grazing_deg},
-      {"supersampling", o.supersampling},
-      {"images", !d.images.empty()},
-      {"texture_photos", ListPhotos(o.texture_photos)},
-      {"evaluation_view", d.evaluation_view},
-      {"files",
-       {{"ground_truth", "gt.ply"},
-        {"initial_mesh", d.initial_mesh.faces.empty() ? "" : "initial.ply"},
-        {"sparse_points", "sparse.ply"},
-        {"colmap", "sparse"},
-        {"scene", "scene.h5"},
-        {"images", "images"}}},
-      {"seconds", {{"geometry", d.seconds_geometry}, {"points", d.seconds_points},
-                   {"images", d.seconds_images}}}};
-  WriteFileAtomically(dir / "synth.json", [&](std::ostream& out) { out << json.dump(2) << "\n"; },
-                      /*binary=*/false);
+  nlohmann::json json = {{"generator", "manisweep synth"},
+                         {"scene", d.scene_name},
+                         {"seed", o.seed},
+                         {"views", scene.views.size()},
+                         {"width", o.width},
+                         {"height", o.height},
+                         {"points", scene.points.size()},
+                         {"observations", scene.NumObservations()},
+                         {"image_noise", o.image_noise},
+                         {"point_noise", o.point_noise},
+                         {"min_track", o.min_track},
+                         {"max_grazing_deg", o.max_grazing_deg},
+                         {"supersampling", o.supersampling},
+                         {"images", !d.images.empty()},
+                         {"texture_photos", ListPhotos(o.texture_photos)},
+                         {"evaluation_view", d.evaluation_view},
+                         {"files",
+                          {{"ground_truth", "gt.ply"},
+                           {"initial_mesh", d.initial_mesh.faces.empty() ? "" : "initial.ply"},
+                           {"sparse_points", "sparse.ply"},
+                           {"colmap", "sparse"},
+                           {"scene", "scene.h5"},
+                           {"images", "images"}}},
+                         {"seconds",
+                          {{"geometry", d.seconds_geometry},
+                           {"points", d.seconds_points},
+                           {"images", d.seconds_images}}}};
+  WriteFileAtomically(
+      dir / "synth.json", [&](std::ostream& out) { out << json.dump(2) << "\n"; },
+      /*binary=*/false);
   // Scene files last: the formats are the project's importers' (scene/scene_io.h).
   WriteScene(scene, (dir / "sparse").string(), SceneFormat::kColmapText);
   WriteScene(scene, (dir / "scene.h5").string(), SceneFormat::kManisweepH5);

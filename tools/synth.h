@@ -17,21 +17,21 @@ namespace ms {
 
 struct SynthOptions {
   std::string scene = "pyramid-down";  // pyramid-down, pyramid-up, blob, city
-  int views = 0;       // 0: the scene's default (pyramids 16, blob 24, city 60)
-  int width = 0;       // 0: the scene's default (800, city 1024)
-  int height = 0;      // 0: the scene's default (600, city 768)
-  uint64_t seed = 1;   // texture, shape (blob), layout (city), sampling and noise
+  int views = 0;                       // 0: the scene's default (pyramids 16, blob 24, city 60)
+  int width = 0;                       // 0: the scene's default (800, city 1024)
+  int height = 0;                      // 0: the scene's default (600, city 768)
+  uint64_t seed = 1;                   // texture, shape (blob), layout (city), sampling and noise
   double image_noise = 0;  // standard deviation of Gaussian pixel noise, in grey levels (0-255)
   double point_noise = 0;  // standard deviation of Gaussian noise on sparse points, scene units
-  int points = 0;      // blob/city: sparse points wanted (0: 3000 for blob, 40 per view for
-                       // city); pyramids always get the 4 base corners
-  int min_track = 2;   // blob/city: keep points seen by at least this many views
+  int points = 0;          // blob/city: sparse points wanted (0: 3000 for blob, 40 per view for
+                           // city); pyramids always get the 4 base corners
+  int min_track = 2;       // blob/city: keep points seen by at least this many views
   double max_grazing_deg = 75;  // a point is seen only if its surface faces the camera closer
                                 // than this to head-on
   bool render_images = true;    // false: cameras, points and mesh only (no GL needed)
   int supersampling = 2;        // anti-aliasing: render k x k samples per pixel
   std::vector<std::string> texture_photos;  // photographs (files) mixed into the texture
-  void Check() const;  // throws InputError naming the field
+  void Check() const;                       // throws InputError naming the field
 };
 
 struct SynthDataset {
@@ -41,9 +41,9 @@ struct SynthDataset {
   // observations (pixel = projection of the exact point, before point noise).
   Scene scene;
   Mesh ground_truth;
-  Mesh initial_mesh;             // pyramids: the base square (the paper's initial manifold)
-  std::vector<cv::Mat> images;   // CV_8UC3 BGR, one per view; empty without render_images
-  int evaluation_view = 0;       // the view `manisweep evaluate` uses by default
+  Mesh initial_mesh;            // pyramids: the base square (the paper's initial manifold)
+  std::vector<cv::Mat> images;  // CV_8UC3 BGR, one per view; empty without render_images
+  int evaluation_view = 0;      // the view `manisweep evaluate` uses by default
   std::vector<Eigen::Vector3d> exact_points;  // sparse points before point noise
   std::vector<int32_t> point_faces;           // ground-truth face of each point (-1: a corner)
   double seconds_geometry = 0, seconds_points = 0, seconds_images = 0;

@@ -48,10 +48,9 @@ Mesh Icosphere(int level) {
         Eigen::Vector3d(t, 0, 1), Eigen::Vector3d(-t, 0, -1), Eigen::Vector3d(-t, 0, 1)}) {
     mesh.vertices.push_back(v.normalized());
   }
-  mesh.faces = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  mesh.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int l = 0; l < level; ++l) {
     std::map<std::pair<int32_t, int32_t>, int32_t> midpoints;
     auto midpoint = [&](int32_t a, int32_t b) {
@@ -65,8 +64,7 @@ Mesh Icosphere(int level) {
     };
     std::vector<std::array<int32_t, 3>> faces;
     for (const auto& f : mesh.faces) {
-      const int32_t ab = midpoint(f[0], f[1]), bc = midpoint(f[1], f[2]),
-                    ca = midpoint(f[2], f[0]);
+      const int32_t ab = midpoint(f[0], f[1]), bc = midpoint(f[1], f[2]), ca = midpoint(f[2], f[0]);
       faces.push_back({f[0], ab, ca});
       faces.push_back({f[1], bc, ab});
       faces.push_back({f[2], ca, bc});
@@ -90,16 +88,20 @@ SynthSceneKind ParseSynthScene(const std::string& name) {
 
 std::string SynthSceneName(SynthSceneKind kind) {
   switch (kind) {
-    case SynthSceneKind::kPyramidDown: return "pyramid-down";
-    case SynthSceneKind::kPyramidUp: return "pyramid-up";
-    case SynthSceneKind::kBlob: return "blob";
-    case SynthSceneKind::kCity: return "city";
+    case SynthSceneKind::kPyramidDown:
+      return "pyramid-down";
+    case SynthSceneKind::kPyramidUp:
+      return "pyramid-up";
+    case SynthSceneKind::kBlob:
+      return "blob";
+    case SynthSceneKind::kCity:
+      return "city";
   }
   return "unknown";
 }
 
-View LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target,
-            const Eigen::Vector3d& up, const Intrinsics& intrinsics) {
+View LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target, const Eigen::Vector3d& up,
+            const Intrinsics& intrinsics) {
   const Eigen::Vector3d z = (target - center).normalized();
   Eigen::Vector3d x = z.cross(up);
   if (x.norm() < 1e-9) x = z.cross(Eigen::Vector3d::UnitY());
@@ -335,10 +337,14 @@ SynthGeometry MakeCityScene(const SynthLayout& layout) {
 
 SynthGeometry MakeSynthGeometry(SynthSceneKind kind, const SynthLayout& layout) {
   switch (kind) {
-    case SynthSceneKind::kPyramidDown: return MakePyramidScene(false, layout);
-    case SynthSceneKind::kPyramidUp: return MakePyramidScene(true, layout);
-    case SynthSceneKind::kBlob: return MakeBlobScene(layout);
-    case SynthSceneKind::kCity: return MakeCityScene(layout);
+    case SynthSceneKind::kPyramidDown:
+      return MakePyramidScene(false, layout);
+    case SynthSceneKind::kPyramidUp:
+      return MakePyramidScene(true, layout);
+    case SynthSceneKind::kBlob:
+      return MakeBlobScene(layout);
+    case SynthSceneKind::kCity:
+      return MakeCityScene(layout);
   }
   throw InternalError("unknown synthetic scene kind");
 }

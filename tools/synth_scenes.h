@@ -20,10 +20,10 @@ SynthSceneKind ParseSynthScene(const std::string& name);
 std::string SynthSceneName(SynthSceneKind kind);
 
 struct SynthGeometry {
-  Mesh mesh;                    // the ground truth, faces counter-clockwise from free space
-  gl::SurfaceTexture texture;   // materials and per-face material (photos filled by synth.cc)
-  std::vector<View> views;      // names "0000.png", ...
-  Mesh initial_mesh;            // pyramids: the base square (the paper's initial manifold)
+  Mesh mesh;                   // the ground truth, faces counter-clockwise from free space
+  gl::SurfaceTexture texture;  // materials and per-face material (photos filled by synth.cc)
+  std::vector<View> views;     // names "0000.png", ...
+  Mesh initial_mesh;           // pyramids: the base square (the paper's initial manifold)
   std::vector<Eigen::Vector3d> fixed_points;  // pyramids: the 4 base corners, seen by all views
   double max_view_distance = 0;  // sparse points farther than this from a camera are not seen
   int evaluation_view = 0;       // the paper's "first camera"
@@ -49,8 +49,8 @@ SynthGeometry MakeCityScene(const SynthLayout& layout);
 SynthGeometry MakeSynthGeometry(SynthSceneKind kind, const SynthLayout& layout);
 
 // Camera at `center` looking at `target`, image y pointing away from `up` (x_cam right).
-View LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target,
-            const Eigen::Vector3d& up, const Intrinsics& intrinsics);
+View LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target, const Eigen::Vector3d& up,
+            const Intrinsics& intrinsics);
 
 // The largest focal length (fx = fy, centred principal point) at which every point projects
 // inside every view with `margin` (share of the half-size) left free. Points must be in front.

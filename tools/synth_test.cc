@@ -244,11 +244,12 @@ void CheckVisibilityAgainstDepthMaps(const SynthDataset& d, const gl::GlContext&
       hidden_confirmed += hidden;
     }
   }
-  std::printf("%ld observations (%.2f%% exact at their pixel), %ld unlisted in-view sightings, "
-              "%.2f%% of them occluded in the depth map\n",
-              static_cast<long>(observations), 100.0 * visible_ok / observations,
-              static_cast<long>(hidden_checked),
-              hidden_checked ? 100.0 * hidden_confirmed / hidden_checked : 100.0);
+  std::printf(
+      "%ld observations (%.2f%% exact at their pixel), %ld unlisted in-view sightings, "
+      "%.2f%% of them occluded in the depth map\n",
+      static_cast<long>(observations), 100.0 * visible_ok / observations,
+      static_cast<long>(hidden_checked),
+      hidden_checked ? 100.0 * hidden_confirmed / hidden_checked : 100.0);
   EXPECT_GT(observations, 0);
   EXPECT_GT(visible_ok, 0.98 * observations);
   EXPECT_EQ(hidden_confirmed, hidden_checked);
