@@ -285,6 +285,7 @@ struct GlContext::Impl {
         info.clip_control = true;
       }
     }
+    if (!o.use_clip_control) info.clip_control = false;
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &info.max_texture_size);
     if (o.debug_output) {
       glEnable(GL_DEBUG_OUTPUT);

@@ -26,7 +26,9 @@ struct GlContextOptions {
   int device_index = -1;  // with kDevice: the EGL device to use (-1: the first that works)
   int min_major = 4;      // the oldest core profile accepted; 4.3 has compute shaders and SSBOs
   int min_minor = 3;
-  bool debug_output = false;  // a debug context whose KHR_debug messages go to the log (slow)
+  bool debug_output = false;     // a debug context whose KHR_debug messages go to the log (slow)
+  bool use_clip_control = true;  // reversed-Z depth where available; false: GL's default
+                                 // [-1, 1] depth as on drivers without it (tests that path)
   void Check() const;
 };
 

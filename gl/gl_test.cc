@@ -197,6 +197,37 @@ TEST_F(GlTest, CoverageFollowsViewProjectAtPixelCentres) {
   EXPECT_GT(covered, 300);
 }
 
+TEST(GlDepthRange, ConventionalDepthRangeRendersTheSameDepths) {
+  // The path for drivers without glClipControl: GL's default [-1, 1] depth range.
+  GlContextOptions options;
+  options.use_clip_control = false;
+  GlContext context(options);
+  ASSERT_FALSE(context.info().clip_control);
+  const View view = TestView(80, 60);
+  Mesh mesh = FacingQuad(view, 3.0, 0.4, -0.25);
+  const Mesh near = FacingQuad(view, 2.0);
+  const int32_t base = static_cast<int32_t>(mesh.vertices.size());
+  mesh.vertices.push_back(near.vertices[0]);  // a triangle of the nearer plane over part of it
+  mesh.vertices.push_back(near.vertices[1]);
+  mesh.vertices.push_back(near.vertices[3]);
+  mesh.faces.push_back({base, base + 2, base + 1});
+  MeshRenderer renderer(context, mesh);
+  const DepthMaps maps = renderer.Render(view);
+  const Intrinsics& k = view.intrinsics;
+  int near_pixels = 0;
+  for (int r = 0; r < maps.depth.rows; ++r) {
+    for (int c = 0; c < maps.depth.cols; ++c) {
+      const double a = (c + 0.5 - k.cx) / k.fx, b = (r + 0.5 - k.cy) / k.fy;
+      const double plane = 3.0 / (1 - 0.4 * a + 0.25 * b);
+      const double expected = maps.face_id.at<int32_t>(r, c) == 2 ? 2.0 : plane;
+      near_pixels += maps.face_id.at<int32_t>(r, c) == 2;
+      ASSERT_NEAR(maps.depth.at<float>(r, c), expected, 1e-4 * expected) << c << "," << r;
+      ASSERT_LT(expected, plane + 1e-9) << "the nearer surface must win";
+    }
+  }
+  EXPECT_GT(near_pixels, 1000);
+}
+
 TEST_F(GlTest, NearestSurfaceWinsAndFaceIdsNameIt) {
   const View view = TestView();
   Mesh mesh = FacingQuad(view, 4.0);

@@ -37,10 +37,13 @@ void CheckView(const View& view, const GlContext& context, int scale = 1) {
 }
 
 // Depth range for a render: the options' if given, else the mesh bounds'.
-bool ChooseDepthRange(const GpuMesh& mesh, const View& view, double near_option, double far_option,
-                      double* near, double* far) {
+bool ChooseDepthRange(const GlContext& context, const GpuMesh& mesh, const View& view,
+                      double near_option, double far_option, double* near, double* far) {
   double auto_near = 0, auto_far = 0;
   if (!mesh.DepthBounds(view, &auto_near, &auto_far)) return false;
+  // Without reversed-Z (no glClipControl) depth precision degrades with far/near: keep the
+  // ratio at most 1e4 (surfaces closer than far/1e4 are then clipped).
+  if (!context.info().clip_control) auto_near = std::max(auto_near, auto_far * 1e-4);
   *near = near_option > 0 ? near_option : auto_near;
   *far = far_option > 0 ? far_option : auto_far;
   return *far > *near;
@@ -181,7 +184,7 @@ DepthMaps MeshRenderer::Render(const View& view, const DepthRenderOptions& optio
   if (options.face_ids) maps.face_id = cv::Mat(height, width, CV_32S, cv::Scalar(-1));
   double near = 0, far = 0;
   if (impl_->mesh.num_faces() == 0 ||
-      !ChooseDepthRange(impl_->mesh, view, options.near, options.far, &near, &far)) {
+      !ChooseDepthRange(context, impl_->mesh, view, options.near, options.far, &near, &far)) {
     return maps;  // nothing in front of the camera
   }
 
@@ -377,7 +380,7 @@ cv::Mat SurfaceRenderer::Render(const View& view, const SurfaceRenderOptions& op
   cv::Mat image;
   double near = 0, far = 0;
   if (impl_->mesh.num_faces() > 0 &&
-      ChooseDepthRange(impl_->mesh, big, options.near, options.far, &near, &far)) {
+      ChooseDepthRange(context, impl_->mesh, big, options.near, options.far, &near, &far)) {
     std::unique_ptr<Framebuffer>& fb = impl_->framebuffer;
     if (!fb || fb->width() != width || fb->height() != height) {
       fb = std::make_unique<Framebuffer>(width, height,
