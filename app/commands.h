@@ -10,5 +10,7 @@ namespace ms::app {
 void RegisterInfoCommand(CLI::App& app);
 void RegisterCheckMeshCommand(CLI::App& app);
 void RegisterSweepCommand(CLI::App& app);
+void RegisterSynthCommand(CLI::App& app);
+void RegisterEvaluateCommand(CLI::App& app);
 
 }  // namespace ms::app

@@ -12,6 +12,7 @@
 #include <memory>
 
 #include "app/commands.h"
+#include "gl/context.h"
 #include "scene/scene.h"
 #include "scene/scene_io.h"
 
@@ -37,6 +38,7 @@ void RunInfo(const InfoOptions& options) {
   std::printf("  ZeroMQ      %d.%d.%d\n", zmq_major, zmq_minor, zmq_patch);
   std::printf("  HDF5        %u.%u.%u\n", h5_major, h5_minor, h5_release);
   std::printf("  spdlog      %d.%d.%d\n", SPDLOG_VER_MAJOR, SPDLOG_VER_MINOR, SPDLOG_VER_PATCH);
+  std::printf("  OpenGL      %s\n", gl::DescribeGl().c_str());
   if (!options.input.empty()) {
     const Scene scene = ReadScene(options.input);
     std::printf("scene %s\n  format      %s\n  %s\n", options.input.c_str(),

@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
   ms::app::RegisterInfoCommand(app);
   ms::app::RegisterCheckMeshCommand(app);
   ms::app::RegisterSweepCommand(app);
+  ms::app::RegisterSynthCommand(app);
+  ms::app::RegisterEvaluateCommand(app);
 
   try {
     app.parse(argc, argv);
