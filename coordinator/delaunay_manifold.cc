@@ -37,6 +37,7 @@ constexpr int32_t kInfiniteVertexId = INT32_MAX;
 struct VertexInfo {
   int32_t id = kInfiniteVertexId;  // point id (>= 0) or -1 - k for Steiner point k
   int32_t outside_cells = 0;       // incident cells in O
+  int32_t cells = 0;               // incident cells, infinite ones included
 };
 
 struct CellInfo {
@@ -45,6 +46,7 @@ struct CellInfo {
   // three faces containing vertex i: evidence of free space stops at the ray's point.
   int32_t ends[4] = {0, 0, 0, 0};
   uint32_t stamp = 0;     // visit marker for walks and set building
+  uint32_t born = 0;      // insertion batch that created the cell (0: the initial build)
   bool outside = false;   // in O
   bool queued = false;    // in the growing queue
   bool has_camera = false;
@@ -66,6 +68,15 @@ Point ToPoint(const Eigen::Vector3d& p) { return Point(p.x(), p.y(), p.z()); }
 // positively oriented cell, where {k < l} are the two other indices (a Grassmann-Pluecker
 // identity; A_i, B_i are the orientations of a and b against face i).
 constexpr int kPluckerSign[4][4] = {{0, -1, 1, -1}, {1, 0, -1, 1}, {-1, 1, 0, -1}, {1, -1, 1, 0}};
+
+// Fast walk step: entering a cell through face e, the segment leaves through the face given
+// by the signs of orientation(p_e, p_m, a, b) for the three other vertices m (in increasing
+// order), coded as 4*(s1>0) + 2*(s2>0) + (s3>0). Codes 0 and 7 cannot occur; a zero sign is a
+// degenerate step handled by the general rule. (Derived and checked numerically.)
+constexpr int kExitFace[4][8] = {{-1, 1, 3, 3, 2, 1, 2, -1},
+                                 {-1, 2, 0, 2, 3, 3, 0, -1},
+                                 {-1, 0, 3, 3, 1, 0, 1, -1},
+                                 {-1, 1, 0, 1, 2, 2, 0, -1}};
 
 void OtherTwo(int i, int j, int* k, int* l) {
   int found[2], n = 0;
@@ -244,7 +255,8 @@ class DelaunayManifold::Impl {
   const CameraStart& StartOf(int camera);
   // Calls visit(cell) for every cell crossed by the open segment camera -> point.
   template <typename Visit>
-  int64_t Walk(const CameraStart& start, const Point& a, const Point& b, Visit&& visit) const;
+  int64_t Walk(const CameraStart& start, const Point& a, const Vertex_handle& target,
+               Visit&& visit) const;
   template <typename Visit>
   void WalkFallback(Cell_handle from, const Point& a, const Point& b, uint32_t stamp,
                     Visit& visit) const;
@@ -264,6 +276,13 @@ class DelaunayManifold::Impl {
   int64_t outside_count_ = 0;
   int64_t ray_count_ = 0;
   mutable uint32_t stamp_ = 0;
+  uint32_t batch_ = 0;               // insertion batches so far
+  std::vector<uint32_t> point_mark_;  // per point: last batch that marked its rays
+  mutable std::vector<Cell_handle> scratch_cells_;  // reused by walks
+  // Reused by VertexRegular (no allocation in the hot path).
+  mutable std::vector<Cell_handle> regular_cells_;
+  mutable std::vector<std::pair<Vertex_handle, Vertex_handle>> regular_link_;
+  mutable std::vector<std::pair<Vertex_handle, int>> regular_degree_;
   bool built_ = false;
 };
 
@@ -315,81 +334,113 @@ std::vector<Cell_handle> DelaunayManifold::Impl::StartCandidates(const CameraSta
 }
 
 template <typename Visit>
-int64_t DelaunayManifold::Impl::Walk(const CameraStart& start, const Point& a, const Point& b,
-                                     Visit&& visit) const {
+int64_t DelaunayManifold::Impl::Walk(const CameraStart& start, const Point& a,
+                                     const Vertex_handle& target, Visit&& visit) const {
+  const Point& b = target->point();
   const uint32_t stamp = NextStamp();
   int64_t steps = 0;
   Cell_handle current;
-  const std::vector<Cell_handle> candidates = StartCandidates(start);
-  for (const Cell_handle& c : candidates) {
-    if (!dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
-      current = c;
-      break;
+  if (start.type == Delaunay::CELL) {
+    current = start.cell;  // the camera is strictly inside: the segment starts in this cell
+  } else {
+    const std::vector<Cell_handle> candidates = StartCandidates(start);
+    for (const Cell_handle& c : candidates) {
+      if (!dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
+        current = c;
+        break;
+      }
+    }
+    if (current == Cell_handle()) {
+      // The segment leaves the camera along a face or edge: enumerate exhaustively.
+      WalkFallback(candidates.front(), a, b, stamp, visit);
+      return steps;
     }
   }
-  if (current == Cell_handle()) {
-    // The segment leaves the camera along a face or edge: enumerate exhaustively.
-    WalkFallback(candidates.front(), a, b, stamp, visit);
-    return steps;
-  }
+  int entry = -1;  // face through which `current` was entered, if through a face interior
   for (;;) {
     current->info().stamp = stamp;
     visit(current);
     ++steps;
-    const FaceSides s = ComputeFaceSides(current, a, b);
-    // Faces that bound the segment's interval from above: it leaves through the first.
-    int exit = -1, ties[3], num_ties = 0;
-    for (int j = 0; j < 4; ++j) {
-      if (!(s.a[j] > 0 && s.b[j] <= 0)) continue;
-      if (exit < 0) {
-        exit = j;
-        ties[0] = j;
-        num_ties = 1;
-        continue;
-      }
-      // U_j < U_exit  <=>  K_{j,exit} < 0.
-      const int order = PluckerSign(current, j, exit, a, b);
-      if (order < 0) {
-        exit = j;
-        ties[0] = j;
-        num_ties = 1;
-      } else if (order == 0) {
-        ties[num_ties++] = j;
-      }
-    }
-    if (exit < 0 || s.b[exit] == 0) break;  // the segment ends in or on this cell
+    // A crossed cell incident to the end point is the last one (convexity).
+    if (current->has_vertex(target)) break;
     Cell_handle next;
-    if (num_ties == 1) {
-      next = current->neighbor(exit);
-      MS_CHECK(!dt_.is_infinite(next)) << "viewing ray leaves the triangulation";
-      if (next->info().stamp == stamp) next = Cell_handle();
-    } else {
-      // Leaves through an edge (two faces tie) or a vertex (three): the next cell is the one
-      // around that simplex that the segment enters.
-      std::vector<Cell_handle> around;
-      if (num_ties == 2) {
-        int k, l;
-        OtherTwo(ties[0], ties[1], &k, &l);
-        auto circ = dt_.incident_cells(current, k, l), done = circ;
-        do {
-          around.push_back(circ);
-        } while (++circ != done);
-      } else {
-        const int vertex = 6 - ties[0] - ties[1] - ties[2];
-        dt_.incident_cells(current->vertex(vertex), std::back_inserter(around));
+    int exit = -1;
+    if (entry >= 0) {
+      // Fast step: three orientations decide the exit face (kExitFace).
+      const Point& apex = current->vertex(entry)->point();
+      int code = 0;
+      bool degenerate = false;
+      for (int m = 0; m < 4 && !degenerate; ++m) {
+        if (m == entry) continue;
+        const CGAL::Orientation o = CGAL::orientation(apex, current->vertex(m)->point(), a, b);
+        degenerate = o == CGAL::COPLANAR;
+        code = 2 * code + (o == CGAL::POSITIVE);
       }
-      for (const Cell_handle& c : around) {
-        if (c->info().stamp != stamp && !dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
-          next = c;
-          break;
+      if (!degenerate) exit = kExitFace[entry][code];
+    }
+    if (exit < 0) {
+      // General step, exact in every case: the exit is the face whose bound on the segment's
+      // parameter is smallest; ties mean leaving through an edge or a vertex.
+      const FaceSides s = ComputeFaceSides(current, a, b);
+      int ties[3], num_ties = 0;
+      for (int j = 0; j < 4; ++j) {
+        if (!(s.a[j] > 0 && s.b[j] <= 0)) continue;
+        if (exit < 0) {
+          exit = j;
+          ties[0] = j;
+          num_ties = 1;
+          continue;
+        }
+        // U_j < U_exit  <=>  K_{j,exit} < 0.
+        const int order = PluckerSign(current, j, exit, a, b);
+        if (order < 0) {
+          exit = j;
+          ties[0] = j;
+          num_ties = 1;
+        } else if (order == 0) {
+          ties[num_ties++] = j;
         }
       }
+      if (exit < 0 || s.b[exit] == 0) break;  // the segment ends in or on this cell
+      if (num_ties > 1) {
+        // Leaves through an edge (two faces tie) or a vertex (three): the next cell is the
+        // one around that simplex that the segment enters.
+        std::vector<Cell_handle>& around = scratch_cells_;
+        around.clear();
+        if (num_ties == 2) {
+          int k, l;
+          OtherTwo(ties[0], ties[1], &k, &l);
+          auto circ = dt_.incident_cells(current, k, l), done = circ;
+          do {
+            around.push_back(circ);
+          } while (++circ != done);
+        } else {
+          const int vertex = 6 - ties[0] - ties[1] - ties[2];
+          dt_.incident_cells(current->vertex(vertex), std::back_inserter(around));
+        }
+        for (const Cell_handle& c : around) {
+          if (c->info().stamp != stamp && !dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
+            next = c;
+            break;
+          }
+        }
+        if (next == Cell_handle()) {
+          // Degenerate: the segment runs inside a face or along an edge for a while.
+          WalkFallback(current, a, b, stamp, visit);
+          return steps;
+        }
+        entry = -1;
+        current = next;
+        continue;
+      }
     }
-    if (next == Cell_handle()) {
-      // Degenerate: the segment runs inside a face or along an edge for a while.
+    next = current->neighbor(exit);
+    MS_CHECK(!dt_.is_infinite(next)) << "viewing ray leaves the triangulation";
+    if (next->info().stamp == stamp) {
       WalkFallback(current, a, b, stamp, visit);
       return steps;
     }
+    entry = next->index(current);
     current = next;
   }
   return steps;
@@ -441,16 +492,10 @@ bool DelaunayManifold::Impl::FlipKeepsManifold(const Cell_handle& t) const {
   int F = 0;
   for (int i = 0; i < 4; ++i) F += on_target_side(t->neighbor(i));
   int V = 0;
-  std::vector<Cell_handle> around;
   for (int i = 0; i < 4; ++i) {
-    const Vertex_handle v = t->vertex(i);
-    if (joining_outside) {
-      V += v->info().outside_cells > 0;
-    } else {
-      around.clear();
-      dt_.incident_cells(v, std::back_inserter(around));
-      V += std::any_of(around.begin(), around.end(), on_target_side);
-    }
+    const VertexInfo& info = t->vertex(i)->info();
+    // t itself is on neither count of the side it joins.
+    V += joining_outside ? info.outside_cells > 0 : info.cells - info.outside_cells > 0;
   }
   int E = 0;
   for (int i = 0; i < 4; ++i) {
@@ -477,9 +522,11 @@ bool DelaunayManifold::Impl::FlipKeepsManifold(const Cell_handle& t) const {
 // closed cycle (or there are none). `flipped` is evaluated with its label inverted.
 bool DelaunayManifold::Impl::VertexRegular(const Vertex_handle& v, const Cell_handle& flipped) const {
   const auto label = [&](const Cell_handle& c) { return c == flipped ? !InO(c) : InO(c); };
-  std::vector<Cell_handle> around;
+  std::vector<Cell_handle>& around = regular_cells_;
+  around.clear();
   dt_.incident_cells(v, std::back_inserter(around));
-  std::vector<std::pair<Vertex_handle, Vertex_handle>> link;
+  std::vector<std::pair<Vertex_handle, Vertex_handle>>& link = regular_link_;
+  link.clear();
   for (const Cell_handle& c : around) {
     if (!label(c)) continue;
     for (int i = 0; i < 4; ++i) {
@@ -494,7 +541,8 @@ bool DelaunayManifold::Impl::VertexRegular(const Vertex_handle& v, const Cell_ha
   }
   if (link.empty()) return true;
   // Every link vertex must have degree 2 and the edges must form a single cycle.
-  std::vector<std::pair<Vertex_handle, int>> degree;
+  std::vector<std::pair<Vertex_handle, int>>& degree = regular_degree_;
+  degree.clear();
   for (const auto& [p, q] : link) {
     for (const Vertex_handle& w : {p, q}) {
       auto it = std::find_if(degree.begin(), degree.end(),
@@ -652,15 +700,16 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   std::vector<std::pair<Point, VertexInfo>> vertices;
   vertices.reserve(steiner.size() + points.size());
   for (size_t k = 0; k < steiner.size(); ++k) {
-    vertices.push_back({ToPoint(steiner[k]), {static_cast<int32_t>(-1 - k), 0}});
+    vertices.push_back({ToPoint(steiner[k]), {static_cast<int32_t>(-1 - k), 0, 0}});
   }
   for (size_t i = 0; i < points.size(); ++i) {
-    vertices.push_back({ToPoint(points[i].position), {static_cast<int32_t>(i), 0}});
+    vertices.push_back({ToPoint(points[i].position), {static_cast<int32_t>(i), 0, 0}});
   }
   dt_.insert(vertices.begin(), vertices.end());
   positions_.reserve(points.size());
   point_cameras_.reserve(points.size());
   vertex_of_point_.assign(points.size(), Vertex_handle());
+  point_mark_.assign(points.size(), 0);
   for (auto v = dt_.finite_vertices_begin(); v != dt_.finite_vertices_end(); ++v) {
     if (v->info().id >= 0) vertex_of_point_[v->info().id] = v;
   }
@@ -679,6 +728,9 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
       vertex_of_point_[i] = c->vertex(li);
       ++stats.merged_duplicates;
     }
+  }
+  for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
+    for (int i = 0; i < 4; ++i) ++c->vertex(i)->info().cells;
   }
   stats.vertices = num_vertices();
   stats.cells = num_cells();
@@ -702,7 +754,7 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
     const Point target = target_vertex->point();
     const auto count = [&](const Cell_handle& c) { CountCrossing(c, target_vertex); };
     for (int32_t c : point_cameras_[i]) {
-      stats.ray_cell_steps += Walk(StartOf(c), camera_points_[c], target, count);
+      stats.ray_cell_steps += Walk(StartOf(c), camera_points_[c], target_vertex, count);
       ray_index_->Add(c, static_cast<int32_t>(i), positions_[i]);
       ++stats.rays;
       progress.Update(stats.rays);
@@ -738,25 +790,32 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   MS_CHECK(built_) << "Insert before Build";
   InsertionStats stats;
   stats.requested = static_cast<int64_t>(points.size());
-  Timer timer;
-  Progress progress("manifold: inserting points", stats.requested);
-  std::vector<Cell_handle> conflicts, new_cells, around;
-  std::vector<std::pair<CellKey, Cell_handle>> shrink_set;
-  std::vector<Facet> boundary;
-  std::vector<RayRef> candidates;
-  Cell_handle hint;
   for (size_t n = 0; n < points.size(); ++n) {
-    progress.Update(static_cast<int64_t>(n));
-    const RayPoint& rp = points[n];
-    if (!rp.position.allFinite()) {
+    if (!points[n].position.allFinite()) {
       throw InputError("new point " + std::to_string(n) + ": position is not finite");
     }
-    for (int32_t c : rp.cameras) {
+    for (int32_t c : points[n].cameras) {
       if (c < 0 || c >= static_cast<int32_t>(cameras_.size())) {
         throw InputError("new point " + std::to_string(n) + ": camera " + std::to_string(c) +
                          " out of range");
       }
     }
+  }
+  Timer timer;
+  Progress progress("manifold: inserting points", stats.requested);
+  // Cells created in this batch carry its number; their ray counts are rebuilt once at the
+  // end (shrinking and the discard rule do not depend on weights, only growing does).
+  const uint32_t batch = ++batch_;
+  const int32_t first_new_id = static_cast<int32_t>(positions_.size());
+  std::vector<Cell_handle> conflicts, around;
+  std::vector<std::pair<CellKey, Cell_handle>> shrink_set;
+  std::vector<Facet> boundary;
+  std::vector<RayRef> candidates;
+  std::vector<int32_t> affected_points;  // old points whose rays may cross a new cell
+  Cell_handle hint;
+  for (size_t n = 0; n < points.size(); ++n) {
+    progress.Update(static_cast<int64_t>(n));
+    const RayPoint& rp = points[n];
     if (!((rp.position.array() > box_min_.array()).all() &&
           (rp.position.array() < box_max_.array()).all())) {
       ++stats.discarded_outside;
@@ -783,9 +842,8 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
       continue;
     }
 
-    // Shrink: remove cells of E (D and its neighbourhood) from O where the surface stays
-    // manifold, repeating until nothing changes.
-    // D's cells come first, then the rest of E; stop as soon as D has left O.
+    // Shrink: remove cells of E (D, then its neighbourhood) from O where the surface stays
+    // manifold, until D has left O or nothing more can be removed.
     const uint32_t stamp = NextStamp();
     shrink_set.clear();
     const auto add_to_shrink_set = [&](const Cell_handle& c) {
@@ -795,20 +853,22 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
     };
     for (const Cell_handle& c : conflicts) add_to_shrink_set(c);
     const size_t num_in_d = shrink_set.size();
-    for (const Cell_handle& c : conflicts) {
-      if (options_.shrink_neighbourhood == 0) {
-        for (int i = 0; i < 4; ++i) add_to_shrink_set(c->neighbor(i));
-      } else {
-        for (int i = 0; i < 4; ++i) {
-          around.clear();
-          dt_.incident_cells(c->vertex(i), std::back_inserter(around));
-          for (const Cell_handle& a : around) add_to_shrink_set(a);
+    if (num_in_d > 0) {
+      for (const Cell_handle& c : conflicts) {
+        if (options_.shrink_neighbourhood == 0) {
+          for (int i = 0; i < 4; ++i) add_to_shrink_set(c->neighbor(i));
+        } else {
+          for (int i = 0; i < 4; ++i) {
+            around.clear();
+            dt_.incident_cells(c->vertex(i), std::back_inserter(around));
+            for (const Cell_handle& a : around) add_to_shrink_set(a);
+          }
         }
       }
+      const auto by_key = [](const auto& x, const auto& y) { return x.first < y.first; };
+      std::sort(shrink_set.begin(), shrink_set.begin() + num_in_d, by_key);
+      std::sort(shrink_set.begin() + num_in_d, shrink_set.end(), by_key);
     }
-    const auto by_key = [](const auto& x, const auto& y) { return x.first < y.first; };
-    std::sort(shrink_set.begin(), shrink_set.begin() + num_in_d, by_key);
-    std::sort(shrink_set.begin() + num_in_d, shrink_set.end(), by_key);
     size_t d_in_o = num_in_d;
     for (bool changed = true; changed && d_in_o > 0;) {
       changed = false;
@@ -828,7 +888,7 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
       continue;
     }
 
-    // Rays that may cross the hole: conservative box query on the ray index.
+    // Old rays that may cross the hole (conservative box query), for the recount below.
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
     for (const Cell_handle& c : conflicts) {
       if (c->info().has_camera) {
@@ -846,60 +906,60 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
     candidates.clear();
     ray_index_->Query(lo, hi, &candidates);
     stats.candidate_rays += static_cast<int64_t>(candidates.size());
-
-    const Vertex_handle v = dt_.insert_in_hole(p, conflicts.begin(), conflicts.end(),
-                                               boundary.front().first, boundary.front().second);
-    const int32_t id = static_cast<int32_t>(positions_.size());
-    v->info() = VertexInfo{id, 0};
-    new_cells.clear();
-    dt_.incident_cells(v, std::back_inserter(new_cells));
-    for (const Cell_handle& c : new_cells) c->info() = CellInfo{};
-    // New cells take the crossings of the old rays that pass through them (cells outside the
-    // hole keep theirs: their geometry did not change).
-    const double slack = 1e-9 * (hi - lo).norm();
     for (const RayRef& ray : candidates) {
-      const Eigen::Vector3d& a = cameras_[ray.camera].center;
-      const Eigen::Vector3d& b = positions_[ray.point];
-      // Slab test of the segment against the hole's box.
-      double t0 = 0, t1 = 1;
-      bool misses = false;
-      for (int axis = 0; axis < 3 && !misses; ++axis) {
-        const double d = b[axis] - a[axis];
-        const double l = lo[axis] - slack, h = hi[axis] + slack;
-        if (std::abs(d) < 1e-300) {
-          misses = a[axis] < l || a[axis] > h;
-        } else {
-          double ta = (l - a[axis]) / d, tb = (h - a[axis]) / d;
-          if (ta > tb) std::swap(ta, tb);
-          t0 = std::max(t0, ta);
-          t1 = std::min(t1, tb);
-          misses = t0 > t1 + 1e-12;
-        }
-      }
-      if (misses) continue;
-      const Point pa = camera_points_[ray.camera];
-      const Vertex_handle target = vertex_of_point_[ray.point];
-      const Point pb = target->point();
-      for (const Cell_handle& c : new_cells) {
-        if (SegmentCrossesCell(c, pa, pb)) CountCrossing(c, target);
+      if (point_mark_[ray.point] != batch) {
+        point_mark_[ray.point] = batch;
+        affected_points.push_back(ray.point);
       }
     }
-    // The new point and its own rays.
+
+    for (const Cell_handle& c : conflicts) {
+      for (int i = 0; i < 4; ++i) --c->vertex(i)->info().cells;
+    }
+    const Vertex_handle v = dt_.insert_in_hole(p, conflicts.begin(), conflicts.end(),
+                                               boundary.front().first, boundary.front().second);
+    v->info() = VertexInfo{static_cast<int32_t>(positions_.size()), 0, 0};
+    around.clear();
+    dt_.incident_cells(v, std::back_inserter(around));
+    for (const Cell_handle& c : around) {
+      c->info() = CellInfo{};
+      c->info().born = batch;
+      for (int i = 0; i < 4; ++i) ++c->vertex(i)->info().cells;
+    }
     positions_.push_back(rp.position);
     std::vector<int32_t> cams = rp.cameras;
     std::sort(cams.begin(), cams.end());
     cams.erase(std::unique(cams.begin(), cams.end()), cams.end());
-    vertex_of_point_.push_back(v);
-    const auto count = [&](const Cell_handle& c) { CountCrossing(c, v); };
-    for (int32_t c : cams) {
-      Walk(StartOf(c), camera_points_[c], p, count);
-      ray_index_->Add(c, id, rp.position);
-      ++stats.new_rays;
-    }
-    ray_count_ += static_cast<int64_t>(cams.size());
     point_cameras_.push_back(std::move(cams));
+    point_mark_.push_back(0);
+    vertex_of_point_.push_back(v);
     ++stats.inserted;
     hint = v->cell();
+  }
+
+  // Exact ray counts for the cells born in this batch: every old ray that may cross one is
+  // walked once and counted on those cells only (the others keep their counts: their geometry
+  // did not change); the new points' rays are walked and counted everywhere.
+  std::sort(affected_points.begin(), affected_points.end());
+  for (int32_t id : affected_points) {
+    const Vertex_handle target = vertex_of_point_[id];
+    const auto count_new_cells = [&](const Cell_handle& c) {
+      if (c->info().born == batch) CountCrossing(c, target);
+    };
+    for (int32_t c : point_cameras_[id]) {
+      Walk(StartOf(c), camera_points_[c], target, count_new_cells);
+      ++stats.rewalked_rays;
+    }
+  }
+  for (int32_t id = first_new_id; id < static_cast<int32_t>(positions_.size()); ++id) {
+    const Vertex_handle target = vertex_of_point_[id];
+    const auto count = [&](const Cell_handle& c) { CountCrossing(c, target); };
+    for (int32_t c : point_cameras_[id]) {
+      Walk(StartOf(c), camera_points_[c], target, count);
+      ray_index_->Add(c, id, positions_[id]);
+      ++stats.new_rays;
+    }
+    ray_count_ += static_cast<int64_t>(point_cameras_[id].size());
   }
   stats.seconds_insertion = timer.Seconds();
 
@@ -911,11 +971,11 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   stats.seconds_growing = timer.Seconds();
   spdlog::info(
       "manifold: {} new points: {} inserted, {} discarded (conflict {}, duplicate {}, outside "
-      "{}), {} cells shrunk; {:.2f} s inserting, {:.2f} s regrowing",
+      "{}), {} cells shrunk, {} rays re-walked; {:.2f} s inserting, {:.2f} s regrowing",
       stats.requested, stats.inserted,
       stats.discarded_conflict + stats.discarded_duplicate + stats.discarded_outside,
       stats.discarded_conflict, stats.discarded_duplicate, stats.discarded_outside,
-      stats.shrunk_cells, stats.seconds_insertion, stats.seconds_growing);
+      stats.shrunk_cells, stats.rewalked_rays, stats.seconds_insertion, stats.seconds_growing);
   if (options_.validate_each_step) {
     const std::string problem = Validate(true);
     if (!problem.empty()) throw InternalError("manifold invalid after insertion: " + problem);
@@ -970,9 +1030,10 @@ Mesh DelaunayManifold::Impl::ExtractSurface(SurfaceInfo* info) const {
 std::string DelaunayManifold::Impl::Validate(bool check_weights) const {
   std::ostringstream problems;
   if (!dt_.is_valid(false)) problems << "CGAL triangulation invalid; ";
-  std::unordered_map<const void*, int32_t> outside_cells;
+  std::unordered_map<const void*, int32_t> outside_cells, cells_around;
   int64_t outside = 0;
   for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
+    for (int i = 0; i < 4; ++i) ++cells_around[&*c->vertex(i)];
     if (!c->info().outside) continue;
     if (dt_.is_infinite(c)) {
       problems << "an infinite cell is in O; ";
@@ -989,6 +1050,7 @@ std::string DelaunayManifold::Impl::Validate(bool check_weights) const {
     const auto it = outside_cells.find(&*v);
     const int32_t expected = it == outside_cells.end() ? 0 : it->second;
     if (v->info().outside_cells != expected) ++bad_counts;
+    if (v->info().cells != cells_around[&*v]) ++bad_counts;
     if (!VertexRegular(v, Cell_handle())) ++irregular;
   }
   if (bad_counts > 0) problems << bad_counts << " vertices with a wrong count of cells in O; ";
@@ -1009,7 +1071,7 @@ std::string DelaunayManifold::Impl::Validate(bool check_weights) const {
         CameraStart start;
         start.cell = dt_.locate(camera_points_[c], start.type, start.li, start.lj);
         start.valid = true;
-        self->Walk(start, camera_points_[c], target, count);
+        self->Walk(start, camera_points_[c], target_vertex, count);
       }
     }
     int64_t wrong = 0;
@@ -1074,7 +1136,7 @@ using PlainDelaunay = Delaunay;
 PlainDelaunay Triangulate(const std::vector<Eigen::Vector3d>& points) {
   std::vector<std::pair<Point, VertexInfo>> vertices;
   for (size_t i = 0; i < points.size(); ++i) {
-    vertices.push_back({ToPoint(points[i]), {static_cast<int32_t>(i), 0}});
+    vertices.push_back({ToPoint(points[i]), {static_cast<int32_t>(i), 0, 0}});
   }
   PlainDelaunay dt(vertices.begin(), vertices.end());
   return dt;
@@ -1142,7 +1204,7 @@ struct ManifoldTestAccess {
     const Point a = impl.camera_points_[0];
     const Point b = impl.vertex_of_point_[target]->point();
     walked->clear();
-    impl.Walk(impl.StartOf(0), a, b,
+    impl.Walk(impl.StartOf(0), a, impl.vertex_of_point_[target],
               [&](const Cell_handle& c) { walked->push_back(manifold_internal::SortedIds(c)); });
     brute_force->clear();
     for (auto c = impl.dt_.finite_cells_begin(); c != impl.dt_.finite_cells_end(); ++c) {

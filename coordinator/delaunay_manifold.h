@@ -52,7 +52,8 @@ struct InsertionStats {
   int64_t discarded_duplicate = 0;  // same position as an existing vertex
   int64_t discarded_outside = 0;    // outside the Steiner box
   int64_t shrunk_cells = 0;         // cells removed from O while shrinking
-  int64_t candidate_rays = 0;       // rays re-examined for new cells
+  int64_t candidate_rays = 0;       // rays found near conflict regions (with repeats)
+  int64_t rewalked_rays = 0;        // old rays walked again to count them on new cells
   int64_t new_rays = 0;
   int64_t outside_cells = 0;        // |O| after regrowing
   double seconds_insertion = 0, seconds_growing = 0;

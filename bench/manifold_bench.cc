@@ -1,0 +1,59 @@
+// Throughput of the manifold reconstruction steps (docs/performance.md):
+//   manifold_bench [points ...]            default: 10000 100000 1000000
+// For each size: Delaunay insertion, ray tracing (rays/s), growing (cells/s), peak memory per
+// point; then incremental insertion of 10^4 points near the surface (points/s).
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "base/log.h"
+#include "bench/bench_scenes.h"
+#include "coordinator/delaunay_manifold.h"
+
+int main(int argc, char** argv) {
+  ms::InitLogging("bench");
+  spdlog::set_level(spdlog::level::warn);
+  std::vector<int64_t> sizes;
+  int64_t insert_count = 10000;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("--insert=", 0) == 0) {
+      insert_count = std::stoll(arg.substr(9));
+    } else {
+      sizes.push_back(std::stoll(arg));
+    }
+  }
+  if (sizes.empty()) sizes = {10000, 100000, 1000000};
+  std::printf("%9s %8s %9s %8s %9s %11s %8s %11s %9s %8s %10s %11s\n", "points", "rays",
+              "cells", "DT s", "trace s", "rays/s", "grow s", "cells/s", "total s", "B/point",
+              "ins pts/s", "ins total s");
+  for (int64_t n : sizes) {
+    const ms::bench::ManifoldBenchScene scene = ms::bench::MakeBlobScene(n, 48, 5, 42);
+    const int64_t rss_before = ms::bench::PeakRssBytes();
+    ms::DelaunayManifold manifold(scene.cameras, ms::ManifoldOptions{});
+    ms::Timer timer;
+    const ms::BuildStats stats = manifold.Build(scene.points);
+    const double total = timer.Seconds();
+    const int64_t rss = ms::bench::PeakRssBytes() - rss_before;
+    // Incremental: new points near the surface, as sweeping would find them.
+    const ms::bench::ManifoldBenchScene more =
+        ms::bench::MakeBlobScene(insert_count, 48, 3, 4242, 0.002);
+    timer.Restart();
+    const ms::InsertionStats ins = manifold.Insert(more.points);
+    const double insert_total = timer.Seconds();
+    std::printf("%9lld %8lld %9lld %8.2f %9.2f %11.0f %8.2f %11.0f %9.2f %8.0f %10.0f %11.2f\n",
+                static_cast<long long>(n), static_cast<long long>(stats.rays),
+                static_cast<long long>(stats.cells), stats.seconds_triangulation,
+                stats.seconds_ray_tracing, stats.rays / stats.seconds_ray_tracing,
+                stats.seconds_growing, stats.outside_cells / std::max(stats.seconds_growing, 1e-9),
+                total, static_cast<double>(rss) / n, insert_count / insert_total, insert_total);
+    std::printf("          incremental: %lld inserted, %lld discarded (conflict), %lld shrunk, "
+                "%lld candidate rays, insertion %.2f s + regrowing %.2f s\n",
+                static_cast<long long>(ins.inserted), static_cast<long long>(ins.discarded_conflict),
+                static_cast<long long>(ins.shrunk_cells), static_cast<long long>(ins.candidate_rays),
+                ins.seconds_insertion, ins.seconds_growing);
+    std::fflush(stdout);
+  }
+  return 0;
+}
