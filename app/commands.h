@@ -8,5 +8,6 @@
 namespace ms::app {
 
 void RegisterInfoCommand(CLI::App& app);
+void RegisterConvertCommand(CLI::App& app);
 
 }  // namespace ms::app
