@@ -92,7 +92,7 @@ Scene ParseBundler(const std::string& bundle_name, const std::string& bundle,
     view.intrinsics.cy = 0.5 * size.height;
     view.intrinsics.k1 = k1;
     view.intrinsics.k2 = k2;
-    view.R = Flip() * R;
+    view.R = format::NearestRotation(Flip() * R);
     view.t = Flip() * t;
     view_of_camera[i] = static_cast<int32_t>(scene.views.size());
     scene.views.push_back(std::move(view));

@@ -217,6 +217,14 @@ bool ObservationPixel(const Scene& scene, const ScenePoint& point, const Observa
   return true;
 }
 
+Eigen::Matrix3d NearestRotation(const Eigen::Matrix3d& R) {
+  if (!R.allFinite()) return R;
+  const double error = (R * R.transpose() - Eigen::Matrix3d::Identity()).norm();
+  if (error < 1e-12 || error > 1e-3 || R.determinant() < 0) return R;
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  return svd.matrixU() * svd.matrixV().transpose();
+}
+
 Intrinsics IntrinsicsFromK(const TextReader& reader, const Eigen::Matrix3d& K_in,
                            const std::string& what) {
   if (K_in(1, 0) != 0 || K_in(2, 0) != 0 || K_in(2, 1) != 0 || !(K_in(2, 2) > 0)) {

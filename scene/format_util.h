@@ -101,6 +101,11 @@ void RequireTokenName(const std::string& path, const std::string& format_name, s
 bool ObservationPixel(const Scene& scene, const ScenePoint& point, const Observation& o,
                       LossPolicy* loss, double* x, double* y);
 
+// Rotation matrices printed with few digits (Strecha's 6) are a little off orthonormal, which
+// breaks R^T = R^-1 downstream: within 1e-3 of a rotation, the nearest rotation (SVD); exact
+// rotations (error below 1e-12) and non-rotations (left for Scene::Validate to reject) unchanged.
+Eigen::Matrix3d NearestRotation(const Eigen::Matrix3d& R);
+
 // Pinhole intrinsics from a 3x3 K read at the reader's current line: K must be upper triangular
 // with K(2,2) > 0 (it is divided out) and no skew beyond 1e-9 fx. Size and distortion stay 0.
 Intrinsics IntrinsicsFromK(const TextReader& reader, const Eigen::Matrix3d& K,

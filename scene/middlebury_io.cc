@@ -28,7 +28,7 @@ Scene ParseMiddlebury(const std::string& name, const std::string& contents,
     }
     for (int a = 0; a < 3; ++a) view.t[a] = format::NextDouble(r, "t");
     view.intrinsics = format::IntrinsicsFromK(r, K, "K of " + format::Quote(view.name));
-    view.R = R;
+    view.R = format::NearestRotation(R);
     scene.views.push_back(std::move(view));
   }
   if (!r.AtEnd()) {

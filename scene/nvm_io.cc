@@ -57,6 +57,7 @@ RawCamera ParseCamera(TextReader& r, bool r9t) {
       for (int j = 0; j < 3; ++j) c.R(i, j) = NextDouble(r, "rotation");
     }
     for (int i = 0; i < 3; ++i) c.t[i] = NextDouble(r, "translation");
+    c.R = format::NearestRotation(c.R);
   } else {
     double q[4];
     for (double& v : q) v = NextDouble(r, "quaternion");

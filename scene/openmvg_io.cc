@@ -37,6 +37,32 @@ std::string OneLine(const std::string& text) {
   return out;
 }
 
+// nlohmann builds a DOM node per value; rejecting deep nesting first keeps memory and time
+// proportional to sensible files (sfm_data nests 7 levels) and out of pathological ones.
+void CheckNesting(const std::string& name, const std::string& text, int max_depth) {
+  int depth = 0;
+  bool in_string = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_depth) {
+        throw InputError(name + ": byte " + std::to_string(i) + ": JSON nested deeper than " +
+                         std::to_string(max_depth) + " levels");
+      }
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+}
+
 class JsonReader {
  public:
   explicit JsonReader(std::string name) : name_(std::move(name)) {}
@@ -153,6 +179,7 @@ struct RawIntrinsic {
 }  // namespace
 
 Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::string* root_path) {
+  CheckNesting(name, contents, 32);
   json root;
   try {
     root = json::parse(contents);
@@ -275,7 +302,7 @@ Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::st
       in_k.p1 = k.disto[3];  // openMVG's t1 multiplies (r^2 + 2y^2) in y: OpenCV's p1
       in_k.p2 = k.disto[4];
     }
-    view.R = pose->second.first;
+    view.R = format::NearestRotation(pose->second.first);
     view.t = -view.R * pose->second.second;
     view_index[id] = static_cast<int32_t>(scene.views.size());
     scene.views.push_back(std::move(view));

@@ -57,7 +57,7 @@ SceneFormat FormatFromContents(const std::string& path) {
 }
 
 [[noreturn]] void NoH5(const std::string& path) {
-  throw InputError(path + ": the HDF5 scene store is not built into this branch");
+  throw InputError(path + ": HDF5 scene store not built into this branch");
 }
 
 }  // namespace

@@ -63,7 +63,7 @@ View ParseStrechaCamera(const std::string& name, const std::string& contents) {
   std::string file = fs::path(name).filename().string();
   if (HasCameraSuffix(file)) file.resize(file.size() - (sizeof(kSuffix) - 1));
   view.name = file;
-  view.R = R.transpose();
+  view.R = format::NearestRotation(R.transpose());
   view.SetCenter(C);
   return view;
 }
