@@ -11,8 +11,8 @@ namespace ms::app {
 namespace {
 
 struct ConvertOptions {
-  std::string input;         // scene to read
-  std::string output;        // path to write
+  std::string input;          // scene to read
+  std::string output;         // path to write
   std::string from = "auto";  // input format name, or auto (detected from the path)
   std::string to = "auto";    // output format name, or auto (inferred from the output path)
   SceneReadOptions read;

@@ -35,18 +35,20 @@ std::vector<std::string> ParseList(const std::string& list_name, const std::stri
   std::string_view line;
   while (r.NextDataLine(&line, 0)) {
     // "<image> [0 <focal from EXIF>]": only the name matters.
-    names.emplace_back(SplitFields(line)[0]);
+    std::string_view name;
+    format::FieldCursor(line).Next(&name);
+    names.emplace_back(name);
   }
   return names;
 }
 
 }  // namespace
 
-Scene ParseBundler(const std::string& bundle_name, const std::string& bundle,
-                   const std::string& list_name, const std::string& list,
-                   const ImageSizeLookup& image_size) {
+Scene ParseBundler(const std::string& bundle_name, std::string bundle, const std::string& list_name,
+                   const std::string& list, const ImageSizeLookup& image_size) {
   const std::vector<std::string> names = ParseList(list_name, list);
-  TextReader r(bundle_name, bundle);
+  const size_t file_bytes = bundle.size();
+  TextReader r(bundle_name, std::move(bundle));
   std::string_view header;
   if (!r.NextDataLine(&header, 0)) r.Fail("empty file, expected '# Bundle file v0.3'");
   if (Trim(header) != "# Bundle file v0.3") {
@@ -97,12 +99,13 @@ Scene ParseBundler(const std::string& bundle_name, const std::string& bundle,
     view_of_camera[i] = static_cast<int32_t>(scene.views.size());
     scene.views.push_back(std::move(view));
   }
-  scene.points.reserve(format::ReserveBound(num_points, bundle.size(), 14));
+  scene.points.reserve(format::ReserveBound(num_points, file_bytes, 14));
   size_t dropped = 0;
   for (int64_t p = 0; p < num_points; ++p) {
     ScenePoint point;
     for (int i = 0; i < 3; ++i) point.position[i] = NextDouble(r, "point position");
-    for (int i = 0; i < 3; ++i) point.color[i] = static_cast<uint8_t>(NextInt(r, "point colour", 0, 255));
+    for (int i = 0; i < 3; ++i)
+      point.color[i] = static_cast<uint8_t>(NextInt(r, "point colour", 0, 255));
     const int64_t length = NextInt(r, "view list length", 0, INT32_MAX);
     for (int64_t m = 0; m < length; ++m) {
       const int64_t camera = NextInt(r, "view list camera", 0, num_cameras - 1);
@@ -177,7 +180,8 @@ Scene ReadBundler(const std::string& path, const SceneReadOptions& options) {
 void WriteBundler(const Scene& scene, const std::string& path, const SceneWriteOptions& options) {
   format::LossPolicy loss(path, "Bundler", options.allow_lossy);
   std::string list;
-  std::string out = fmt::format("# Bundle file v0.3\n{} {}\n", scene.views.size(), scene.points.size());
+  std::string out =
+      fmt::format("# Bundle file v0.3\n{} {}\n", scene.views.size(), scene.points.size());
   for (size_t i = 0; i < scene.views.size(); ++i) {
     const View& v = scene.views[i];
     format::RequireTokenName(path, "Bundler's list.txt", i, v.name);
@@ -215,9 +219,10 @@ void WriteBundler(const Scene& scene, const std::string& path, const SceneWriteO
                        FormatDouble(p.position.y()), FormatDouble(p.position.z()), p.color[0],
                        p.color[1], p.color[2], count, views);
   }
-  WriteFileAtomically(path, [&](std::ostream& s) { s.write(out.data(), out.size()); }, false);
-  WriteFileAtomically(BundlerListPath(path), [&](std::ostream& s) { s.write(list.data(), list.size()); },
-                      false);
+  WriteFileAtomically(
+      path, [&](std::ostream& s) { s.write(out.data(), out.size()); }, false);
+  WriteFileAtomically(
+      BundlerListPath(path), [&](std::ostream& s) { s.write(list.data(), list.size()); }, false);
 }
 
 }  // namespace ms

@@ -16,9 +16,8 @@
 namespace ms {
 
 // Parses bundle.out and list.txt held in memory.
-Scene ParseBundler(const std::string& bundle_name, const std::string& bundle,
-                   const std::string& list_name, const std::string& list,
-                   const ImageSizeLookup& image_size);
+Scene ParseBundler(const std::string& bundle_name, std::string bundle, const std::string& list_name,
+                   const std::string& list, const ImageSizeLookup& image_size);
 
 // The list file a writer puts beside `bundle_path`: "list.txt" for bundle.out, otherwise
 // "<stem>.list.txt" (COLMAP's export names "X.bundle.out" + "X.list.txt").

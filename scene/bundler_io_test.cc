@@ -15,10 +15,11 @@ namespace {
 using testing::DataPath;
 
 void SortPoints(Scene* scene) {
-  std::sort(scene->points.begin(), scene->points.end(), [](const ScenePoint& a, const ScenePoint& b) {
-    return std::lexicographical_compare(a.position.data(), a.position.data() + 3, b.position.data(),
-                                        b.position.data() + 3);
-  });
+  std::sort(scene->points.begin(), scene->points.end(),
+            [](const ScenePoint& a, const ScenePoint& b) {
+              return std::lexicographical_compare(a.position.data(), a.position.data() + 3,
+                                                  b.position.data(), b.position.data() + 3);
+            });
 }
 
 TEST(BundlerIo, ColmapExportMatchesItsSource) {
@@ -49,8 +50,9 @@ TEST(BundlerIo, SkipsUnregisteredCamerasAndFlipsAxes) {
       "80 0 0\n1 0 0\n0 1 0\n0 0 1\n1 2 -6\n"
       "0 0 0\n1 2 3\n3 0 7 1 1 1 8 0 0 2 9 -2.5 4\n";
   const std::string list = "x.png\ny.png 0 100\nz.png\n";
-  const Scene scene = ParseBundler("b.out", bundle, "list.txt", list,
-                                   [](const std::string&) { return ImageSize{40, 30}; });
+  const Scene scene = ParseBundler("b.out", bundle, "list.txt", list, [](const std::string&) {
+    return ImageSize{40, 30};
+  });
   ASSERT_EQ(scene.views.size(), 2u);
   EXPECT_EQ(scene.views[0].name, "y.png");
   // Bundler looks down -z with y up: identity R becomes diag(1, -1, -1).
@@ -71,7 +73,9 @@ TEST(BundlerIo, SkipsUnregisteredCamerasAndFlipsAxes) {
 TEST(BundlerIo, ListMustMatchCameraCount) {
   try {
     ParseBundler("b.out", "# Bundle file v0.3\n2 0\n", "list.txt", "x.png\n",
-                 [](const std::string&) { return ImageSize{40, 30}; });
+                 [](const std::string&) {
+                   return ImageSize{40, 30};
+                 });
     FAIL();
   } catch (const InputError& e) {
     EXPECT_STREQ(e.what(), "list.txt: lists 1 images but b.out has 2 cameras");

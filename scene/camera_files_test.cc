@@ -64,7 +64,8 @@ TEST(StrechaIo, RejectsDistortionAndSkew) {
                  "x.camera:4: distortion: only '0 0 0' is supported (the non-zero model is "
                  "undocumented)");
   }
-  EXPECT_THROW(ParseStrechaCamera("x.camera", "50 1 32\n0 50 24\n0 0 1\n0 0 0\n" + rest), InputError);
+  EXPECT_THROW(ParseStrechaCamera("x.camera", "50 1 32\n0 50 24\n0 0 1\n0 0 0\n" + rest),
+               InputError);
   EXPECT_THROW(ParseStrechaCamera("x.camera", base + "0 0 0\n" + rest + "7\n"), InputError);
 }
 
@@ -78,7 +79,8 @@ TEST(StrechaIo, FountainGroundTruthAgreesWithColmap) {
     EXPECT_FALSE(v.image_path.empty()) << v.name;  // found in ../images
   }
   EXPECT_EQ(strecha.views[0].name, "0000.jpg");
-  EXPECT_LT((strecha.views[0].Center() - Eigen::Vector3d(-7.28137, -7.57667, 0.204446)).norm(), 1e-12);
+  EXPECT_LT((strecha.views[0].Center() - Eigen::Vector3d(-7.28137, -7.57667, 0.204446)).norm(),
+            1e-12);
   EXPECT_EQ(strecha.views[0].intrinsics.cx, 1520.69);
   // COLMAP triangulated its points with these poses: projections through either camera set
   // agree (the .camera files' 6 digits leave R a little off orthonormal).
@@ -100,7 +102,9 @@ TEST(MiddleburyIo, Fixture) {
   EXPECT_EQ(scene.views[2].intrinsics.width, 80);  // c.png
   EXPECT_EQ(scene.views[2].intrinsics.cx, 40.0);
   const double angle = 20 * M_PI / 180;
-  EXPECT_LT((a.Center() - Eigen::Vector3d(0.6 * std::cos(angle), 0.6 * std::sin(angle), 0.1)).norm(), 1e-11);
+  EXPECT_LT(
+      (a.Center() - Eigen::Vector3d(0.6 * std::cos(angle), 0.6 * std::sin(angle), 0.1)).norm(),
+      1e-11);
 }
 
 TEST(MiddleburyIo, CountMustMatch) {
@@ -139,7 +143,8 @@ TEST(CameraFiles, WriteReadRoundTrip) {
   WriteScene(scene, dir / "scene_par.txt", SceneFormat::kMiddlebury, lossy);
   Scene cameras_only = scene;
   cameras_only.points.clear();
-  testing::ExpectScenesNear(cameras_only, ReadScene(dir / "cams", {}, SceneFormat::kStrecha), 1e-14);
+  testing::ExpectScenesNear(cameras_only, ReadScene(dir / "cams", {}, SceneFormat::kStrecha),
+                            1e-14);
   SceneReadOptions options;
   options.image_dir = dir.path().string();
   testing::ExpectScenesNear(cameras_only, ReadScene(dir / "scene_par.txt", options), 1e-15);

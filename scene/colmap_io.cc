@@ -30,11 +30,18 @@ struct ModelInfo {
   int num_params;
 };
 // COLMAP's camera model ids are the indices into this table.
-constexpr ModelInfo kModels[] = {
-    {"SIMPLE_PINHOLE", 3}, {"PINHOLE", 4},           {"SIMPLE_RADIAL", 4},
-    {"RADIAL", 5},         {"OPENCV", 8},            {"OPENCV_FISHEYE", 8},
-    {"FULL_OPENCV", 12},   {"FOV", 5},               {"SIMPLE_RADIAL_FISHEYE", 4},
-    {"RADIAL_FISHEYE", 5}, {"THIN_PRISM_FISHEYE", 12}, {"RAD_TAN_THIN_PRISM_FISHEYE", 16}};
+constexpr ModelInfo kModels[] = {{"SIMPLE_PINHOLE", 3},
+                                 {"PINHOLE", 4},
+                                 {"SIMPLE_RADIAL", 4},
+                                 {"RADIAL", 5},
+                                 {"OPENCV", 8},
+                                 {"OPENCV_FISHEYE", 8},
+                                 {"FULL_OPENCV", 12},
+                                 {"FOV", 5},
+                                 {"SIMPLE_RADIAL_FISHEYE", 4},
+                                 {"RADIAL_FISHEYE", 5},
+                                 {"THIN_PRISM_FISHEYE", 12},
+                                 {"RAD_TAN_THIN_PRISM_FISHEYE", 16}};
 constexpr int kNumModels = sizeof(kModels) / sizeof(kModels[0]);
 enum ModelId { kSimplePinhole = 0, kPinhole, kSimpleRadial, kRadial, kOpenCv, kFullOpenCv = 6 };
 
@@ -76,19 +83,19 @@ std::string Where(const std::string& file, uint64_t where, bool binary) {
 }
 
 float CheckedPixel(double value, const std::function<void(const std::string&)>& fail) {
-  if (!(std::abs(value) <= kMaxPixel)) fail("pixel coordinate " + format::FormatDouble(value) +
-                                             " is out of range");
+  if (!(std::abs(value) <= kMaxPixel))
+    fail("pixel coordinate " + format::FormatDouble(value) + " is out of range");
   return static_cast<float>(value);
 }
 
 // ---- text -----------------------------------------------------------------------------------
 
-std::vector<Camera> ParseCamerasText(const std::string& name, const std::string& contents) {
-  TextReader r(name, contents);
+std::vector<Camera> ParseCamerasText(const std::string& name, std::string contents) {
+  TextReader r(name, std::move(contents));
   std::vector<Camera> cameras;
   std::string_view line;
   while (r.NextDataLine(&line)) {
-    const auto f = SplitFields(line);
+    const auto f = format::SplitFieldsAtMost(r, line, 4 + 16, "camera line");
     if (f.size() < 4) r.Fail("camera line needs CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]");
     Camera c;
     c.where = r.line_number();
@@ -103,18 +110,19 @@ std::vector<Camera> ParseCamerasText(const std::string& name, const std::string&
              std::to_string(expected) + " parameters, the line has " +
              std::to_string(f.size() - 4));
     }
-    for (size_t i = 4; i < f.size(); ++i) c.params.push_back(format::ParseDouble(r, f[i], "PARAMS"));
+    for (size_t i = 4; i < f.size(); ++i)
+      c.params.push_back(format::ParseDouble(r, f[i], "PARAMS"));
     cameras.push_back(std::move(c));
   }
   return cameras;
 }
 
-std::vector<Image> ParseImagesText(const std::string& name, const std::string& contents) {
-  TextReader r(name, contents);
+std::vector<Image> ParseImagesText(const std::string& name, std::string contents) {
+  TextReader r(name, std::move(contents));
   std::vector<Image> images;
   std::string_view line;
   while (r.NextDataLine(&line)) {
-    const auto f = SplitFields(line);
+    const auto f = format::SplitFieldsAtMost(r, line, 10, "image line");
     if (f.size() != 10) {
       r.Fail("image line needs IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME (10 fields), got " +
              std::to_string(f.size()));
@@ -132,17 +140,19 @@ std::vector<Image> ParseImagesText(const std::string& name, const std::string& c
     // The POINTS2D line follows directly and may be empty (an image without features).
     std::string_view points_line;
     if (r.NextLine(&points_line)) {
-      const auto p = SplitFields(points_line);
-      if (p.size() % 3 != 0) {
-        r.Fail("POINTS2D: " + std::to_string(p.size()) +
+      const size_t count = format::CountFields(points_line);
+      if (count % 3 != 0) {
+        r.Fail("POINTS2D: " + std::to_string(count) +
                " values is not a multiple of 3 (X Y POINT3D_ID)");
       }
-      image.points2d.reserve(p.size() / 3);
+      image.points2d.reserve(count / 3);
       const auto fail = [&](const std::string& m) { r.Fail("POINTS2D: " + m); };
-      for (size_t i = 0; i < p.size(); i += 3) {
-        const float x = CheckedPixel(format::ParseDouble(r, p[i], "POINTS2D X"), fail);
-        const float y = CheckedPixel(format::ParseDouble(r, p[i + 1], "POINTS2D Y"), fail);
-        format::ParseInt(r, p[i + 2], "POINTS2D POINT3D_ID", -1, INT64_MAX);
+      format::FieldCursor cursor(points_line);
+      std::string_view x_text, y_text, id_text;
+      while (cursor.Next(&x_text) && cursor.Next(&y_text) && cursor.Next(&id_text)) {
+        const float x = CheckedPixel(format::ParseDouble(r, x_text, "POINTS2D X"), fail);
+        const float y = CheckedPixel(format::ParseDouble(r, y_text, "POINTS2D Y"), fail);
+        format::ParseInt(r, id_text, "POINTS2D POINT3D_ID", -1, INT64_MAX);
         image.points2d.push_back({x, y});
       }
     }
@@ -151,16 +161,20 @@ std::vector<Image> ParseImagesText(const std::string& name, const std::string& c
   return images;
 }
 
-std::vector<Point> ParsePointsText(const std::string& name, const std::string& contents) {
-  TextReader r(name, contents);
+std::vector<Point> ParsePointsText(const std::string& name, std::string contents) {
+  TextReader r(name, std::move(contents));
   std::vector<Point> points;
   std::string_view line;
   while (r.NextDataLine(&line)) {
-    const auto f = SplitFields(line);
-    if (f.size() < 8 || (f.size() - 8) % 2 != 0) {
-      r.Fail("point line needs POINT3D_ID X Y Z R G B ERROR and (IMAGE_ID POINT2D_IDX) pairs, got " +
-             std::to_string(f.size()) + " fields");
+    const size_t count = format::CountFields(line);
+    if (count < 8 || (count - 8) % 2 != 0) {
+      r.Fail(
+          "point line needs POINT3D_ID X Y Z R G B ERROR and (IMAGE_ID POINT2D_IDX) pairs, got " +
+          std::to_string(count) + " fields");
     }
+    format::FieldCursor cursor(line);
+    std::array<std::string_view, 8> f;
+    for (std::string_view& field : f) cursor.Next(&field);
     Point p;
     p.where = r.line_number();
     p.id = static_cast<uint64_t>(format::ParseInt(r, f[0], "POINT3D_ID", 0, INT64_MAX));
@@ -171,10 +185,11 @@ std::vector<Point> ParsePointsText(const std::string& name, const std::string& c
       p.rgb[i] = static_cast<uint8_t>(format::ParseInt(r, f[4 + i], kRgb[i], 0, 255));
     }
     format::ParseDouble(r, f[7], "ERROR");
-    p.track.reserve((f.size() - 8) / 2);
-    for (size_t i = 8; i < f.size(); i += 2) {
-      const auto image_id = format::ParseInt(r, f[i], "TRACK IMAGE_ID", 0, UINT32_MAX - 1);
-      const auto index = format::ParseInt(r, f[i + 1], "TRACK POINT2D_IDX", 0, UINT32_MAX);
+    p.track.reserve((count - 8) / 2);
+    std::string_view image_text, index_text;
+    while (cursor.Next(&image_text) && cursor.Next(&index_text)) {
+      const auto image_id = format::ParseInt(r, image_text, "TRACK IMAGE_ID", 0, UINT32_MAX - 1);
+      const auto index = format::ParseInt(r, index_text, "TRACK POINT2D_IDX", 0, UINT32_MAX);
       p.track.emplace_back(static_cast<uint32_t>(image_id), static_cast<uint32_t>(index));
     }
     points.push_back(std::move(p));
@@ -189,13 +204,14 @@ std::vector<Camera> ParseCamerasBinary(const std::string& name, const std::strin
   const uint64_t n = b.Read<uint64_t>("number of cameras");
   b.CheckCount(n, 4 + 4 + 8 + 8, "number of cameras");
   std::vector<Camera> cameras;
-  cameras.reserve(n);
+  cameras.reserve(format::ReserveBound(n, data.size(), 24));
   for (uint64_t i = 0; i < n; ++i) {
     Camera c;
     c.where = b.position();
     c.id = b.Read<uint32_t>("camera_id");
     const int32_t model = b.Read<int32_t>("model_id");
-    if (model < 0 || model >= kNumModels) b.Fail("model_id: unknown camera model id " + std::to_string(model));
+    if (model < 0 || model >= kNumModels)
+      b.Fail("model_id: unknown camera model id " + std::to_string(model));
     c.model = model;
     const uint64_t width = b.Read<uint64_t>("width");
     const uint64_t height = b.Read<uint64_t>("height");
@@ -205,7 +221,8 @@ std::vector<Camera> ParseCamerasBinary(const std::string& name, const std::strin
     }
     c.width = static_cast<int>(width);
     c.height = static_cast<int>(height);
-    for (int k = 0; k < kModels[model].num_params; ++k) c.params.push_back(b.ReadFiniteDouble("params"));
+    for (int k = 0; k < kModels[model].num_params; ++k)
+      c.params.push_back(b.ReadFiniteDouble("params"));
     cameras.push_back(std::move(c));
   }
   if (!b.AtEnd()) b.Fail("unexpected data after the last camera");
@@ -217,7 +234,7 @@ std::vector<Image> ParseImagesBinary(const std::string& name, const std::string&
   const uint64_t n = b.Read<uint64_t>("number of images");
   b.CheckCount(n, 4 + 32 + 24 + 4 + 1 + 8, "number of images");
   std::vector<Image> images;
-  images.reserve(n);
+  images.reserve(format::ReserveBound(n, data.size(), 73));
   for (uint64_t i = 0; i < n; ++i) {
     Image image;
     image.where = b.position();
@@ -228,7 +245,7 @@ std::vector<Image> ParseImagesBinary(const std::string& name, const std::string&
     image.name = b.ReadCString("name");
     const uint64_t num_points = b.Read<uint64_t>("number of points2D");
     b.CheckCount(num_points, 24, "number of points2D");
-    image.points2d.reserve(num_points);
+    image.points2d.reserve(format::ReserveBound(num_points, data.size(), 24));
     const auto fail = [&](const std::string& m) { b.Fail("points2D: " + m); };
     for (uint64_t k = 0; k < num_points; ++k) {
       const float x = CheckedPixel(b.ReadFiniteDouble("points2D x"), fail);
@@ -247,7 +264,7 @@ std::vector<Point> ParsePointsBinary(const std::string& name, const std::string&
   const uint64_t n = b.Read<uint64_t>("number of points3D");
   b.CheckCount(n, 8 + 24 + 3 + 8 + 8, "number of points3D");
   std::vector<Point> points;
-  points.reserve(n);
+  points.reserve(format::ReserveBound(n, data.size(), 51));
   for (uint64_t i = 0; i < n; ++i) {
     Point p;
     p.where = b.position();
@@ -259,7 +276,7 @@ std::vector<Point> ParsePointsBinary(const std::string& name, const std::string&
     b.Read<double>("error");
     const uint64_t length = b.Read<uint64_t>("track length");
     b.CheckCount(length, 8, "track length");
-    p.track.reserve(length);
+    p.track.reserve(format::ReserveBound(length, data.size(), 8));
     for (uint64_t k = 0; k < length; ++k) {
       const uint32_t image_id = b.Read<uint32_t>("track image_id");
       const uint32_t index = b.Read<uint32_t>("track point2D_idx");
@@ -353,8 +370,10 @@ Scene ToScene(const ColmapFiles& files, bool binary, const std::vector<Camera>& 
   RequireUniqueIds(points, &Point::id, files.points_name, binary, "point");
   std::unordered_map<uint32_t, const Camera*> camera_by_id;
   for (const Camera& c : cameras) camera_by_id[c.id] = &c;
-  std::sort(images.begin(), images.end(), [](const Image& a, const Image& b) { return a.id < b.id; });
-  std::sort(points.begin(), points.end(), [](const Point& a, const Point& b) { return a.id < b.id; });
+  std::sort(images.begin(), images.end(),
+            [](const Image& a, const Image& b) { return a.id < b.id; });
+  std::sort(points.begin(), points.end(),
+            [](const Point& a, const Point& b) { return a.id < b.id; });
 
   Scene scene;
   std::unordered_map<uint32_t, int32_t> view_by_image_id;
@@ -368,10 +387,12 @@ Scene ToScene(const ColmapFiles& files, bool binary, const std::vector<Camera>& 
     }
     View view;
     view.name = image.name;
-    view.intrinsics = ToIntrinsics(*cam->second, Where(files.cameras_name, cam->second->where, binary));
+    view.intrinsics =
+        ToIntrinsics(*cam->second, Where(files.cameras_name, cam->second->where, binary));
     const Eigen::Vector4d q(image.q[0], image.q[1], image.q[2], image.q[3]);
     if (!(q.norm() > 1e-9)) {
-      throw InputError(where + ": image " + std::to_string(image.id) + ": quaternion has zero length");
+      throw InputError(where + ": image " + std::to_string(image.id) +
+                       ": quaternion has zero length");
     }
     view.R = RotationFromQuaternion(q[0], q[1], q[2], q[3]);
     view.t = {image.t[0], image.t[1], image.t[2]};
@@ -398,7 +419,8 @@ Scene ToScene(const ColmapFiles& files, bool binary, const std::vector<Camera>& 
                          std::to_string(index) + " of image " + std::to_string(image_id) +
                          ", which has " + std::to_string(image.points2d.size()));
       }
-      point.observations.push_back({view->second, image.points2d[index][0], image.points2d[index][1]});
+      point.observations.push_back(
+          {view->second, image.points2d[index][0], image.points2d[index][1]});
     }
     scene.points.push_back(std::move(point));
   }
@@ -435,11 +457,11 @@ struct Point2dOut {
 };
 
 struct ModelOut {
-  std::vector<CameraOut> cameras;             // camera id = index + 1
-  std::vector<int> camera_of_view;            // index into cameras
-  std::vector<std::vector<Point2dOut>> points2d;  // per view
+  std::vector<CameraOut> cameras;                                  // camera id = index + 1
+  std::vector<int> camera_of_view;                                 // index into cameras
+  std::vector<std::vector<Point2dOut>> points2d;                   // per view
   std::vector<std::vector<std::pair<uint32_t, uint32_t>>> tracks;  // per point
-  std::vector<double> errors;                 // per point, mean reprojection error
+  std::vector<double> errors;  // per point, mean reprojection error
 };
 
 ModelOut BuildModel(const Scene& scene, const std::string& path, bool binary,
@@ -451,7 +473,8 @@ ModelOut BuildModel(const Scene& scene, const std::string& path, bool binary,
     const View& v = scene.views[i];
     if (binary) {
       if (v.name.empty() || v.name.find('\0') != std::string::npos) {
-        throw InputError(path + ": view " + std::to_string(i) + ": image name is empty or has a NUL");
+        throw InputError(path + ": view " + std::to_string(i) +
+                         ": image name is empty or has a NUL");
       }
     } else {
       format::RequireTokenName(path, "COLMAP text", i, v.name);
@@ -552,11 +575,12 @@ void WriteText(const Scene& scene, const ModelOut& m, const fs::path& dir) {
       scene.points.empty() ? 0.0 : static_cast<double>(track_sum) / scene.points.size());
   for (size_t p = 0; p < scene.points.size(); ++p) {
     const ScenePoint& point = scene.points[p];
-    points += fmt::format("{} {} {} {} {} {} {} {}", p + 1, FormatDouble(point.position.x()),
-                          FormatDouble(point.position.y()), FormatDouble(point.position.z()),
-                          point.color[0], point.color[1], point.color[2],
-                          FormatDouble(m.errors[p]));
-    for (const auto& [image_id, index] : m.tracks[p]) points += fmt::format(" {} {}", image_id, index);
+    points +=
+        fmt::format("{} {} {} {} {} {} {} {}", p + 1, FormatDouble(point.position.x()),
+                    FormatDouble(point.position.y()), FormatDouble(point.position.z()),
+                    point.color[0], point.color[1], point.color[2], FormatDouble(m.errors[p]));
+    for (const auto& [image_id, index] : m.tracks[p])
+      points += fmt::format(" {} {}", image_id, index);
     points += "\n";
   }
   WriteBuffer(dir / "points3D.txt", points);
@@ -619,23 +643,25 @@ void WriteBinary(const Scene& scene, const ModelOut& m, const fs::path& dir) {
 
 }  // namespace
 
-Scene ParseColmapModel(const ColmapFiles& files, bool binary) {
+Scene ParseColmapModel(ColmapFiles files, bool binary) {
   if (binary) {
     auto cameras = ParseCamerasBinary(files.cameras_name, files.cameras);
     auto images = ParseImagesBinary(files.images_name, files.images);
     auto points = ParsePointsBinary(files.points_name, files.points);
     return ToScene(files, binary, cameras, std::move(images), std::move(points));
   }
-  auto cameras = ParseCamerasText(files.cameras_name, files.cameras);
-  auto images = ParseImagesText(files.images_name, files.images);
-  auto points = ParsePointsText(files.points_name, files.points);
+  auto cameras = ParseCamerasText(files.cameras_name, std::move(files.cameras));
+  auto images = ParseImagesText(files.images_name, std::move(files.images));
+  auto points = ParsePointsText(files.points_name, std::move(files.points));
   return ToScene(files, binary, cameras, std::move(images), std::move(points));
 }
 
 std::string FindColmapModelDir(const std::string& path) {
   std::error_code ec;
-  for (const fs::path& dir : {fs::path(path), fs::path(path) / "sparse", fs::path(path) / "sparse" / "0"}) {
-    if (fs::is_regular_file(dir / "cameras.bin", ec) || fs::is_regular_file(dir / "cameras.txt", ec)) {
+  for (const fs::path& dir :
+       {fs::path(path), fs::path(path) / "sparse", fs::path(path) / "sparse" / "0"}) {
+    if (fs::is_regular_file(dir / "cameras.bin", ec) ||
+        fs::is_regular_file(dir / "cameras.txt", ec)) {
       return dir.string();
     }
   }
@@ -650,7 +676,8 @@ bool ColmapModelIsBinary(const std::string& model_dir) {
 Scene ReadColmapModel(const std::string& path, bool binary, const SceneReadOptions& options) {
   const std::string dir = FindColmapModelDir(path);
   if (dir.empty()) {
-    throw InputError(path + ": no COLMAP model (cameras.txt or cameras.bin) here, in sparse/ or "
+    throw InputError(path +
+                     ": no COLMAP model (cameras.txt or cameras.bin) here, in sparse/ or "
                      "in sparse/0/");
   }
   const std::string ext = binary ? ".bin" : ".txt";
@@ -661,7 +688,7 @@ Scene ReadColmapModel(const std::string& path, bool binary, const SceneReadOptio
   files.cameras = ReadFileToString(files.cameras_name);
   files.images = ReadFileToString(files.images_name);
   files.points = ReadFileToString(files.points_name);
-  Scene scene = ParseColmapModel(files, binary);
+  Scene scene = ParseColmapModel(std::move(files), binary);
   scene.source = dir;
   format::ImageLocator(dir, options).AttachImages(&scene);
   return scene;

@@ -23,7 +23,7 @@ struct ColmapFiles {
 
 // Parses a model from memory; no files are touched (image paths stay empty). Throws InputError
 // naming the file and line (text) or byte (binary) and the field.
-Scene ParseColmapModel(const ColmapFiles& files, bool binary);
+Scene ParseColmapModel(ColmapFiles files, bool binary);
 
 // The directory holding cameras.{txt,bin} for `path`: the path itself, its sparse/ or its
 // sparse/0/ subfolder. Empty if none has one.

@@ -104,7 +104,8 @@ TEST(ColmapIo, BinaryWrittenByColmapMatchesText) {
 TEST(ColmapIo, ErrorsNameFileLineAndField) {
   ColmapFiles files = FixtureFiles();
   files.cameras = "1 PINHOLE 64 48 50 50 32\n";
-  EXPECT_EQ(ErrorOf(files), "cameras.txt:1: PARAMS: model PINHOLE has 4 parameters, the line has 3");
+  EXPECT_EQ(ErrorOf(files),
+            "cameras.txt:1: PARAMS: model PINHOLE has 4 parameters, the line has 3");
   files = FixtureFiles();
   files.cameras += "9 FANCY 1 1 1\n";
   EXPECT_EQ(ErrorOf(files), "cameras.txt:11: MODEL: unknown camera model 'FANCY'");
@@ -187,8 +188,9 @@ TEST(ColmapIo, FountainSharesOneCameraWhenWritten) {
   testing::TempDir dir("colmap_fountain");
   WriteColmapModel(scene, dir.path().string(), false, {});
   const std::string cameras = ReadFileToString(dir / "cameras.txt");
-  EXPECT_NE(cameras.find("# Number of cameras: 1\n1 PINHOLE 3072 2048 2759.48 2764.16 1520.69 1006.81\n"),
-            std::string::npos)
+  EXPECT_NE(
+      cameras.find("# Number of cameras: 1\n1 PINHOLE 3072 2048 2759.48 2764.16 1520.69 1006.81\n"),
+      std::string::npos)
       << cameras;
   testing::ExpectScenesNear(scene, ReadColmapModel(dir.path().string(), false, {}), 1e-14);
 }

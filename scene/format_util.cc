@@ -27,7 +27,8 @@ std::string Quote(std::string_view text) {
     }
   }
   out += "'";
-  if (text.size() > kMaxShown) out += fmt::format(" (first {} of {} bytes)", kMaxShown, text.size());
+  if (text.size() > kMaxShown)
+    out += fmt::format(" (first {} of {} bytes)", kMaxShown, text.size());
   return out;
 }
 
@@ -73,6 +74,39 @@ int64_t ParseInt(const TextReader& reader, std::string_view token, const std::st
   return value;
 }
 
+namespace {
+bool IsBlank(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f';
+}
+}  // namespace
+
+bool FieldCursor::Next(std::string_view* field) {
+  while (pos_ < line_.size() && IsBlank(line_[pos_])) ++pos_;
+  if (pos_ >= line_.size()) return false;
+  const size_t start = pos_;
+  while (pos_ < line_.size() && !IsBlank(line_[pos_])) ++pos_;
+  *field = line_.substr(start, pos_ - start);
+  return true;
+}
+
+size_t CountFields(std::string_view line) {
+  FieldCursor cursor(line);
+  std::string_view field;
+  size_t n = 0;
+  while (cursor.Next(&field)) ++n;
+  return n;
+}
+
+std::vector<std::string_view> SplitFieldsAtMost(const TextReader& reader, std::string_view line,
+                                                size_t max_fields, const std::string& what) {
+  const size_t n = CountFields(line);
+  if (n > max_fields) {
+    reader.Fail(what + ": " + std::to_string(n) + " fields, at most " + std::to_string(max_fields) +
+                " expected");
+  }
+  return SplitFields(line);
+}
+
 std::string FormatDouble(double value) { return fmt::format("{}", value); }
 std::string FormatFloat(float value) { return fmt::format("{}", value); }
 
@@ -90,7 +124,8 @@ void WarnDroppedDuplicates(const std::string& source, size_t dropped) {
 }
 
 size_t ReserveBound(uint64_t count, size_t file_bytes, size_t min_bytes_each) {
-  const uint64_t bound = file_bytes / std::max<size_t>(min_bytes_each, 1);
+  const uint64_t bound =
+      std::min<uint64_t>(file_bytes / std::max<size_t>(min_bytes_each, 1), 1 << 16);
   return static_cast<size_t>(std::min(count, bound));
 }
 
@@ -165,8 +200,9 @@ void ImageLocator::AttachImages(Scene* scene) {
     }
     if (!options_.read_image_sizes) continue;
     auto cached = sizes_.find(view.name);
-    const ImageSize size =
-        cached != sizes_.end() ? cached->second : (sizes_[view.name] = ReadImageSize(view.image_path));
+    const ImageSize size = cached != sizes_.end()
+                               ? cached->second
+                               : (sizes_[view.name] = ReadImageSize(view.image_path));
     if (size.width != view.intrinsics.width || size.height != view.intrinsics.height) {
       throw InputError(model_name_ + ": view " + std::to_string(i) + " (" + Quote(view.name) +
                        "): the model says " + std::to_string(view.intrinsics.width) + "x" +
@@ -196,9 +232,8 @@ void RequireTokenName(const std::string& path, const std::string& format_name, s
                             c == '\f' || c == '\0';
                    });
   if (bad) {
-    throw InputError(path + ": view " + std::to_string(view_index) + ": image name " +
-                     Quote(name) + " is empty or has white space, which " + format_name +
-                     " cannot store");
+    throw InputError(path + ": view " + std::to_string(view_index) + ": image name " + Quote(name) +
+                     " is empty or has white space, which " + format_name + " cannot store");
   }
 }
 

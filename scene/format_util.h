@@ -34,6 +34,22 @@ inline int64_t NextInt(TextReader& reader, const std::string& field, int64_t min
   return ParseInt(reader, reader.NextToken(field), field, min, max);
 }
 
+// The white-space separated fields of a line, one at a time: long lines (COLMAP's POINTS2D)
+// are walked without building a vector of all their fields.
+class FieldCursor {
+ public:
+  explicit FieldCursor(std::string_view line) : line_(line) {}
+  bool Next(std::string_view* field);
+
+ private:
+  std::string_view line_;
+  size_t pos_ = 0;
+};
+size_t CountFields(std::string_view line);
+// SplitFields for lines that must have at most `max_fields` fields (fails through `reader`).
+std::vector<std::string_view> SplitFieldsAtMost(const TextReader& reader, std::string_view line,
+                                                size_t max_fields, const std::string& what);
+
 // Shortest decimal text that reads back to exactly the same double (or float).
 std::string FormatDouble(double value);
 std::string FormatFloat(float value);
@@ -44,8 +60,9 @@ size_t SortAndDeduplicateObservations(Scene* scene);
 // Logs a warning if `dropped` > 0.
 void WarnDroppedDuplicates(const std::string& source, size_t dropped);
 
-// An upper bound for a count read from a file: no file of `file_bytes` bytes can hold more than
-// file_bytes / min_bytes_each items. Used to cap reservations, never to accept a count.
+// How many items to reserve for a count read from a file: no file of `file_bytes` bytes holds
+// more than file_bytes / min_bytes_each, and beyond 65536 the vector grows as items are parsed.
+// Caps reservations only; never accepts a count.
 size_t ReserveBound(uint64_t count, size_t file_bytes, size_t min_bytes_each);
 
 // Finds the image files of a model and reads their sizes from headers (cached by name).

@@ -94,8 +94,8 @@ ImageSize ParseJpeg(const std::string& name, const ByteSource& read) {
     }
     pos += length;
   }
-  Fail(name, "JPEG: no frame header within the first " + std::to_string(kMaxJpegSegments) +
-                 " segments");
+  Fail(name,
+       "JPEG: no frame header within the first " + std::to_string(kMaxJpegSegments) + " segments");
 }
 
 ImageSize ParseFromSource(const std::string& name, const ByteSource& read, bool* recognised) {
@@ -181,8 +181,8 @@ UndistortedImage Undistort(const View& view, const cv::Mat& image) {
   const Intrinsics& k = view.intrinsics;
   if (image.cols != k.width || image.rows != k.height) {
     throw InputError("view '" + view.name + "': image is " + std::to_string(image.cols) + "x" +
-                     std::to_string(image.rows) + " but the camera is " +
-                     std::to_string(k.width) + "x" + std::to_string(k.height));
+                     std::to_string(image.rows) + " but the camera is " + std::to_string(k.width) +
+                     "x" + std::to_string(k.height));
   }
   UndistortedImage result{view, image};
   if (!k.HasDistortion()) return result;

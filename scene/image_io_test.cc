@@ -58,7 +58,7 @@ TEST(ImageIo, MalformedHeadersFail) {
 TEST(ImageIo, ReadLoadAndFallback) {
   testing::TempDir dir("image_io");
   cv::Mat bgr(6, 9, CV_8UC3, cv::Scalar(255, 0, 0));  // blue in OpenCV's BGR order
-  bgr.at<cv::Vec3b>(2, 3) = cv::Vec3b(0, 0, 255);      // one red pixel
+  bgr.at<cv::Vec3b>(2, 3) = cv::Vec3b(0, 0, 255);     // one red pixel
   cv::imwrite(dir / "c.png", bgr);
   cv::imwrite(dir / "c.bmp", bgr);
   EXPECT_EQ(ReadImageSize(dir / "c.png"), (ImageSize{9, 6}));

@@ -9,13 +9,14 @@
 
 namespace ms {
 
-Scene ParseMiddlebury(const std::string& name, const std::string& contents,
+Scene ParseMiddlebury(const std::string& name, std::string contents,
                       const ImageSizeLookup& image_size) {
-  TextReader r(name, contents);
+  const size_t file_bytes = contents.size();
+  TextReader r(name, std::move(contents));
   const int64_t count = format::NextInt(r, "number of images", 0, INT32_MAX);
   Scene scene;
   scene.source = name;
-  scene.views.reserve(format::ReserveBound(count, contents.size(), 44));
+  scene.views.reserve(format::ReserveBound(count, file_bytes, 44));
   for (int64_t i = 0; i < count; ++i) {
     View view;
     view.name = std::string(r.NextToken("image name"));
@@ -32,7 +33,8 @@ Scene ParseMiddlebury(const std::string& name, const std::string& contents,
     scene.views.push_back(std::move(view));
   }
   if (!r.AtEnd()) {
-    r.Fail("unexpected data after the " + std::to_string(count) + " images the first line announces");
+    r.Fail("unexpected data after the " + std::to_string(count) +
+           " images the first line announces");
   }
   // Sizes last, so a malformed file fails before any image is looked up.
   for (View& view : scene.views) {
@@ -52,7 +54,8 @@ Scene ReadMiddlebury(const std::string& path, const SceneReadOptions& options) {
   return scene;
 }
 
-void WriteMiddlebury(const Scene& scene, const std::string& path, const SceneWriteOptions& options) {
+void WriteMiddlebury(const Scene& scene, const std::string& path,
+                     const SceneWriteOptions& options) {
   format::LossPolicy loss(path, "Middlebury cameras", options.allow_lossy);
   if (!scene.points.empty()) loss.Report("the points (Middlebury files hold cameras only)");
   using format::FormatDouble;
@@ -70,7 +73,8 @@ void WriteMiddlebury(const Scene& scene, const std::string& path, const SceneWri
     out += fmt::format(" {} {} {}\n", FormatDouble(v.t.x()), FormatDouble(v.t.y()),
                        FormatDouble(v.t.z()));
   }
-  WriteFileAtomically(path, [&](std::ostream& s) { s.write(out.data(), out.size()); }, false);
+  WriteFileAtomically(
+      path, [&](std::ostream& s) { s.write(out.data(), out.size()); }, false);
 }
 
 }  // namespace ms

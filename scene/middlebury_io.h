@@ -11,7 +11,7 @@
 
 namespace ms {
 
-Scene ParseMiddlebury(const std::string& name, const std::string& contents,
+Scene ParseMiddlebury(const std::string& name, std::string contents,
                       const ImageSizeLookup& image_size);
 
 Scene ReadMiddlebury(const std::string& path, const SceneReadOptions& options);

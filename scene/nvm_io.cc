@@ -76,17 +76,20 @@ RawCamera ParseCamera(TextReader& r, bool r9t) {
 
 }  // namespace
 
-Scene ParseNvm(const std::string& name, const std::string& contents, int model_index,
+Scene ParseNvm(const std::string& name, std::string contents, int model_index,
                const ImageSizeLookup& image_size) {
   if (model_index < 0) throw InputError(name + ": NVM model index must be >= 0");
-  TextReader r(name, contents);
+  const size_t file_bytes = contents.size();
+  TextReader r(name, std::move(contents));
   std::string_view header;
   if (!r.NextDataLine(&header, 0)) r.Fail("empty file, expected the NVM_V3 header");
-  const auto head = SplitFields(header);
-  if (head.empty() || (head[0] != "NVM_V3" && head[0] != "NVM_V3_R9T")) {
+  std::string_view version;
+  format::FieldCursor(header).Next(&version);
+  if (version != "NVM_V3" && version != "NVM_V3_R9T") {
     r.Fail("not an NVM file: the first line must start with NVM_V3 or NVM_V3_R9T, found " +
-           Quote(head.empty() ? std::string_view() : head[0]));
+           Quote(version));
   }
+  const auto head = format::SplitFieldsAtMost(r, header, 7, "header");
   const bool r9t = head[0] == "NVM_V3_R9T";
   FixedK fixed;
   if (head.size() > 1) {
@@ -116,7 +119,7 @@ Scene ParseNvm(const std::string& name, const std::string& contents, int model_i
     }
     const bool chosen = model == model_index;
     std::vector<RawCamera> cameras;
-    cameras.reserve(format::ReserveBound(num_cameras, contents.size(), 22));
+    cameras.reserve(format::ReserveBound(num_cameras, file_bytes, 22));
     for (int64_t i = 0; i < num_cameras; ++i) cameras.push_back(ParseCamera(r, r9t));
 
     Scene scene;
@@ -148,9 +151,10 @@ Scene ParseNvm(const std::string& name, const std::string& contents, int model_i
               format::FitOpenCvToVisualSfm(c.k, CornerRadius(k), where, &k.k1, &k.k2, &k.k3);
           const double error_px = error * std::max(k.fx, k.fy);
           if (error_px > kWarnDistortionErrorPx) {
-            spdlog::warn("{}: VisualSFM radial k={} converted to OpenCV k1..k3 with up to {:.3f} px "
-                         "error at the image corners",
-                         where, c.k, error_px);
+            spdlog::warn(
+                "{}: VisualSFM radial k={} converted to OpenCV k1..k3 with up to {:.3f} px "
+                "error at the image corners",
+                where, c.k, error_px);
           } else {
             spdlog::debug("{}: VisualSFM radial k={} -> k1={} k2={} k3={} (max error {:.2e} px)",
                           where, c.k, k.k1, k.k2, k.k3, error_px);
@@ -163,7 +167,7 @@ Scene ParseNvm(const std::string& name, const std::string& contents, int model_i
     }
 
     const int64_t num_points = NextInt(r, "number of points", 0, INT32_MAX);
-    if (chosen) scene.points.reserve(format::ReserveBound(num_points, contents.size(), 14));
+    if (chosen) scene.points.reserve(format::ReserveBound(num_points, file_bytes, 14));
     for (int64_t p = 0; p < num_points; ++p) {
       ScenePoint point;
       for (int i = 0; i < 3; ++i) point.position[i] = NextDouble(r, "point position");
@@ -197,10 +201,10 @@ Scene ParseNvm(const std::string& name, const std::string& contents, int model_i
 
 Scene ReadNvm(const std::string& path, const SceneReadOptions& options) {
   format::ImageLocator locator(path, options);
-  Scene scene = ParseNvm(path, ReadFileToString(path), options.nvm_model_index,
-                         [&](const std::string& image) {
-                           return locator.RequireSize(image, "because NVM measures from the image centre");
-                         });
+  Scene scene = ParseNvm(
+      path, ReadFileToString(path), options.nvm_model_index, [&](const std::string& image) {
+        return locator.RequireSize(image, "because NVM measures from the image centre");
+      });
   locator.AttachImages(&scene);
   return scene;
 }
@@ -219,8 +223,9 @@ void WriteNvm(const Scene& scene, const std::string& path, const SceneWriteOptio
   }
   const bool fixed_k = !all_centred && shared_k;
   if (!all_centred && !shared_k) {
-    loss.Report("per-view principal points off the image centre or fx != fy (written: the mean "
-                "focal length, principal point at the centre)");
+    loss.Report(
+        "per-view principal points off the image centre or fx != fy (written: the mean "
+        "focal length, principal point at the centre)");
   }
   std::string out;
   if (fixed_k) {
@@ -277,7 +282,8 @@ void WriteNvm(const Scene& scene, const std::string& path, const SceneWriteOptio
       "\n0\n\n#the last part of NVM file points to the PLY files\n"
       "#the first number is the number of associated PLY files\n"
       "#each following number gives a model-index that has PLY\n0\n";
-  WriteFileAtomically(path, [&](std::ostream& s) { s.write(out.data(), out.size()); }, false);
+  WriteFileAtomically(
+      path, [&](std::ostream& s) { s.write(out.data(), out.size()); }, false);
 }
 
 }  // namespace ms

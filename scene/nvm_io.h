@@ -18,7 +18,7 @@ namespace ms {
 
 // Parses model `model_index` (0 = first) of an NVM file held in memory. Image sizes come from
 // `image_size`, called once per camera of the chosen model.
-Scene ParseNvm(const std::string& name, const std::string& contents, int model_index,
+Scene ParseNvm(const std::string& name, std::string contents, int model_index,
                const ImageSizeLookup& image_size);
 
 Scene ReadNvm(const std::string& path, const SceneReadOptions& options);

@@ -37,8 +37,8 @@ TEST(NvmIo, FirstModelOfVisualSfmFile) {
   EXPECT_EQ(a.intrinsics.cx, 32.0);
   EXPECT_EQ(a.intrinsics.cy, 24.0);
   EXPECT_FALSE(a.intrinsics.HasDistortion());
-  EXPECT_EQ(a.R, RotationFromQuaternion(0.46329759436098156, 0.5341866144516608,
-                                        0.5341866144516609, -0.46329759436098156));
+  EXPECT_EQ(a.R, RotationFromQuaternion(0.46329759436098156, 0.5341866144516608, 0.5341866144516609,
+                                        -0.46329759436098156));
   EXPECT_LT((a.Center() - Eigen::Vector3d(3.5, 0, 0.5)).norm(), 1e-14);
   const View& c = scene.views[2];
   EXPECT_EQ(c.intrinsics.width, 80);
@@ -91,7 +91,8 @@ TEST(NvmIo, R9tAndFixedK) {
 TEST(NvmIo, VisualSfmDistortionFit) {
   // (k, largest error in normalised units over radius 0.9): the fit is a 3-term polynomial, so
   // strong distortion leaves more; 1e-5 is 0.001 px at f = 100.
-  for (const auto& [k, tolerance] : {std::pair{-0.2, 1.5e-3}, {-0.07, 3e-5}, {0.05, 1e-5}, {0.3, 1.5e-3}}) {
+  for (const auto& [k, tolerance] :
+       {std::pair{-0.2, 1.5e-3}, {-0.07, 3e-5}, {0.05, 1e-5}, {0.3, 1.5e-3}}) {
     double k1, k2, k3;
     const double error = format::FitOpenCvToVisualSfm(k, 0.9, "test", &k1, &k2, &k3);
     EXPECT_LT(error, tolerance) << k;

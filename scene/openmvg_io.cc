@@ -5,8 +5,8 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
-#include <set>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "base/error.h"
 #include "base/file_util.h"
@@ -94,7 +94,8 @@ class JsonReader {
     int64_t result = 0;
     if (value.is_number_unsigned()) {
       const uint64_t u = value.get<uint64_t>();
-      if (u > static_cast<uint64_t>(max)) Fail(path, "integer " + std::to_string(u) + " is too large");
+      if (u > static_cast<uint64_t>(max))
+        Fail(path, "integer " + std::to_string(u) + " is too large");
       result = static_cast<int64_t>(u);
     } else if (value.is_number_integer()) {
       result = value.get<int64_t>();
@@ -116,7 +117,8 @@ class JsonReader {
       Fail(path, "expected an array of " + std::to_string(count) + " numbers");
     }
     std::vector<double> out;
-    for (size_t i = 0; i < count; ++i) out.push_back(Number(value[i], path + "[" + std::to_string(i) + "]"));
+    for (size_t i = 0; i < count; ++i)
+      out.push_back(Number(value[i], path + "[" + std::to_string(i) + "]"));
     return out;
   }
 
@@ -140,8 +142,8 @@ class JsonReader {
   // The data of a cereal shared pointer (first occurrence or a reference to an earlier one).
   const json& PointerData(const json& value, const std::string& path) {
     const json& wrapper = Field(value, "ptr_wrapper", path);
-    const auto id = static_cast<uint64_t>(
-        Integer(Field(wrapper, "id", path + ".ptr_wrapper"), path + ".ptr_wrapper.id", 0, UINT32_MAX));
+    const auto id = static_cast<uint64_t>(Integer(Field(wrapper, "id", path + ".ptr_wrapper"),
+                                                  path + ".ptr_wrapper.id", 0, UINT32_MAX));
     if (id & kFirstOccurrence) {
       const json& data = Field(wrapper, "data", path + ".ptr_wrapper");
       shared_[id & ~kFirstOccurrence] = &data;
@@ -163,6 +165,7 @@ class JsonReader {
 struct RawView {
   int64_t id = 0;
   std::string name;
+  int64_t width = 0, height = 0;
   int64_t intrinsic = 0, pose = 0;
   std::string path;
 };
@@ -208,11 +211,15 @@ Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::st
       const std::string local_path = in.String(*local, data_path + ".local_path");
       if (!local_path.empty()) v.name = (fs::path(local_path) / v.name).generic_string();
     }
+    v.width = in.Integer(in.Field(data, "width", data_path), data_path + ".width", 0, kMaxSide);
+    v.height = in.Integer(in.Field(data, "height", data_path), data_path + ".height", 0, kMaxSide);
     v.intrinsic = in.Integer(in.Field(data, "id_intrinsic", data_path), data_path + ".id_intrinsic",
                              0, UINT32_MAX);
-    v.pose = in.Integer(in.Field(data, "id_pose", data_path), data_path + ".id_pose", 0, UINT32_MAX);
+    v.pose =
+        in.Integer(in.Field(data, "id_pose", data_path), data_path + ".id_pose", 0, UINT32_MAX);
     v.path = path;
-    if (!views.emplace(v.id, v).second) in.Fail(path + ".key", "view id " + std::to_string(v.id) + " appears twice");
+    if (!views.emplace(v.id, v).second)
+      in.Fail(path + ".key", "view id " + std::to_string(v.id) + " appears twice");
   }
 
   std::map<int64_t, RawIntrinsic> intrinsics;
@@ -227,16 +234,23 @@ Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::st
     const std::string data_path = path + ".value.ptr_wrapper.data";
     const json& data = in.PointerData(value, path + ".value");
     k.path = data_path;
-    k.width = static_cast<int>(in.Integer(in.Field(data, "width", data_path), data_path + ".width", 0, kMaxSide));
-    k.height = static_cast<int>(in.Integer(in.Field(data, "height", data_path), data_path + ".height", 0, kMaxSide));
+    k.width = static_cast<int>(
+        in.Integer(in.Field(data, "width", data_path), data_path + ".width", 0, kMaxSide));
+    k.height = static_cast<int>(
+        in.Integer(in.Field(data, "height", data_path), data_path + ".height", 0, kMaxSide));
     // Only pinhole types have these; others are rejected below if a posed view uses them.
-    if (const json* f = in.OptionalField(data, "focal_length")) k.focal = in.Number(*f, data_path + ".focal_length");
-    if (const json* pp = in.OptionalField(data, "principal_point")) k.pp = in.Numbers(*pp, data_path + ".principal_point", 2);
-    static const std::pair<const char*, size_t> kDisto[] = {{"disto_k1", 1}, {"disto_k3", 3}, {"disto_t2", 5}};
+    if (const json* f = in.OptionalField(data, "focal_length"))
+      k.focal = in.Number(*f, data_path + ".focal_length");
+    if (const json* pp = in.OptionalField(data, "principal_point"))
+      k.pp = in.Numbers(*pp, data_path + ".principal_point", 2);
+    static const std::pair<const char*, size_t> kDisto[] = {
+        {"disto_k1", 1}, {"disto_k3", 3}, {"disto_t2", 5}};
     for (const auto& [field, count] : kDisto) {
-      if (const json* d = in.OptionalField(data, field)) k.disto = in.Numbers(*d, data_path + "." + field, count);
+      if (const json* d = in.OptionalField(data, field))
+        k.disto = in.Numbers(*d, data_path + "." + field, count);
     }
-    if (!intrinsics.emplace(id, k).second) in.Fail(path + ".key", "intrinsic id " + std::to_string(id) + " appears twice");
+    if (!intrinsics.emplace(id, k).second)
+      in.Fail(path + ".key", "intrinsic id " + std::to_string(id) + " appears twice");
   }
 
   std::map<int64_t, std::pair<Eigen::Matrix3d, Eigen::Vector3d>> poses;
@@ -247,13 +261,16 @@ Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::st
     const int64_t id = in.Integer(in.Field(entry, "key", path), path + ".key", 0, UINT32_MAX);
     const json& value = in.Field(entry, "value", path);
     const json& rotation = in.Field(value, "rotation", path + ".value");
-    if (!rotation.is_array() || rotation.size() != 3) in.Fail(path + ".value.rotation", "expected 3 rows");
+    if (!rotation.is_array() || rotation.size() != 3)
+      in.Fail(path + ".value.rotation", "expected 3 rows");
     Eigen::Matrix3d R;
     for (int r = 0; r < 3; ++r) {
-      const auto row = in.Numbers(rotation[r], path + ".value.rotation[" + std::to_string(r) + "]", 3);
+      const auto row =
+          in.Numbers(rotation[r], path + ".value.rotation[" + std::to_string(r) + "]", 3);
       for (int c = 0; c < 3; ++c) R(r, c) = row[c];
     }
-    const auto c = in.Numbers(in.Field(value, "center", path + ".value"), path + ".value.center", 3);
+    const auto c =
+        in.Numbers(in.Field(value, "center", path + ".value"), path + ".value.center", 3);
     if (!poses.emplace(id, std::make_pair(R, Eigen::Vector3d(c[0], c[1], c[2]))).second) {
       in.Fail(path + ".key", "pose id " + std::to_string(id) + " appears twice");
     }
@@ -273,17 +290,23 @@ Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::st
     }
     const RawIntrinsic& k = intrinsic->second;
     static const std::set<std::string> kSupported = {"pinhole", "pinhole_radial_k1",
-                                                      "pinhole_radial_k3", "pinhole_brown_t2"};
+                                                     "pinhole_radial_k3", "pinhole_brown_t2"};
     if (!kSupported.count(k.type)) {
       in.Fail(k.path, "camera type " + format::Quote(k.type) +
                           " is not supported (supported: pinhole, pinhole_radial_k1, "
                           "pinhole_radial_k3, pinhole_brown_t2)");
     }
-    const size_t disto_count = k.type == "pinhole" ? 0 : k.type == "pinhole_radial_k1" ? 1
-                               : k.type == "pinhole_radial_k3"                      ? 3
-                                                                                    : 5;
+    const size_t disto_count = k.type == "pinhole"             ? 0
+                               : k.type == "pinhole_radial_k1" ? 1
+                               : k.type == "pinhole_radial_k3" ? 3
+                                                               : 5;
     if (k.pp.size() != 2 || k.disto.size() != disto_count) {
       in.Fail(k.path, "fields do not match camera type " + k.type);
+    }
+    if (v.width != k.width || v.height != k.height) {
+      in.Fail(v.path, "view size " + std::to_string(v.width) + "x" + std::to_string(v.height) +
+                          " differs from its intrinsic's " + std::to_string(k.width) + "x" +
+                          std::to_string(k.height));
     }
     View view;
     view.name = v.name;
@@ -317,15 +340,18 @@ Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::st
     ScenePoint point;
     const auto X = in.Numbers(in.Field(value, "X", path + ".value"), path + ".value.X", 3);
     point.position = {X[0], X[1], X[2]};
-    const json& observations = in.Array(in.Field(value, "observations", path + ".value"),
-                                        path + ".value.observations");
+    const json& observations =
+        in.Array(in.Field(value, "observations", path + ".value"), path + ".value.observations");
     for (size_t o = 0; o < observations.size(); ++o) {
       const std::string obs_path = path + ".value.observations[" + std::to_string(o) + "]";
-      const int64_t view_id = in.Integer(in.Field(observations[o], "key", obs_path), obs_path + ".key", 0, UINT32_MAX);
+      const int64_t view_id =
+          in.Integer(in.Field(observations[o], "key", obs_path), obs_path + ".key", 0, UINT32_MAX);
       const auto it = view_index.find(view_id);
-      if (it == view_index.end()) in.Fail(obs_path + ".key", "view " + std::to_string(view_id) + " is not in views");
-      const auto x = in.Numbers(in.Field(in.Field(observations[o], "value", obs_path), "x", obs_path + ".value"),
-                                obs_path + ".value.x", 2);
+      if (it == view_index.end())
+        in.Fail(obs_path + ".key", "view " + std::to_string(view_id) + " is not in views");
+      const auto x = in.Numbers(
+          in.Field(in.Field(observations[o], "value", obs_path), "x", obs_path + ".value"),
+          obs_path + ".value.x", 2);
       if (!(std::abs(x[0]) <= kMaxPixel && std::abs(x[1]) <= kMaxPixel)) {
         in.Fail(obs_path + ".value.x", "pixel coordinate out of range");
       }
@@ -333,13 +359,14 @@ Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::st
         ++dropped;
         continue;
       }
-      point.observations.push_back({it->second, static_cast<float>(x[0]), static_cast<float>(x[1])});
+      point.observations.push_back(
+          {it->second, static_cast<float>(x[0]), static_cast<float>(x[1])});
     }
     scene.points.push_back(std::move(point));
   }
   if (unposed > 0) {
-    spdlog::info("{}: skipped {} views without pose or intrinsic, and {} observations in them", name,
-                 unposed, dropped);
+    spdlog::info("{}: skipped {} views without pose or intrinsic, and {} observations in them",
+                 name, unposed, dropped);
   }
   format::WarnDroppedDuplicates(name, format::SortAndDeduplicateObservations(&scene));
   return scene;
@@ -397,7 +424,8 @@ void WriteOpenMvg(const Scene& scene, const std::string& path, const SceneWriteO
   }
   for (size_t i = 0; i < scene.views.size(); ++i) {
     const View& v = scene.views[i];
-    if (v.name.empty()) throw InputError(path + ": view " + std::to_string(i) + ": empty image name");
+    if (v.name.empty())
+      throw InputError(path + ": view " + std::to_string(i) + ": empty image name");
     ojson data;
     data["local_path"] = "";
     data["filename"] = v.name;
@@ -479,8 +507,13 @@ void WriteOpenMvg(const Scene& scene, const std::string& path, const SceneWriteO
   }
   out["control_points"] = ojson::array();
   const std::string text = out.dump(4);
-  WriteFileAtomically(path, [&](std::ostream& s) { s.write(text.data(), text.size()); s << "\n"; },
-                      false);
+  WriteFileAtomically(
+      path,
+      [&](std::ostream& s) {
+        s.write(text.data(), text.size());
+        s << "\n";
+      },
+      false);
 }
 
 }  // namespace ms

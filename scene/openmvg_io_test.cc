@@ -59,10 +59,12 @@ TEST(OpenMvgIo, FixtureWithPolymorphicIdsAndAnUnposedView) {
 }
 
 TEST(OpenMvgIo, ErrorsNameThePath) {
-  EXPECT_EQ(ErrorOf("[1, 2"), "sfm_data.json: not valid JSON: [json.exception.parse_error.101] "
-                              "parse error at line 1, column 6: syntax error while parsing array - "
-                              "unexpected end of input; expected ']'");
-  EXPECT_EQ(ErrorOf(R"({"views": [{"key": 0}]})"), "sfm_data.json: views[0]: missing field 'value'");
+  EXPECT_EQ(ErrorOf("[1, 2"),
+            "sfm_data.json: not valid JSON: [json.exception.parse_error.101] "
+            "parse error at line 1, column 6: syntax error while parsing array - "
+            "unexpected end of input; expected ']'");
+  EXPECT_EQ(ErrorOf(R"({"views": [{"key": 0}]})"),
+            "sfm_data.json: views[0]: missing field 'value'");
   EXPECT_EQ(ErrorOf(R"({"views": [], "intrinsics": [{"key": 0, "value": {"polymorphic_id": 3}}]})"),
             "sfm_data.json: intrinsics[0].value.polymorphic_id: id 3 names no earlier type");
   EXPECT_EQ(ErrorOf(R"({"views": [], "intrinsics": [], "extrinsics": [{"key": -1}]})"),
@@ -79,8 +81,9 @@ TEST(OpenMvgIo, UnsupportedCameraTypeIsNamed) {
     "extrinsics": [{"key": 0, "value": {"rotation": [[1, 0, 0], [0, 1, 0], [0, 0, 1]],
       "center": [0, 0, 0]}}], "structure": []})";
   const std::string error = ErrorOf(json);
-  EXPECT_NE(error.find("intrinsics[0].value.ptr_wrapper.data: camera type 'fisheye' is not supported"),
-            std::string::npos)
+  EXPECT_NE(
+      error.find("intrinsics[0].value.ptr_wrapper.data: camera type 'fisheye' is not supported"),
+      std::string::npos)
       << error;
 }
 

@@ -28,7 +28,8 @@ std::string Lower(std::string s) {
 }
 
 bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
 // The format named by a file name, or kAuto if the name says nothing.
@@ -79,15 +80,24 @@ SceneFormat ParseSceneFormat(const std::string& name) {
 
 std::string SceneFormatName(SceneFormat format) {
   switch (format) {
-    case SceneFormat::kAuto: return "auto";
-    case SceneFormat::kManisweepH5: return "h5";
-    case SceneFormat::kColmapText: return "colmap-text";
-    case SceneFormat::kColmapBinary: return "colmap-binary";
-    case SceneFormat::kNvm: return "nvm";
-    case SceneFormat::kBundler: return "bundler";
-    case SceneFormat::kOpenMvg: return "openmvg";
-    case SceneFormat::kStrecha: return "strecha";
-    case SceneFormat::kMiddlebury: return "middlebury";
+    case SceneFormat::kAuto:
+      return "auto";
+    case SceneFormat::kManisweepH5:
+      return "h5";
+    case SceneFormat::kColmapText:
+      return "colmap-text";
+    case SceneFormat::kColmapBinary:
+      return "colmap-binary";
+    case SceneFormat::kNvm:
+      return "nvm";
+    case SceneFormat::kBundler:
+      return "bundler";
+    case SceneFormat::kOpenMvg:
+      return "openmvg";
+    case SceneFormat::kStrecha:
+      return "strecha";
+    case SceneFormat::kMiddlebury:
+      return "middlebury";
   }
   return "unknown";
 }
@@ -111,14 +121,16 @@ SceneFormat DetectSceneFormat(const std::string& path) {
       return ColmapModelIsBinary(model) ? SceneFormat::kColmapBinary : SceneFormat::kColmapText;
     }
     if (IsStrechaDirectory(path)) return SceneFormat::kStrecha;
-    throw InputError(path + ": cannot tell the scene format: the directory has no COLMAP model "
+    throw InputError(path +
+                     ": cannot tell the scene format: the directory has no COLMAP model "
                      "(cameras.txt/.bin, also in sparse/ and sparse/0/) and no *.camera files; "
                      "name the format (--from)");
   }
   SceneFormat format = FormatFromName(path);
   if (format == SceneFormat::kAuto) format = FormatFromContents(path);
   if (format == SceneFormat::kAuto) {
-    throw InputError(path + ": cannot tell the scene format from the name or the first bytes; "
+    throw InputError(path +
+                     ": cannot tell the scene format from the name or the first bytes; "
                      "name the format (--from)");
   }
   return format;
@@ -139,14 +151,29 @@ Scene ReadScene(const std::string& path, const SceneReadOptions& options, SceneF
   Scene scene;
   switch (format) {
     case SceneFormat::kAuto:  // resolved above
-    case SceneFormat::kManisweepH5: NoH5(path);
-    case SceneFormat::kColmapText: scene = ReadColmapModel(path, false, options); break;
-    case SceneFormat::kColmapBinary: scene = ReadColmapModel(path, true, options); break;
-    case SceneFormat::kNvm: scene = ReadNvm(path, options); break;
-    case SceneFormat::kBundler: scene = ReadBundler(path, options); break;
-    case SceneFormat::kOpenMvg: scene = ReadOpenMvg(path, options); break;
-    case SceneFormat::kStrecha: scene = ReadStrecha(path, options); break;
-    case SceneFormat::kMiddlebury: scene = ReadMiddlebury(path, options); break;
+    case SceneFormat::kManisweepH5:
+      NoH5(path);
+    case SceneFormat::kColmapText:
+      scene = ReadColmapModel(path, false, options);
+      break;
+    case SceneFormat::kColmapBinary:
+      scene = ReadColmapModel(path, true, options);
+      break;
+    case SceneFormat::kNvm:
+      scene = ReadNvm(path, options);
+      break;
+    case SceneFormat::kBundler:
+      scene = ReadBundler(path, options);
+      break;
+    case SceneFormat::kOpenMvg:
+      scene = ReadOpenMvg(path, options);
+      break;
+    case SceneFormat::kStrecha:
+      scene = ReadStrecha(path, options);
+      break;
+    case SceneFormat::kMiddlebury:
+      scene = ReadMiddlebury(path, options);
+      break;
   }
   scene.Validate();
   spdlog::info("read {} ({}) in {:.2f} s: {}", path, SceneFormatName(format), timer.Seconds(),
@@ -160,14 +187,29 @@ void WriteScene(const Scene& scene, const std::string& path, SceneFormat format,
   scene.Validate();
   switch (format) {
     case SceneFormat::kAuto:
-    case SceneFormat::kManisweepH5: NoH5(path);
-    case SceneFormat::kColmapText: WriteColmapModel(scene, path, false, options); break;
-    case SceneFormat::kColmapBinary: WriteColmapModel(scene, path, true, options); break;
-    case SceneFormat::kNvm: WriteNvm(scene, path, options); break;
-    case SceneFormat::kBundler: WriteBundler(scene, path, options); break;
-    case SceneFormat::kOpenMvg: WriteOpenMvg(scene, path, options); break;
-    case SceneFormat::kStrecha: WriteStrecha(scene, path, options); break;
-    case SceneFormat::kMiddlebury: WriteMiddlebury(scene, path, options); break;
+    case SceneFormat::kManisweepH5:
+      NoH5(path);
+    case SceneFormat::kColmapText:
+      WriteColmapModel(scene, path, false, options);
+      break;
+    case SceneFormat::kColmapBinary:
+      WriteColmapModel(scene, path, true, options);
+      break;
+    case SceneFormat::kNvm:
+      WriteNvm(scene, path, options);
+      break;
+    case SceneFormat::kBundler:
+      WriteBundler(scene, path, options);
+      break;
+    case SceneFormat::kOpenMvg:
+      WriteOpenMvg(scene, path, options);
+      break;
+    case SceneFormat::kStrecha:
+      WriteStrecha(scene, path, options);
+      break;
+    case SceneFormat::kMiddlebury:
+      WriteMiddlebury(scene, path, options);
+      break;
   }
   spdlog::info("wrote {} ({}): {}", path, SceneFormatName(format), scene.Summary());
 }

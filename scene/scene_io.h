@@ -32,8 +32,8 @@ struct SceneReadOptions {
   std::string image_dir;
   int nvm_model_index = 0;      // NVM files may hold several models
   bool require_images = false;  // fail if an image file is missing
-  // Check image sizes against the files (reads only headers). Sets sizes where the format lacks
-  // them (NVM, Bundler).
+  // Check image sizes against the files (reads only headers). NVM, Bundler and Middlebury lack
+  // sizes and always read them from the images.
   bool read_image_sizes = true;
   void Check() const;  // throws InputError naming the field
 };

@@ -35,7 +35,8 @@ TEST(SceneIo, DetectsEveryFormat) {
   testing::TempDir dir("detect");
   // sparse/0/ inside a project folder, and formats recognised by content.
   std::filesystem::create_directories(dir / "project/sparse/0");
-  std::filesystem::copy_file(DataPath("colmap/text/cameras.txt"), dir / "project/sparse/0/cameras.txt");
+  std::filesystem::copy_file(DataPath("colmap/text/cameras.txt"),
+                             dir / "project/sparse/0/cameras.txt");
   EXPECT_EQ(DetectSceneFormat(dir / "project"), SceneFormat::kColmapText);
   WriteFileAtomically(dir / "model", [](std::ostream& o) { o << "NVM_V3\n"; });
   EXPECT_EQ(DetectSceneFormat(dir / "model"), SceneFormat::kNvm);
@@ -60,8 +61,10 @@ TEST(SceneIo, RoundTripThroughEveryPointFormat) {
   testing::TempDir dir("roundtrip");
   const Scene scene = testing::MakeSyntheticScene(dir.path().string());
   const std::pair<SceneFormat, std::string> targets[] = {
-      {SceneFormat::kNvm, "scene.nvm"},           {SceneFormat::kColmapText, "text"},
-      {SceneFormat::kColmapBinary, "binary"},     {SceneFormat::kBundler, "bundle.out"},
+      {SceneFormat::kNvm, "scene.nvm"},
+      {SceneFormat::kColmapText, "text"},
+      {SceneFormat::kColmapBinary, "binary"},
+      {SceneFormat::kBundler, "bundle.out"},
       {SceneFormat::kBundler, "other.bundle.out"}};
   for (const auto& [format, name] : targets) {
     SCOPED_TRACE(name);

@@ -65,9 +65,11 @@ inline void ExpectScenesNear(const Scene& a, const Scene& b, double rel, double 
     EXPECT_EQ(k.height, l.height);
     const double ka[] = {k.fx, k.fy, k.cx, k.cy, k.k1, k.k2, k.p1, k.p2, k.k3};
     const double la[] = {l.fx, l.fy, l.cx, l.cy, l.k1, l.k2, l.p1, l.p2, l.k3};
-    for (int j = 0; j < 9; ++j) EXPECT_TRUE(Near(ka[j], la[j], rel)) << j << ": " << ka[j] << " vs " << la[j];
+    for (int j = 0; j < 9; ++j)
+      EXPECT_TRUE(Near(ka[j], la[j], rel)) << j << ": " << ka[j] << " vs " << la[j];
     EXPECT_LE((u.R - v.R).cwiseAbs().maxCoeff(), rel) << u.R << "\nvs\n" << v.R;
-    for (int j = 0; j < 3; ++j) EXPECT_TRUE(Near(u.t[j], v.t[j], rel)) << u.t.transpose() << " vs " << v.t.transpose();
+    for (int j = 0; j < 3; ++j)
+      EXPECT_TRUE(Near(u.t[j], v.t[j], rel)) << u.t.transpose() << " vs " << v.t.transpose();
   }
   ASSERT_EQ(a.points.size(), b.points.size());
   for (size_t i = 0; i < a.points.size(); ++i) {

@@ -39,8 +39,8 @@ std::vector<fs::path> CameraFiles(const std::string& dir) {
 
 }  // namespace
 
-View ParseStrechaCamera(const std::string& name, const std::string& contents) {
-  TextReader r(name, contents);
+View ParseStrechaCamera(const std::string& name, std::string contents) {
+  TextReader r(name, std::move(contents));
   Eigen::Matrix3d K, R;
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) K(i, j) = format::NextDouble(r, "K");
@@ -80,7 +80,8 @@ Scene ReadStrecha(const std::string& dir, const SceneReadOptions& options) {
   Scene scene;
   scene.source = dir;
   for (const fs::path& file : files) {
-    scene.views.push_back(ParseStrechaCamera(file.string(), ReadFileToString(file, kMaxCameraFileBytes)));
+    scene.views.push_back(
+        ParseStrechaCamera(file.string(), ReadFileToString(file, kMaxCameraFileBytes)));
   }
   format::ImageLocator(dir, options).AttachImages(&scene);
   return scene;
@@ -115,7 +116,8 @@ void WriteStrecha(const Scene& scene, const std::string& dir, const SceneWriteOp
     out += fmt::format("{} {} {}\n{} {}\n", FormatDouble(c.x()), FormatDouble(c.y()),
                        FormatDouble(c.z()), k.width, k.height);
     const fs::path path = fs::path(dir) / (fs::path(v.name).filename().string() + kSuffix);
-    WriteFileAtomically(path, [&](std::ostream& s) { s.write(out.data(), out.size()); }, false);
+    WriteFileAtomically(
+        path, [&](std::ostream& s) { s.write(out.data(), out.size()); }, false);
   }
 }
 

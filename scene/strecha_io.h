@@ -12,7 +12,7 @@
 namespace ms {
 
 // Parses one .camera file held in memory; the view is named after the file without ".camera".
-View ParseStrechaCamera(const std::string& name, const std::string& contents);
+View ParseStrechaCamera(const std::string& name, std::string contents);
 
 // Reads every *.camera file of a directory, in name order.
 Scene ReadStrecha(const std::string& dir, const SceneReadOptions& options);
