@@ -3,6 +3,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -27,8 +28,8 @@ class TempDir {
  public:
   explicit TempDir(const std::string& tag) {
     path_ = std::filesystem::temp_directory_path() /
-            ("ms_" + tag + "_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-             "_" + std::to_string(reinterpret_cast<uintptr_t>(this)));
+            ("ms_" + tag + "_" + std::to_string(::getpid()) + "_" +
+             std::to_string(reinterpret_cast<uintptr_t>(this)));
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }

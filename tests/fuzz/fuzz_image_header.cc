@@ -3,6 +3,7 @@
 #include <string_view>
 
 #include "base/error.h"
+#include "fuzz_util.h"
 #include "scene/image_io.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

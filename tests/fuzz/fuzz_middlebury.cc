@@ -2,6 +2,7 @@
 #include <cstdint>
 
 #include "base/error.h"
+#include "fuzz_util.h"
 #include "scene/middlebury_io.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -7,9 +7,15 @@
 #include <string>
 #include <vector>
 
+#include <spdlog/spdlog.h>
+
 #include "base/file_util.h"
 
 namespace ms::fuzz {
+
+// Readers log warnings (e.g. repeated views in a track); at thousands of inputs a second that
+// would be most of the work.
+inline const bool kQuiet = (spdlog::set_level(spdlog::level::off), true);
 
 inline std::string Fixture(const std::string& relative) {
   return ReadFileToString(std::string(MS_SOURCE_DIR) + "/tests/data/" + relative);

@@ -53,6 +53,8 @@ for f in "$D"/images/* "$C"/image/*; do seed fuzz_image_header "$(basename "$f")
 [ -f "$ROOT/../shared/data/fountain-P11/images/0000.jpg" ] &&
   head -c 4096 "$ROOT/../shared/data/fountain-P11/images/0000.jpg" | seed fuzz_image_header fountain.jpg
 
+# UBSan only reports by default; make its findings stop the run like ASan's.
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
 status=0
 for t in "${TARGETS[@]}"; do
   out=$BUILD/fuzz-out/$t
