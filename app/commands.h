@@ -12,5 +12,6 @@ void RegisterCheckMeshCommand(CLI::App& app);
 void RegisterSweepCommand(CLI::App& app);
 void RegisterSynthCommand(CLI::App& app);
 void RegisterEvaluateCommand(CLI::App& app);
+void RegisterConvertCommand(CLI::App& app);
 
 }  // namespace ms::app

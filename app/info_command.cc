@@ -21,6 +21,8 @@ namespace {
 
 struct InfoOptions {
   std::string input;
+  std::string from = "auto";  // scene format name, or auto
+  SceneReadOptions read;
 };
 
 void RunInfo(const InfoOptions& options) {
@@ -40,9 +42,11 @@ void RunInfo(const InfoOptions& options) {
   std::printf("  spdlog      %d.%d.%d\n", SPDLOG_VER_MAJOR, SPDLOG_VER_MINOR, SPDLOG_VER_PATCH);
   std::printf("  OpenGL      %s\n", gl::DescribeGl().c_str());
   if (!options.input.empty()) {
-    const Scene scene = ReadScene(options.input);
+    const SceneFormat format = options.from == "auto" ? DetectSceneFormat(options.input)
+                                                      : ParseSceneFormat(options.from);
+    const Scene scene = ReadScene(options.input, options.read, format);
     std::printf("scene %s\n  format      %s\n  %s\n", options.input.c_str(),
-                SceneFormatName(DetectSceneFormat(options.input)).c_str(),
+                SceneFormatName(format).c_str(),
                 scene.Summary().c_str());
     const BoundingBox box = scene.PointBounds();
     if (!box.Empty()) {
@@ -60,6 +64,10 @@ void RegisterInfoCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "info", "Library versions, the OpenGL renderer available through EGL, and a scene summary");
   cmd->add_option("-i,--input", options->input, "scene to summarise (any supported format)");
+  cmd->add_option("--from", options->from, "scene format (see `manisweep convert --help`)")
+      ->capture_default_str();
+  cmd->add_option("--image-dir", options->read.image_dir,
+                  "folder with the images when they are not beside the scene");
   cmd->callback([options] { RunInfo(*options); });
 }
 

@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   ms::app::RegisterSweepCommand(app);
   ms::app::RegisterSynthCommand(app);
   ms::app::RegisterEvaluateCommand(app);
+  ms::app::RegisterConvertCommand(app);
 
   try {
     app.parse(argc, argv);

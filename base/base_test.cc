@@ -27,6 +27,32 @@ TEST(TextReader, ReportsFileLineAndField) {
   }
 }
 
+TEST(TextReader, TokenLineNumbers) {
+  TextReader reader("t", "a b\n\nc\nd");
+  reader.NextToken("a");
+  EXPECT_EQ(reader.line_number(), 1);
+  reader.NextToken("b");
+  EXPECT_EQ(reader.line_number(), 1);
+  reader.NextToken("c");
+  EXPECT_EQ(reader.line_number(), 3);
+  EXPECT_FALSE(reader.AtEnd());
+  EXPECT_EQ(reader.line_number(), 4);
+  // Lines then tokens: the token after line 1 is on line 2.
+  TextReader mixed("m", "header\n7 8\n");
+  std::string_view line;
+  ASSERT_TRUE(mixed.NextLine(&line));
+  EXPECT_EQ(mixed.line_number(), 1);
+  mixed.NextToken("seven");
+  EXPECT_EQ(mixed.line_number(), 2);
+  mixed.NextToken("eight");
+  try {
+    mixed.NextToken("nine");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "m:2: unexpected end of file, expected nine");
+  }
+}
+
 TEST(TextReader, RejectsNonFiniteAndOutOfRange) {
   TextReader reader("f", "nan inf -5 99999999999999999999");
   EXPECT_THROW(reader.NextDouble("a"), InputError);

@@ -43,8 +43,9 @@ bool TextReader::NextLine(std::string_view* line) {
   if (end == std::string::npos) end = data_.size();
   std::string_view view(data_.data() + pos_, end - pos_);
   if (!view.empty() && view.back() == '\r') view.remove_suffix(1);
+  line_number_ = newlines_ + 1;
+  if (end < data_.size()) ++newlines_;
   pos_ = end + 1;
-  ++line_number_;
   *line = view;
   return true;
 }
@@ -69,10 +70,14 @@ std::string_view TextReader::RequireDataLine(const std::string& what, char comme
 
 std::string_view TextReader::NextToken(const std::string& what) {
   while (pos_ < data_.size() && IsSpace(data_[pos_])) {
-    if (data_[pos_] == '\n') ++line_number_;
+    if (data_[pos_] == '\n') ++newlines_;
     ++pos_;
   }
-  if (pos_ >= data_.size()) Fail("unexpected end of file, expected " + what);
+  if (pos_ >= data_.size()) {
+    line_number_ = std::max(newlines_, 1);  // the last line
+    Fail("unexpected end of file, expected " + what);
+  }
+  line_number_ = newlines_ + 1;  // the token's own line
   size_t start = pos_;
   while (pos_ < data_.size() && !IsSpace(data_[pos_])) ++pos_;
   return std::string_view(data_.data() + start, pos_ - start);
@@ -80,10 +85,12 @@ std::string_view TextReader::NextToken(const std::string& what) {
 
 bool TextReader::AtEnd() {
   while (pos_ < data_.size() && IsSpace(data_[pos_])) {
-    if (data_[pos_] == '\n') ++line_number_;
+    if (data_[pos_] == '\n') ++newlines_;
     ++pos_;
   }
-  return pos_ >= data_.size();
+  if (pos_ >= data_.size()) return true;
+  line_number_ = newlines_ + 1;  // where the next token starts, for a caller's Fail()
+  return false;
 }
 
 void TextReader::Fail(const std::string& message) const {

@@ -48,7 +48,8 @@ class TextReader {
   std::string name_;
   std::string data_;
   size_t pos_ = 0;
-  int line_number_ = 0;
+  int line_number_ = 0;  // line of the last line or token returned (1-based)
+  int newlines_ = 0;     // '\n' characters before pos_
 };
 
 // Splits on spaces/tabs, skipping empty tokens.

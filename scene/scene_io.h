@@ -32,9 +32,17 @@ struct SceneReadOptions {
   std::string image_dir;
   int nvm_model_index = 0;      // NVM files may hold several models
   bool require_images = false;  // fail if an image file is missing
-  // Check image sizes against the files (reads only headers). Sets sizes where the format lacks
-  // them (NVM, Bundler).
+  // Check image sizes against the files (reads only headers). NVM, Bundler and Middlebury lack
+  // sizes and always read them from the images.
   bool read_image_sizes = true;
+  void Check() const;  // throws InputError naming the field
+};
+
+struct SceneWriteOptions {
+  // Formats that cannot hold part of a scene (e.g. Bundler: fx != fy, an off-centre principal
+  // point, tangential distortion; camera-only formats: the points) fail with InputError saying
+  // what would be lost. With allow_lossy they write what they can and log a warning per kind.
+  bool allow_lossy = false;
 };
 
 // Detects by extension/contents: *.h5, *.nvm, *.json, bundle.out/*.out, *_par.txt, a directory
@@ -45,7 +53,15 @@ SceneFormat DetectSceneFormat(const std::string& path);
 Scene ReadScene(const std::string& path, const SceneReadOptions& options = {},
                 SceneFormat format = SceneFormat::kAuto);
 
-// Writes atomically (temporary name, then rename). Directory formats create the directory.
-void WriteScene(const Scene& scene, const std::string& path, SceneFormat format);
+// The format a path asks for when writing: *.h5, *.nvm, *.out (Bundler), *.json (openMVG),
+// *_par.txt (Middlebury); an existing COLMAP model directory keeps its flavour; any other path
+// is a COLMAP text model directory. Strecha output must be asked for by name.
+SceneFormat InferOutputFormat(const std::string& path);
+
+// Writes atomically (temporary name, then rename; directory formats write each file so).
+// Directory formats create the directory. kAuto uses InferOutputFormat. Throws InputError if
+// the format cannot hold the scene without loss (see SceneWriteOptions) or writing fails.
+void WriteScene(const Scene& scene, const std::string& path, SceneFormat format,
+                const SceneWriteOptions& options = {});
 
 }  // namespace ms

@@ -1,7 +1,8 @@
+#include "scene/scene.h"
+
 #include <gtest/gtest.h>
 
 #include "base/error.h"
-#include "scene/scene.h"
 
 namespace ms {
 namespace {

@@ -1,0 +1,61 @@
+// `manisweep convert`: reads a scene in one format and writes it in another (see
+// docs/formats.md for what each format holds and what a conversion loses).
+#include <memory>
+#include <string>
+
+#include "app/commands.h"
+#include "base/error.h"
+#include "scene/scene_io.h"
+
+namespace ms::app {
+namespace {
+
+struct ConvertOptions {
+  std::string input;          // scene to read
+  std::string output;         // path to write
+  std::string from = "auto";  // input format name, or auto (detected from the path)
+  std::string to = "auto";    // output format name, or auto (inferred from the output path)
+  SceneReadOptions read;
+  SceneWriteOptions write;
+};
+
+void RunConvert(const ConvertOptions& options) {
+  const SceneFormat from = ParseSceneFormat(options.from);
+  const SceneFormat to =
+      options.to == "auto" ? InferOutputFormat(options.output) : ParseSceneFormat(options.to);
+  const Scene scene = ReadScene(options.input, options.read, from);
+  WriteScene(scene, options.output, to, options.write);
+}
+
+}  // namespace
+
+void RegisterConvertCommand(CLI::App& app) {
+  auto options = std::make_shared<ConvertOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "convert",
+      "Convert a scene between formats: COLMAP (text/binary), NVM, Bundler, openMVG, Strecha "
+      "and Middlebury cameras");
+  cmd->add_option("-i,--input", options->input, "scene to read (file or directory)")->required();
+  cmd->add_option("-o,--output", options->output, "where to write the scene")->required();
+  const std::string formats =
+      "colmap-text, colmap-binary, nvm, bundler, openmvg, strecha, middlebury, h5 or auto";
+  cmd->add_option("--from", options->from, "input format: " + formats)->capture_default_str();
+  cmd->add_option("--to", options->to,
+                  "output format: " + formats +
+                      " (auto: from the output path; a directory becomes COLMAP text)")
+      ->capture_default_str();
+  cmd->add_option("--image-dir", options->read.image_dir,
+                  "folder with the images, when they are not beside the model or in an images/ "
+                  "folder next to it (NVM, Bundler and Middlebury need them for image sizes)");
+  cmd->add_option("--nvm-model", options->read.nvm_model_index,
+                  "which model of a multi-model NVM file to read (0 = first)")
+      ->capture_default_str();
+  cmd->add_flag("--require-images", options->read.require_images,
+                "fail if an image file of the scene cannot be found");
+  cmd->add_flag("--allow-lossy", options->write.allow_lossy,
+                "write even if the output format cannot hold everything (e.g. Bundler and "
+                "fx != fy); each kind of loss is logged as a warning");
+  cmd->callback([options] { RunConvert(*options); });
+}
+
+}  // namespace ms::app
