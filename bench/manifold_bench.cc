@@ -48,6 +48,11 @@ int main(int argc, char** argv) {
                 stats.seconds_ray_tracing, stats.rays / stats.seconds_ray_tracing,
                 stats.seconds_growing, stats.outside_cells / std::max(stats.seconds_growing, 1e-9),
                 total, static_cast<double>(rss) / n, insert_count / insert_total, insert_total);
+    std::printf("          %.1f cell steps per ray; %lld manifold tests, %lld full, %.1f link steps each\n",
+                static_cast<double>(stats.ray_cell_steps) / std::max<int64_t>(stats.rays, 1),
+                static_cast<long long>(stats.manifold_tests),
+                static_cast<long long>(stats.full_manifold_tests),
+                static_cast<double>(stats.link_steps) / std::max<int64_t>(stats.full_manifold_tests, 1));
     std::printf("          incremental: %lld inserted, %lld discarded (conflict), %lld shrunk, "
                 "%lld candidate rays, insertion %.2f s + regrowing %.2f s\n",
                 static_cast<long long>(ins.inserted), static_cast<long long>(ins.discarded_conflict),

@@ -38,6 +38,8 @@ struct VertexInfo {
   int32_t id = kInfiniteVertexId;  // point id (>= 0) or -1 - k for Steiner point k
   int32_t outside_cells = 0;       // incident cells in O
   int32_t cells = 0;               // incident cells, infinite ones included
+  int32_t surface_faces = 0;       // incident faces between O and the rest
+  uint32_t changed = 0;            // last insertion batch that changed a cell around it
 };
 
 struct CellInfo {
@@ -233,6 +235,13 @@ class DelaunayManifold::Impl {
     const int delta = outside ? 1 : -1;
     outside_count_ += delta;
     for (int i = 0; i < 4; ++i) c->vertex(i)->info().outside_cells += delta;
+    // Flipping c toggles whether each of its faces is on the surface.
+    for (int i = 0; i < 4; ++i) {
+      const int face_delta = InO(c->neighbor(i)) != outside ? 1 : -1;
+      for (int j = 0; j < 4; ++j) {
+        if (j != i) c->vertex(j)->info().surface_faces += face_delta;
+      }
+    }
   }
   CellKey Key(const Cell_handle& c) const {
     CellKey key;
@@ -244,13 +253,18 @@ class DelaunayManifold::Impl {
   // --- manifold tests ---
   bool FlipKeepsManifold(const Cell_handle& t) const;
   bool VertexRegular(const Vertex_handle& v, const Cell_handle& flipped) const;
+  bool VertexRegularAfterFlip(const Vertex_handle& v, const Cell_handle& t) const;
 
   // --- growing and shrinking ---
   void Grow(const std::vector<Cell_handle>& seeds);
   int64_t GrowFromHeaviest();
-  std::vector<Cell_handle> BoundarySeeds() const;
+  // Cells not in O, sharing a face with O, with a vertex marked changed in batch `changed_in`.
+  std::vector<Cell_handle> BoundarySeeds(uint32_t changed_in) const;
 
   // --- rays ---
+  // Orders rays by camera, then by direction (Morton order of normalised image coordinates):
+  // consecutive walks then cross mostly the same cells, which stay in cache.
+  void SortRaysForLocality(std::vector<RayRef>* rays) const;
   uint32_t NextStamp() const;
   const CameraStart& StartOf(int camera);
   // Calls visit(cell) for every cell crossed by the open segment camera -> point.
@@ -279,6 +293,10 @@ class DelaunayManifold::Impl {
   uint32_t batch_ = 0;               // insertion batches so far
   std::vector<uint32_t> point_mark_;  // per point: last batch that marked its rays
   mutable std::vector<Cell_handle> scratch_cells_;  // reused by walks
+  struct TestCounts {
+    int64_t fast = 0, full = 0, link_steps = 0;
+  };
+  mutable TestCounts test_counts_;
   // Reused by VertexRegular (no allocation in the hot path).
   mutable std::vector<Cell_handle> regular_cells_;
   mutable std::vector<std::pair<Vertex_handle, Vertex_handle>> regular_link_;
@@ -288,6 +306,37 @@ class DelaunayManifold::Impl {
 
 // ---------------------------------------------------------------------------------------------
 // Ray walking
+
+void DelaunayManifold::Impl::SortRaysForLocality(std::vector<RayRef>* rays) const {
+  const auto spread = [](uint32_t x) {  // 16 bits -> every other bit of 32
+    x &= 0xFFFF;
+    x = (x | (x << 8)) & 0x00FF00FF;
+    x = (x | (x << 4)) & 0x0F0F0F0F;
+    x = (x | (x << 2)) & 0x33333333;
+    x = (x | (x << 1)) & 0x55555555;
+    return x;
+  };
+  std::vector<std::pair<uint64_t, RayRef>> keyed;
+  keyed.reserve(rays->size());
+  for (const RayRef& ray : *rays) {
+    const ManifoldCamera& cam = cameras_[ray.camera];
+    const Eigen::Vector3d x = cam.R * (positions_[ray.point] - cam.center);
+    uint32_t morton = 0;
+    if (x.z() > 0) {
+      const auto quantize = [](double value, double lo, double hi) {
+        const double t = std::clamp((value - lo) / (hi - lo), 0.0, 1.0);
+        return static_cast<uint32_t>(t * 65535.0);
+      };
+      morton = spread(quantize(x.x() / x.z(), cam.u_min, cam.u_max)) |
+               (spread(quantize(x.y() / x.z(), cam.v_min, cam.v_max)) << 1);
+    }
+    keyed.push_back({(static_cast<uint64_t>(ray.camera) << 32) | morton, ray});
+  }
+  std::sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first < b.first : a.second.point < b.second.point;
+  });
+  for (size_t i = 0; i < keyed.size(); ++i) (*rays)[i] = keyed[i].second;
+}
 
 uint32_t DelaunayManifold::Impl::NextStamp() const {
   if (++stamp_ == 0) {
@@ -482,40 +531,84 @@ void DelaunayManifold::Impl::WalkFallback(Cell_handle from, const Point& a, cons
 
 // Would flipping t (into O if it is outside O, out of O otherwise) keep the surface manifold?
 // Fast test first (Lhuillier): count the vertices V, edges E and faces F that t shares with
-// the side it joins; some (V,E,F) are always safe. Otherwise test vertex regularity of t's
-// four vertices after the flip, the exact criterion.
+// the side it joins; (0,0,0), (3,3,1), (4,5,2), (4,6,3) and (4,6,4) are always safe. V and F
+// are O(1); E is needed only to tell (4,5,2) from (4,6,2). Otherwise the exact test: every
+// vertex of t must stay regular.
 bool DelaunayManifold::Impl::FlipKeepsManifold(const Cell_handle& t) const {
   const bool joining_outside = !t->info().outside;
   const auto on_target_side = [&](const Cell_handle& c) {
     return c != t && (joining_outside ? InO(c) : !InO(c));
   };
-  int F = 0;
-  for (int i = 0; i < 4; ++i) F += on_target_side(t->neighbor(i));
+  int F = 0, shared[4], num_shared = 0;
+  for (int i = 0; i < 4; ++i) {
+    if (on_target_side(t->neighbor(i))) {
+      ++F;
+      shared[num_shared++] = i;
+    }
+  }
   int V = 0;
   for (int i = 0; i < 4; ++i) {
     const VertexInfo& info = t->vertex(i)->info();
     // t itself is on neither count of the side it joins.
     V += joining_outside ? info.outside_cells > 0 : info.cells - info.outside_cells > 0;
   }
-  int E = 0;
-  for (int i = 0; i < 4; ++i) {
-    for (int j = i + 1; j < 4; ++j) {
-      auto circ = dt_.incident_cells(t, i, j), done = circ;
-      bool touches = false;
-      do {
-        touches = on_target_side(circ);
-      } while (!touches && ++circ != done);
-      E += touches;
-    }
+  ++test_counts_.fast;
+  // With V = 3 and F = 1 the fourth vertex touches nothing, so E = 3; with F >= 3 every edge
+  // lies on a shared face, so E = 6. With F = 2, E = 5 iff the edge joining the two vertices
+  // opposite the shared faces touches nothing.
+  if ((V == 0 && F == 0) || (V == 3 && F == 1) || (V == 4 && F >= 3)) return true;
+  if (V == 4 && F == 2) {
+    auto circ = dt_.incident_cells(t, shared[0], shared[1]), done = circ;
+    bool touches = false;
+    do {
+      touches = on_target_side(circ);
+    } while (!touches && ++circ != done);
+    if (!touches) return true;
   }
-  if ((V == 0 && E == 0 && F == 0) || (V == 3 && E == 3 && F == 1) ||
-      (V == 4 && E == 5 && F == 2) || (V == 4 && E == 6 && (F == 3 || F == 4))) {
-    return true;
-  }
+  ++test_counts_.full;
   for (int i = 0; i < 4; ++i) {
-    if (!VertexRegular(t->vertex(i), t)) return false;
+    if (!VertexRegularAfterFlip(t->vertex(i), t)) return false;
   }
   return true;
+}
+
+// Exact and local. The link of v (the edges opposite v in the surface faces around it) is a
+// single simple cycle or empty before the flip (the invariant). Flipping t toggles exactly
+// the three link edges w1w2, w2w3, w3w1 that t's faces at v contribute. With k of them on the
+// link now, the new link is a single cycle or empty iff:
+//   k = 0: the link is empty (else a second cycle or a vertex of degree 4 appears);
+//   k = 1: say w1w2: it is replaced by w1-w3-w2, fine iff w3 is not on the link already;
+//   k = 2: the path w1-w2-w3 is replaced by the edge w1w3: always fine;
+//   k = 3: the link was exactly that triangle and becomes empty: fine.
+// VertexRegular (the exhaustive criterion) is cross-checked against this in tests.
+bool DelaunayManifold::Impl::VertexRegularAfterFlip(const Vertex_handle& v,
+                                                    const Cell_handle& t) const {
+  const int iv = t->index(v);
+  const bool t_outside = InO(t);
+  int k = 0, w3 = -1;
+  for (int i = 0; i < 4; ++i) {
+    if (i == iv) continue;
+    // Face i of t (opposite vertex i) contains v; it is on the surface iff labels differ.
+    if (t_outside != InO(t->neighbor(i))) {
+      ++k;
+      w3 = i;  // with k = 1: the surface face is the one opposite w3
+    }
+  }
+  switch (k) {
+    case 0:
+      return v->info().surface_faces == 0;
+    case 1: {
+      // Is the edge (v, w3) on the surface (some label change around it)?
+      auto circ = dt_.incident_cells(t, iv, w3), done = circ;
+      const bool first = InO(circ);
+      bool on_surface = false;
+      while (!on_surface && ++circ != done) on_surface = InO(circ) != first;
+      ++test_counts_.link_steps;
+      return !on_surface;
+    }
+    default:
+      return true;
+  }
 }
 
 // A vertex is regular when the edges opposite to it in the surface faces around it form one
@@ -641,10 +734,13 @@ int64_t DelaunayManifold::Impl::GrowFromHeaviest() {
   return outside_count_ - before;
 }
 
-std::vector<Cell_handle> DelaunayManifold::Impl::BoundarySeeds() const {
+std::vector<Cell_handle> DelaunayManifold::Impl::BoundarySeeds(uint32_t changed_in) const {
   std::vector<Cell_handle> seeds;
   for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
     if (c->info().outside) continue;
+    bool changed = false;
+    for (int i = 0; i < 4; ++i) changed |= c->vertex(i)->info().changed == changed_in;
+    if (!changed) continue;
     for (int i = 0; i < 4; ++i) {
       if (InO(c->neighbor(i))) {
         seeds.push_back(c);
@@ -700,10 +796,10 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   std::vector<std::pair<Point, VertexInfo>> vertices;
   vertices.reserve(steiner.size() + points.size());
   for (size_t k = 0; k < steiner.size(); ++k) {
-    vertices.push_back({ToPoint(steiner[k]), {static_cast<int32_t>(-1 - k), 0, 0}});
+    vertices.push_back({ToPoint(steiner[k]), {static_cast<int32_t>(-1 - k), 0, 0, 0, 0}});
   }
   for (size_t i = 0; i < points.size(); ++i) {
-    vertices.push_back({ToPoint(points[i].position), {static_cast<int32_t>(i), 0, 0}});
+    vertices.push_back({ToPoint(points[i].position), {static_cast<int32_t>(i), 0, 0, 0, 0}});
   }
   dt_.insert(vertices.begin(), vertices.end());
   positions_.reserve(points.size());
@@ -749,16 +845,22 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   int64_t total_rays = 0;
   for (const auto& cams : point_cameras_) total_rays += static_cast<int64_t>(cams.size());
   Progress progress("manifold: ray tracing", total_rays);
+  std::vector<RayRef> rays;
+  rays.reserve(total_rays);
   for (size_t i = 0; i < points.size(); ++i) {
-    const Vertex_handle target_vertex = vertex_of_point_[i];
-    const Point target = target_vertex->point();
-    const auto count = [&](const Cell_handle& c) { CountCrossing(c, target_vertex); };
     for (int32_t c : point_cameras_[i]) {
-      stats.ray_cell_steps += Walk(StartOf(c), camera_points_[c], target_vertex, count);
       ray_index_->Add(c, static_cast<int32_t>(i), positions_[i]);
-      ++stats.rays;
-      progress.Update(stats.rays);
+      rays.push_back({c, static_cast<int32_t>(i)});
     }
+  }
+  SortRaysForLocality(&rays);
+  for (const RayRef& ray : rays) {
+    const Vertex_handle target_vertex = vertex_of_point_[ray.point];
+    const auto count = [&](const Cell_handle& c) { CountCrossing(c, target_vertex); };
+    stats.ray_cell_steps +=
+        Walk(StartOf(ray.camera), camera_points_[ray.camera], target_vertex, count);
+    ++stats.rays;
+    progress.Update(stats.rays);
   }
   ray_count_ = stats.rays;
   stats.seconds_ray_tracing = timer.Seconds();
@@ -774,6 +876,9 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   GrowFromHeaviest();
   stats.outside_cells = outside_count_;
   stats.seconds_growing = timer.Seconds();
+  stats.manifold_tests = test_counts_.fast;
+  stats.full_manifold_tests = test_counts_.full;
+  stats.link_steps = test_counts_.link_steps;
   spdlog::info("manifold: grew O to {} of {} free cells in {:.2f} s", stats.outside_cells,
                stats.free_cells, stats.seconds_growing);
   if (options_.validate_each_step) {
@@ -812,6 +917,7 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   std::vector<Facet> boundary;
   std::vector<RayRef> candidates;
   std::vector<int32_t> affected_points;  // old points whose rays may cross a new cell
+  bool all_affected = false;
   Cell_handle hint;
   for (size_t n = 0; n < points.size(); ++n) {
     progress.Update(static_cast<int64_t>(n));
@@ -876,6 +982,7 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
         const Cell_handle& c = shrink_set[k].second;
         if (c->info().outside && FlipKeepsManifold(c)) {
           SetOutside(c, false);
+          for (int i = 0; i < 4; ++i) c->vertex(i)->info().changed = batch;
           ++stats.shrunk_cells;
           changed = true;
           if (k < num_in_d) --d_in_o;
@@ -903,14 +1010,18 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
         hi = hi.cwiseMax(x);
       }
     }
-    candidates.clear();
-    ray_index_->Query(lo, hi, &candidates);
-    stats.candidate_rays += static_cast<int64_t>(candidates.size());
-    for (const RayRef& ray : candidates) {
-      if (point_mark_[ray.point] != batch) {
-        point_mark_[ray.point] = batch;
-        affected_points.push_back(ray.point);
+    // Once most points are affected, re-walking all rays is cheaper than more queries.
+    if (!all_affected) {
+      candidates.clear();
+      ray_index_->Query(lo, hi, &candidates);
+      stats.candidate_rays += static_cast<int64_t>(candidates.size());
+      for (const RayRef& ray : candidates) {
+        if (point_mark_[ray.point] != batch) {
+          point_mark_[ray.point] = batch;
+          affected_points.push_back(ray.point);
+        }
       }
+      all_affected = affected_points.size() > static_cast<size_t>(first_new_id) / 3;
     }
 
     for (const Cell_handle& c : conflicts) {
@@ -918,13 +1029,16 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
     }
     const Vertex_handle v = dt_.insert_in_hole(p, conflicts.begin(), conflicts.end(),
                                                boundary.front().first, boundary.front().second);
-    v->info() = VertexInfo{static_cast<int32_t>(positions_.size()), 0, 0};
+    v->info() = VertexInfo{static_cast<int32_t>(positions_.size()), 0, 0, 0, batch};
     around.clear();
     dt_.incident_cells(v, std::back_inserter(around));
     for (const Cell_handle& c : around) {
       c->info() = CellInfo{};
       c->info().born = batch;
-      for (int i = 0; i < 4; ++i) ++c->vertex(i)->info().cells;
+      for (int i = 0; i < 4; ++i) {
+        ++c->vertex(i)->info().cells;
+        c->vertex(i)->info().changed = batch;
+      }
     }
     positions_.push_back(rp.position);
     std::vector<int32_t> cams = rp.cameras;
@@ -940,16 +1054,22 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   // Exact ray counts for the cells born in this batch: every old ray that may cross one is
   // walked once and counted on those cells only (the others keep their counts: their geometry
   // did not change); the new points' rays are walked and counted everywhere.
-  std::sort(affected_points.begin(), affected_points.end());
+  if (all_affected) {
+    affected_points.resize(first_new_id);
+    for (int32_t id = 0; id < first_new_id; ++id) affected_points[id] = id;
+  }
+  std::vector<RayRef> rays;
   for (int32_t id : affected_points) {
-    const Vertex_handle target = vertex_of_point_[id];
+    for (int32_t c : point_cameras_[id]) rays.push_back({c, id});
+  }
+  SortRaysForLocality(&rays);
+  for (const RayRef& ray : rays) {
+    const Vertex_handle target = vertex_of_point_[ray.point];
     const auto count_new_cells = [&](const Cell_handle& c) {
       if (c->info().born == batch) CountCrossing(c, target);
     };
-    for (int32_t c : point_cameras_[id]) {
-      Walk(StartOf(c), camera_points_[c], target, count_new_cells);
-      ++stats.rewalked_rays;
-    }
+    Walk(StartOf(ray.camera), camera_points_[ray.camera], target, count_new_cells);
+    ++stats.rewalked_rays;
   }
   for (int32_t id = first_new_id; id < static_cast<int32_t>(positions_.size()); ++id) {
     const Vertex_handle target = vertex_of_point_[id];
@@ -963,9 +1083,11 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   }
   stats.seconds_insertion = timer.Seconds();
 
-  // Regrow from the cells on the boundary of O.
+  // Regrow from the cells on the boundary of O that the batch may have changed: a cell none of
+  // whose vertices touches a new or shrunk cell has the weight and neighbourhood it had when
+  // the last growing refused it.
   timer.Restart();
-  Grow(BoundarySeeds());
+  Grow(BoundarySeeds(batch));
   if (outside_count_ == 0) GrowFromHeaviest();
   stats.outside_cells = outside_count_;
   stats.seconds_growing = timer.Seconds();
@@ -1030,11 +1152,17 @@ Mesh DelaunayManifold::Impl::ExtractSurface(SurfaceInfo* info) const {
 std::string DelaunayManifold::Impl::Validate(bool check_weights) const {
   std::ostringstream problems;
   if (!dt_.is_valid(false)) problems << "CGAL triangulation invalid; ";
-  std::unordered_map<const void*, int32_t> outside_cells, cells_around;
+  std::unordered_map<const void*, int32_t> outside_cells, cells_around, surface_faces;
   int64_t outside = 0;
   for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
     for (int i = 0; i < 4; ++i) ++cells_around[&*c->vertex(i)];
     if (!c->info().outside) continue;
+    for (int i = 0; i < 4; ++i) {
+      if (InO(c->neighbor(i))) continue;
+      for (int j = 0; j < 4; ++j) {
+        if (j != i) ++surface_faces[&*c->vertex(j)];
+      }
+    }
     if (dt_.is_infinite(c)) {
       problems << "an infinite cell is in O; ";
       continue;
@@ -1051,6 +1179,7 @@ std::string DelaunayManifold::Impl::Validate(bool check_weights) const {
     const int32_t expected = it == outside_cells.end() ? 0 : it->second;
     if (v->info().outside_cells != expected) ++bad_counts;
     if (v->info().cells != cells_around[&*v]) ++bad_counts;
+    if (v->info().surface_faces != surface_faces[&*v]) ++bad_counts;
     if (!VertexRegular(v, Cell_handle())) ++irregular;
   }
   if (bad_counts > 0) problems << bad_counts << " vertices with a wrong count of cells in O; ";
@@ -1136,7 +1265,7 @@ using PlainDelaunay = Delaunay;
 PlainDelaunay Triangulate(const std::vector<Eigen::Vector3d>& points) {
   std::vector<std::pair<Point, VertexInfo>> vertices;
   for (size_t i = 0; i < points.size(); ++i) {
-    vertices.push_back({ToPoint(points[i]), {static_cast<int32_t>(i), 0, 0}});
+    vertices.push_back({ToPoint(points[i]), {static_cast<int32_t>(i), 0, 0, 0, 0}});
   }
   PlainDelaunay dt(vertices.begin(), vertices.end());
   return dt;
@@ -1191,6 +1320,41 @@ struct ManifoldTestAccess {
     return impl.VertexRegular(vertex, Cell_handle());
   }
 
+  // Random O sets (random flips that keep the surface manifold), then both regularity tests
+  // on every vertex of random cells: they must agree.
+  static int64_t RegularityTestMismatches(const std::vector<Eigen::Vector3d>& points,
+                                          uint32_t seed, int64_t* checked) {
+    DelaunayManifold::Impl impl({}, ManifoldOptions{});
+    std::vector<RayPoint> rays(points.size());
+    for (size_t i = 0; i < points.size(); ++i) rays[i].position = points[i];
+    impl.Build(rays);
+    std::vector<Cell_handle> cells;
+    for (auto c = impl.dt_.finite_cells_begin(); c != impl.dt_.finite_cells_end(); ++c) {
+      cells.push_back(c);
+    }
+    uint64_t state = seed * 2654435761u + 1;
+    const auto next = [&]() {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      return static_cast<size_t>(state >> 33);
+    };
+    int64_t mismatches = 0;
+    *checked = 0;
+    for (int step = 0; step < 4000; ++step) {
+      const Cell_handle t = cells[next() % cells.size()];
+      bool fast = true, full = true;
+      for (int i = 0; i < 4; ++i) {
+        const bool a = impl.VertexRegularAfterFlip(t->vertex(i), t);
+        const bool b = impl.VertexRegular(t->vertex(i), t);
+        mismatches += a != b;
+        ++*checked;
+        fast &= a;
+        full &= b;
+      }
+      if (fast && full) impl.SetOutside(t, !t->info().outside);
+    }
+    return mismatches;
+  }
+
   static void CrossedCells(const std::vector<Eigen::Vector3d>& points,
                            const Eigen::Vector3d& camera, int32_t target,
                            std::vector<manifold_internal::CellVertices>* walked,
@@ -1216,6 +1380,10 @@ struct ManifoldTestAccess {
 };
 
 namespace manifold_internal {
+int64_t RegularityTestMismatches(const std::vector<Eigen::Vector3d>& points, uint32_t seed,
+                                 int64_t* checked) {
+  return ManifoldTestAccess::RegularityTestMismatches(points, seed, checked);
+}
 bool IsVertexRegular(const std::vector<Eigen::Vector3d>& points,
                      const std::vector<CellVertices>& outside, int32_t v) {
   std::vector<CellVertices> sorted = outside;

@@ -42,6 +42,9 @@ struct BuildStats {
   int64_t vertices = 0, cells = 0;
   int64_t rays = 0, ray_cell_steps = 0;
   int64_t free_cells = 0, outside_cells = 0;
+  // Manifold tests while growing: all, those the fast (V,E,F) test could not decide, and the
+  // surface edges walked by the full test.
+  int64_t manifold_tests = 0, full_manifold_tests = 0, link_steps = 0;
   double seconds_triangulation = 0, seconds_ray_tracing = 0, seconds_growing = 0;
 };
 

@@ -185,6 +185,21 @@ TEST(VertexRegularity, PaperFigureOneCases) {
   // link vertex has even degree); check-mesh tests it on meshes.
 }
 
+// The link-walk regularity test used while growing must agree with the exhaustive one.
+TEST(VertexRegularity, FastTestAgreesWithExhaustiveTest) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 60; ++i) points.emplace_back(u(rng), u(rng), u(rng));
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) points.emplace_back(i * 0.5, j * 0.5, 0.25);  // coplanar grid
+  for (uint32_t seed = 1; seed <= 3; ++seed) {
+    int64_t checked = 0;
+    EXPECT_EQ(manifold_internal::RegularityTestMismatches(points, seed, &checked), 0);
+    EXPECT_GT(checked, 10000);
+  }
+}
+
 struct RandomScene {
   std::vector<ManifoldCamera> cameras;
   std::vector<RayPoint> points;

@@ -22,6 +22,12 @@ std::vector<CellVertices> DelaunayCells(const std::vector<Eigen::Vector3d>& poin
 bool IsVertexRegular(const std::vector<Eigen::Vector3d>& points,
                      const std::vector<CellVertices>& outside, int32_t v);
 
+// Flips random cells of a triangulation of `points` whenever both regularity tests allow it,
+// comparing the link-walk test with the exhaustive one on every vertex of every candidate.
+// Returns the number of disagreements; *checked receives the number of comparisons.
+int64_t RegularityTestMismatches(const std::vector<Eigen::Vector3d>& points, uint32_t seed,
+                                 int64_t* checked);
+
 // Cells crossed by the open segment camera -> points[target] in a manifold built from
 // `points` (with Steiner points, ids -1-k): as found by the walk and by testing every cell.
 void CrossedCells(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& camera,
