@@ -8,6 +8,7 @@
 namespace ms::app {
 
 void RegisterInfoCommand(CLI::App& app);
+void RegisterManifoldCommand(CLI::App& app);
 void RegisterCheckMeshCommand(CLI::App& app);
 void RegisterSweepCommand(CLI::App& app);
 void RegisterSynthCommand(CLI::App& app);

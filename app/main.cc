@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   help->add_option("command", help_topic, "command to describe");
 
   ms::app::RegisterInfoCommand(app);
+  ms::app::RegisterManifoldCommand(app);
   ms::app::RegisterCheckMeshCommand(app);
   ms::app::RegisterSweepCommand(app);
   ms::app::RegisterSynthCommand(app);

@@ -44,9 +44,8 @@ struct VertexInfo {
 
 struct CellInfo {
   int32_t crossings = 0;  // viewing rays whose open segment meets the open cell
-  // Of those, the rays that end at vertex i of this cell. They do not spread w2 across the
-  // three faces containing vertex i: evidence of free space stops at the ray's point.
-  int32_t ends[4] = {0, 0, 0, 0};
+  // Of those, the rays that spread w2 across face i to the neighbour there (see Weight).
+  int32_t spread[4] = {0, 0, 0, 0};
   uint32_t stamp = 0;     // visit marker for walks and set building
   uint32_t born = 0;      // insertion batch that created the cell (0: the initial build)
   bool outside = false;   // in O
@@ -110,6 +109,14 @@ FaceSides ComputeFaceSides(const Cell_handle& c, const Point& a, const Point& b)
   s.b[2] = CGAL::orientation(p0, p1, b, p3);
   s.b[3] = CGAL::orientation(p0, p1, p2, b);
   return s;
+}
+
+// Orientation of point x against face i of a finite cell (> 0: on the cell's side).
+CGAL::Orientation FaceSide(const Cell_handle& c, int i, const Point& x) {
+  const Point* p[4] = {&c->vertex(0)->point(), &c->vertex(1)->point(), &c->vertex(2)->point(),
+                       &c->vertex(3)->point()};
+  p[i] = &x;
+  return CGAL::orientation(*p[0], *p[1], *p[2], *p[3]);
 }
 
 // Sign of K_ij (see kPluckerSign).
@@ -206,24 +213,22 @@ class DelaunayManifold::Impl {
 
   // --- labels and weights ---
   bool InO(const Cell_handle& c) const { return !dt_.is_infinite(c) && c->info().outside; }
-  // w1 per ray crossing c, plus w2 per ray crossing a face neighbour n, except rays that end
-  // at a vertex of the face c and n share.
+  // w1 per ray crossing c, plus w2 per ray crossing a face neighbour n that spreads across
+  // the face n shares with c.
   double Weight(const Cell_handle& c) const {
     int64_t neighbours = 0;
     for (int i = 0; i < 4; ++i) {
       const Cell_handle n = c->neighbor(i);
-      const CellInfo& ni = n->info();
-      const int shared_face_of_n = n->index(c);
-      neighbours += ni.crossings - (ni.ends[0] + ni.ends[1] + ni.ends[2] + ni.ends[3]) +
-                    ni.ends[shared_face_of_n];
+      neighbours += n->info().spread[n->index(c)];
     }
     return options_.w1 * c->info().crossings + options_.w2 * static_cast<double>(neighbours);
   }
-  // Counts one ray crossing c that ends at `target`.
-  static void CountCrossing(const Cell_handle& c, const Vertex_handle& target) {
-    ++c->info().crossings;
-    int i;
-    if (c->has_vertex(target, i)) ++c->info().ends[i];
+  // Counts one ray crossing c; bit i of `spread_mask` says it spreads w2 across face i.
+  void CountCrossing(const Cell_handle& c, unsigned spread_mask) const {
+    CellInfo& info = c->info();
+    ++info.crossings;
+    if (options_.w2_rule == W2Rule::kAllFaces) spread_mask = 0xF;
+    for (int i = 0; i < 4; ++i) info.spread[i] += (spread_mask >> i) & 1;
   }
   bool IsFree(const Cell_handle& c) const {
     return !dt_.is_infinite(c) && Weight(c) >= options_.free_threshold;
@@ -408,13 +413,12 @@ int64_t DelaunayManifold::Impl::Walk(const CameraStart& start, const Point& a,
   int entry = -1;  // face through which `current` was entered, if through a face interior
   for (;;) {
     current->info().stamp = stamp;
-    visit(current);
     ++steps;
-    // A crossed cell incident to the end point is the last one (convexity).
-    if (current->has_vertex(target)) break;
     Cell_handle next;
     int exit = -1;
-    if (entry >= 0) {
+    // A crossed cell incident to the end point is the last one (convexity).
+    const bool last = current->has_vertex(target);
+    if (entry >= 0 && !last) {
       // Fast step: three orientations decide the exit face (kExitFace).
       const Point& apex = current->vertex(entry)->point();
       int code = 0;
@@ -427,10 +431,21 @@ int64_t DelaunayManifold::Impl::Walk(const CameraStart& start, const Point& a,
       }
       if (!degenerate) exit = kExitFace[entry][code];
     }
-    if (exit < 0) {
+    if (exit >= 0) {
+      // The camera is beyond the entry face and before the exit face; test the other two.
+      unsigned mask = 1u << entry;
+      for (int i = 0; i < 4; ++i) {
+        if (i != entry && i != exit && FaceSide(current, i, a) == CGAL::NEGATIVE) mask |= 1u << i;
+      }
+      visit(current, mask);
+    } else {
       // General step, exact in every case: the exit is the face whose bound on the segment's
       // parameter is smallest; ties mean leaving through an edge or a vertex.
       const FaceSides s = ComputeFaceSides(current, a, b);
+      unsigned mask = 0;
+      for (int i = 0; i < 4; ++i) mask |= (s.a[i] < 0 ? 1u : 0u) << i;
+      visit(current, mask);
+      if (last) break;
       int ties[3], num_ties = 0;
       for (int j = 0; j < 4; ++j) {
         if (!(s.a[j] > 0 && s.b[j] <= 0)) continue;
@@ -512,9 +527,12 @@ void DelaunayManifold::Impl::WalkFallback(Cell_handle from, const Point& a, cons
     const Kernel::Tetrahedron_3 tet(c->vertex(0)->point(), c->vertex(1)->point(),
                                     c->vertex(2)->point(), c->vertex(3)->point());
     if (c != from && !CGAL::do_intersect(segment, tet)) continue;
-    if (c->info().stamp != stamp && SegmentCrossesCell(c, a, b)) {
+    const FaceSides sides = ComputeFaceSides(c, a, b);
+    if (c->info().stamp != stamp && SegmentCrossesCell(c, a, b, sides)) {
       c->info().stamp = stamp;
-      visit(c);
+      unsigned mask = 0;
+      for (int i = 0; i < 4; ++i) mask |= (sides.a[i] < 0 ? 1u : 0u) << i;
+      visit(c, mask);
     }
     for (int i = 0; i < 4; ++i) {
       around.clear();
@@ -856,7 +874,7 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   SortRaysForLocality(&rays);
   for (const RayRef& ray : rays) {
     const Vertex_handle target_vertex = vertex_of_point_[ray.point];
-    const auto count = [&](const Cell_handle& c) { CountCrossing(c, target_vertex); };
+    const auto count = [&](const Cell_handle& c, unsigned mask) { CountCrossing(c, mask); };
     stats.ray_cell_steps +=
         Walk(StartOf(ray.camera), camera_points_[ray.camera], target_vertex, count);
     ++stats.rays;
@@ -1065,15 +1083,15 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   SortRaysForLocality(&rays);
   for (const RayRef& ray : rays) {
     const Vertex_handle target = vertex_of_point_[ray.point];
-    const auto count_new_cells = [&](const Cell_handle& c) {
-      if (c->info().born == batch) CountCrossing(c, target);
+    const auto count_new_cells = [&](const Cell_handle& c, unsigned mask) {
+      if (c->info().born == batch) CountCrossing(c, mask);
     };
     Walk(StartOf(ray.camera), camera_points_[ray.camera], target, count_new_cells);
     ++stats.rewalked_rays;
   }
   for (int32_t id = first_new_id; id < static_cast<int32_t>(positions_.size()); ++id) {
     const Vertex_handle target = vertex_of_point_[id];
-    const auto count = [&](const Cell_handle& c) { CountCrossing(c, target); };
+    const auto count = [&](const Cell_handle& c, unsigned mask) { CountCrossing(c, mask); };
     for (int32_t c : point_cameras_[id]) {
       Walk(StartOf(c), camera_points_[c], target, count);
       ray_index_->Add(c, id, positions_[id]);
@@ -1185,16 +1203,16 @@ std::string DelaunayManifold::Impl::Validate(bool check_weights) const {
   if (bad_counts > 0) problems << bad_counts << " vertices with a wrong count of cells in O; ";
   if (irregular > 0) problems << irregular << " vertices are not regular (surface not manifold); ";
   if (check_weights) {
-    std::unordered_map<const void*, std::array<int32_t, 5>> recount;  // crossings, ends[4]
+    std::unordered_map<const void*, std::array<int32_t, 5>> recount;  // crossings, spread[4]
     auto* self = const_cast<Impl*>(this);
     for (size_t i = 0; i < positions_.size(); ++i) {
       const Vertex_handle target_vertex = vertex_of_point_[i];
       const Point target = target_vertex->point();
-      const auto count = [&](const Cell_handle& c) {
+      const auto count = [&](const Cell_handle& c, unsigned mask) {
         auto& entry = recount.try_emplace(&*c, std::array<int32_t, 5>{0, 0, 0, 0, 0}).first->second;
         ++entry[0];
-        int k;
-        if (c->has_vertex(target_vertex, k)) ++entry[1 + k];
+        if (options_.w2_rule == W2Rule::kAllFaces) mask = 0xF;
+        for (int k = 0; k < 4; ++k) entry[1 + k] += (mask >> k) & 1;
       };
       for (int32_t c : point_cameras_[i]) {
         CameraStart start;
@@ -1209,8 +1227,9 @@ std::string DelaunayManifold::Impl::Validate(bool check_weights) const {
       const std::array<int32_t, 5> expected =
           it == recount.end() ? std::array<int32_t, 5>{0, 0, 0, 0, 0} : it->second;
       const CellInfo& info = c->info();
-      if (info.crossings != expected[0] || info.ends[0] != expected[1] ||
-          info.ends[1] != expected[2] || info.ends[2] != expected[3] || info.ends[3] != expected[4]) {
+      if (info.crossings != expected[0] || info.spread[0] != expected[1] ||
+          info.spread[1] != expected[2] || info.spread[2] != expected[3] ||
+          info.spread[3] != expected[4]) {
         ++wrong;
       }
     }
@@ -1248,6 +1267,8 @@ void ManifoldOptions::Check() const {
   require(std::isfinite(free_threshold) && free_threshold > 0, "free-threshold", "must be positive");
   require(std::isfinite(steiner_margin) && steiner_margin > 0, "steiner-margin", "must be positive");
   require(steiner_grid >= 2 && steiner_grid <= 64, "steiner-grid", "must be in [2, 64]");
+  require(w2_rule == W2Rule::kCameraSide || w2_rule == W2Rule::kAllFaces, "w2-rule",
+          "must be camera-side or all-faces");
   require(shrink_neighbourhood == 0 || shrink_neighbourhood == 1, "shrink-neighbourhood",
           "must be 0 (face neighbours) or 1 (vertex neighbours)");
 }
@@ -1369,7 +1390,7 @@ struct ManifoldTestAccess {
     const Point b = impl.vertex_of_point_[target]->point();
     walked->clear();
     impl.Walk(impl.StartOf(0), a, impl.vertex_of_point_[target],
-              [&](const Cell_handle& c) { walked->push_back(manifold_internal::SortedIds(c)); });
+              [&](const Cell_handle& c, unsigned) { walked->push_back(manifold_internal::SortedIds(c)); });
     brute_force->clear();
     for (auto c = impl.dt_.finite_cells_begin(); c != impl.dt_.finite_cells_end(); ++c) {
       if (SegmentCrossesCell(c, a, b)) brute_force->push_back(manifold_internal::SortedIds(c));

@@ -6,53 +6,26 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <random>
 #include <set>
 
 #include "base/error.h"
 #include "coordinator/manifold_internal.h"
+#include "mesh/mesh_checker.h"
 
 namespace ms {
 namespace {
 
 using manifold_internal::CellVertices;
 
-// Closed, oriented 2-manifold check on the extracted mesh: every directed edge appears once
-// and its reverse once; every vertex's faces form one fan.
+// The independent checker (mesh/mesh_checker.h) reads only the mesh: "" when it is a closed,
+// oriented 2-manifold without self-intersections.
 std::string SurfaceProblems(const Mesh& mesh) {
-  std::map<std::pair<int, int>, int> directed;
-  for (const auto& f : mesh.faces) {
-    for (int i = 0; i < 3; ++i) ++directed[{f[i], f[(i + 1) % 3]}];
-  }
-  for (const auto& [edge, count] : directed) {
-    if (count != 1) return "directed edge used " + std::to_string(count) + " times";
-    if (!directed.count({edge.second, edge.first})) return "boundary edge";
-  }
-  // One fan per vertex: the faces around v, linked through shared edges, are connected.
-  std::vector<std::vector<int>> faces_of(mesh.vertices.size());
-  for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    for (int v : mesh.faces[f]) faces_of[v].push_back(static_cast<int>(f));
-  }
-  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
-    const auto& around = faces_of[v];
-    if (around.empty()) return "unreferenced vertex";
-    // Map: outgoing neighbour -> face; follow next around v.
-    std::map<int, int> next_of;  // for face (v, a, b): a -> b
-    for (int f : around) {
-      const auto& t = mesh.faces[f];
-      const int i = t[0] == static_cast<int>(v) ? 0 : t[1] == static_cast<int>(v) ? 1 : 2;
-      next_of[t[(i + 1) % 3]] = t[(i + 2) % 3];
-    }
-    int start = next_of.begin()->first, current = start;
-    size_t steps = 0;
-    do {
-      current = next_of.at(current);
-      ++steps;
-    } while (current != start && steps <= around.size());
-    if (steps != around.size()) return "vertex " + std::to_string(v) + " has more than one fan";
-  }
-  return "";
+  const MeshReport report = CheckMesh(mesh, MeshCheckOptions{});
+  if (report.is_closed_manifold) return "";
+  std::string problems;
+  for (const std::string& p : report.Problems()) problems += p + "; ";
+  return problems;
 }
 
 ManifoldCamera LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target) {

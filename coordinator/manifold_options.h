@@ -3,12 +3,22 @@
 
 namespace ms {
 
+// Which face neighbours of a crossed cell a viewing ray gives w2 to (docs/manifold.md).
+enum class W2Rule {
+  // Only neighbours on the camera's side of the shared face: between the camera and the
+  // crossed cell, never beyond it (behind the observed surface). The default.
+  kCameraSide,
+  // All four neighbours, per crossing: the paper's wording and the authors' code.
+  kAllFaces,
+};
+
 struct ManifoldOptions {
   // Ray tracing: every cell crossed by a camera->point segment gets w1, and each of its four
   // face neighbours gets w2 (per crossing). A cell is free space when weight >= t_w.
   double w1 = 4.0;              // paper: w_1 = 4.0
   double w2 = 0.5;              // paper: w_2 = 0.5
   double free_threshold = 4.0;  // paper: t_w = 4.0
+  W2Rule w2_rule = W2Rule::kCameraSide;
 
   // Steiner points on the faces of the bounding box of points and cameras, enlarged by
   // steiner_margin x its diagonal, so flat or tiny inputs still triangulate in 3D and every

@@ -1,0 +1,93 @@
+// `manisweep manifold`: the initial manifold alone (the paper's "initial mesh"), with timing
+// per step.
+#include <cstdio>
+#include <memory>
+
+#include "app/commands.h"
+#include "app/option_groups.h"
+#include "base/error.h"
+#include "base/log.h"
+#include "coordinator/delaunay_manifold.h"
+#include "coordinator/scene_rays.h"
+#include "mesh/mesh_checker.h"
+#include "mesh/mesh_io.h"
+#include "scene/scene_io.h"
+
+namespace ms::app {
+namespace {
+
+struct ManifoldCommandOptions {
+  std::string input;
+  std::string from = "auto";
+  std::string output;
+  bool ascii = false;
+  bool check = true;
+  ManifoldOptions manifold;
+};
+
+void RunManifold(const ManifoldCommandOptions& options) {
+  options.manifold.Check();
+  SceneReadOptions read_options;
+  const Scene scene = ReadScene(options.input, read_options, ParseSceneFormat(options.from));
+  if (scene.points.empty()) throw InputError(options.input + ": the scene has no points");
+  if (scene.NumObservations() == 0) {
+    throw InputError(options.input + ": no point has visibility (observations)");
+  }
+  Timer timer;
+  DelaunayManifold manifold(ManifoldCamerasFromScene(scene), options.manifold);
+  const BuildStats stats = manifold.Build(RayPointsFromScene(scene));
+  SurfaceInfo info;
+  const Mesh mesh = manifold.ExtractSurface(&info);
+  const double total = timer.Seconds();
+  MeshWriteOptions write_options;
+  write_options.binary = !options.ascii;
+  WriteMesh(mesh, options.output, write_options);
+  std::printf("initial manifold of %s\n", options.input.c_str());
+  std::printf("  points            %lld (+%lld Steiner, %lld merged duplicates)\n",
+              static_cast<long long>(stats.points), static_cast<long long>(stats.steiner_points),
+              static_cast<long long>(stats.merged_duplicates));
+  std::printf("  Delaunay          %lld cells, %.3f s\n", static_cast<long long>(stats.cells),
+              stats.seconds_triangulation);
+  std::printf("  ray tracing       %lld rays, %.1f cells per ray, %.3f s\n",
+              static_cast<long long>(stats.rays),
+              stats.rays ? static_cast<double>(stats.ray_cell_steps) / stats.rays : 0.0,
+              stats.seconds_ray_tracing);
+  std::printf("  growing           %lld of %lld free cells outside, %.3f s\n",
+              static_cast<long long>(stats.outside_cells),
+              static_cast<long long>(stats.free_cells), stats.seconds_growing);
+  std::printf("  surface           %zu vertices (%lld Steiner), %zu faces\n", mesh.NumVertices(),
+              static_cast<long long>(info.steiner_vertices), mesh.NumFaces());
+  std::printf("  total             %.3f s; wrote %s\n", total, options.output.c_str());
+  if (options.check) {
+    MeshCheckOptions check_options;
+    check_options.check_self_intersections = mesh.NumFaces() < 2000000;
+    const MeshReport report = CheckMesh(mesh, check_options);
+    std::printf("  check-mesh        %s\n",
+                report.is_closed_manifold ? "closed 2-manifold" : "NOT a closed 2-manifold");
+    if (!report.is_closed_manifold) {
+      for (const std::string& problem : report.Problems()) std::printf("    %s\n", problem.c_str());
+      throw InternalError("the extracted surface is not a closed 2-manifold");
+    }
+  }
+}
+
+}  // namespace
+
+void RegisterManifoldCommand(CLI::App& app) {
+  auto options = std::make_shared<ManifoldCommandOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "manifold",
+      "The initial manifold alone: Delaunay triangulation, visibility ray tracing and manifold "
+      "growing (paper section 2.1), with timing per step");
+  cmd->add_option("-i,--input", options->input, "scene with points and visibility")->required();
+  cmd->add_option("--from", options->from, "input format (see `manisweep convert --help`)")
+      ->capture_default_str();
+  cmd->add_option("-o,--output", options->output, "mesh to write (.ply or .obj)")->required();
+  cmd->add_flag("--ascii", options->ascii, "write ASCII PLY instead of binary");
+  cmd->add_flag("!--no-check", options->check,
+                "skip the independent manifold check of the result");
+  RegisterManifoldOptions(cmd, &options->manifold);
+  cmd->callback([options] { RunManifold(*options); });
+}
+
+}  // namespace ms::app
