@@ -1,7 +1,9 @@
 // Throughput of the manifold reconstruction steps (docs/performance.md):
-//   manifold_bench [points ...]            default: 10000 100000 1000000
+//   manifold_bench [points ...] [--insert=N] [--export=DIR]   default sizes: 10^4 10^5 10^6
 // For each size: Delaunay insertion, ray tracing (rays/s), growing (cells/s), peak memory per
-// point; then incremental insertion of 10^4 points near the surface (points/s).
+// point; then incremental insertion of N (default 10^4) points near the surface (points/s).
+// --export=DIR writes, per size, the input points (PLY, normals = mean unit direction to the
+// cameras that see each point, for the Poisson baseline) and the initial manifold.
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -10,16 +12,20 @@
 #include "base/log.h"
 #include "bench/bench_scenes.h"
 #include "coordinator/delaunay_manifold.h"
+#include "mesh/mesh_io.h"
 
 int main(int argc, char** argv) {
   ms::InitLogging("bench");
   spdlog::set_level(spdlog::level::warn);
   std::vector<int64_t> sizes;
   int64_t insert_count = 10000;
+  std::string export_dir;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg.rfind("--insert=", 0) == 0) {
       insert_count = std::stoll(arg.substr(9));
+    } else if (arg.rfind("--export=", 0) == 0) {
+      export_dir = arg.substr(9);
     } else {
       sizes.push_back(std::stoll(arg));
     }
@@ -36,6 +42,18 @@ int main(int argc, char** argv) {
     const ms::BuildStats stats = manifold.Build(scene.points);
     const double total = timer.Seconds();
     const int64_t rss = ms::bench::PeakRssBytes() - rss_before;
+    if (!export_dir.empty()) {
+      ms::PointCloud cloud;
+      for (const ms::RayPoint& p : scene.points) {
+        Eigen::Vector3d towards = Eigen::Vector3d::Zero();
+        for (int32_t c : p.cameras) towards += (scene.cameras[c].center - p.position).normalized();
+        cloud.points.push_back(p.position);
+        cloud.normals.push_back(towards.normalized());
+      }
+      const std::string stem = export_dir + "/blob_" + std::to_string(n);
+      ms::WritePointCloud(cloud, stem + "_points.ply");
+      ms::WriteMesh(manifold.ExtractSurface(), stem + "_manifold.ply");
+    }
     // Incremental: new points near the surface, as sweeping would find them.
     const ms::bench::ManifoldBenchScene more =
         ms::bench::MakeBlobScene(insert_count, 48, 3, 4242, 0.002);
