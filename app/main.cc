@@ -31,6 +31,10 @@ int main(int argc, char** argv) {
   ms::app::RegisterInfoCommand(app);
   ms::app::RegisterCheckMeshCommand(app);
   ms::app::RegisterSweepCommand(app);
+  ms::app::RegisterReconstructCommand(app);
+  ms::app::RegisterCoordinatorCommand(app);
+  ms::app::RegisterWorkerCommand(app);
+  ms::app::RegisterKeygenCommand(app);
 
   try {
     app.parse(argc, argv);
@@ -47,6 +51,8 @@ int main(int argc, char** argv) {
         std::fputs(app.help().c_str(), stdout);
       }
     }
+  } catch (const ms::app::CommandExit& e) {
+    return e.code();
   } catch (const CLI::CallForHelp&) {
     // --help on the app or a subcommand: print the help of the one asked.
     const CLI::App* target = &app;

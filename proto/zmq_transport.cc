@@ -248,7 +248,11 @@ class ZmqServer : public ServerTransport {
       // Refusals by ZAP are logged by HandleZap; the others mean a peer with a wrong server
       // key (CURVE) or a peer that does not speak ZMTP.
       if (event == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) continue;
-      spdlog::warn("connection from {}: {} (code {}){}", address, EventName(event), value,
+      // A peer that hangs up during the handshake (value = errno) is noise without CURVE.
+      const auto level = event == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL && !zap_
+                             ? spdlog::level::debug
+                             : spdlog::level::warn;
+      spdlog::log(level, "connection from {}: {} (code {}){}", address, EventName(event), value,
                    zap_ ? ": a worker with a wrong --curve-server-key, or without CURVE?" : "");
     }
   }
@@ -268,7 +272,7 @@ class ZmqClient : public ClientTransport {
  public:
   explicit ZmqClient(const ZmqClientOptions& options)
       : context_(1), dealer_(context_, zmq::socket_type::dealer) {
-    dealer_.set(zmq::sockopt::linger, 1000);
+    dealer_.set(zmq::sockopt::linger, 200);  // reconnecting must not wait long
     dealer_.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(std::min<uint64_t>(
                                               2 * options.max_message_bytes, INT64_MAX)));
     if (!options.curve_server_key_file.empty()) {
