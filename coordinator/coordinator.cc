@@ -197,7 +197,7 @@ class Coordinator::Impl {
                      options_.scheduler.liveness * options_.scheduler.heartbeat_interval_s);
       }
       for (uint64_t job : expiry.requeued) {
-        spdlog::warn("job {} (camera {}) goes back to the queue", job, JobIdCamera(job));
+        spdlog::warn("job {} (camera {}) goes back to the queue", JobName(job), JobIdCamera(job));
       }
       for (const std::string& peer : scheduler_.DueHeartbeats(now)) {
         wire::Envelope envelope = stamper_.New();
@@ -288,7 +288,7 @@ class Coordinator::Impl {
       wire::Envelope envelope = stamper_.New();
       *envelope.mutable_job() = jobs_.at(a.job_id);
       transport_->Send(a.peer, Serialize(envelope));
-      spdlog::debug("job {} (camera {}) -> {}{}", a.job_id, JobIdCamera(a.job_id), PeerTag(a.peer),
+      spdlog::debug("job {} -> {}{}", JobName(a.job_id), PeerTag(a.peer),
                     a.attempt > 1 ? fmt::format(" (attempt {})", a.attempt) : "");
     }
     if (scheduler_.exhausted_job()) {
@@ -334,9 +334,8 @@ class Coordinator::Impl {
       return;
     }
     if (status != DecodeStatus::kOk) {
-      junk_.Warn(DecodeStatusName(status),
-                 fmt::format("dropped a {} message from {}: {}", DecodeStatusName(status), who,
-                             problem));
+      junk_.Warn(DecodeStatusName(status), fmt::format("dropped a message from {} ({}): {}", who,
+                                                       DecodeStatusName(status), problem));
       return;
     }
     const double now = Now();
@@ -442,22 +441,22 @@ class Coordinator::Impl {
       // A result for a coordinator before a restart: only the worker's state matters.
       scheduler_.OnResult(peer, sender, kForeignJob, now);
       spdlog::info("ignored a result of another session from worker {} (job {})", sender,
-                   result.job_id());
+                   JobName(result.job_id()));
       return;
     }
     std::vector<FoundPoint> points;
     const std::string problem = ValidatePoints(result, &points);
     if (!problem.empty()) {
       junk_.Warn("result", fmt::format("dropped the result of job {} from worker {}: {}",
-                                       result.job_id(), sender, problem));
+                                       JobName(result.job_id()), sender, problem));
       last_failure_[result.job_id()] = "malformed result: " + problem;
       scheduler_.OnWorkerFailure(peer, sender, result.job_id(), now);
       return;
     }
     const JobScheduler::Outcome outcome = scheduler_.OnResult(peer, sender, result.job_id(), now);
     if (outcome == JobScheduler::Outcome::kAccepted) {
-      spdlog::debug("job {} (camera {}): {} points from worker {} ({:.2f} s)", result.job_id(),
-                    JobIdCamera(result.job_id()), points.size(), sender, result.sweep_seconds());
+      spdlog::debug("job {}: {} points from worker {} ({:.2f} s)", JobName(result.job_id()),
+                    points.size(), sender, result.sweep_seconds());
       kernel_seconds_[sender] += result.sweep_seconds();
       points_by_worker_[sender] += static_cast<int64_t>(points.size());
       results_[result.job_id()] = std::move(points);
@@ -465,7 +464,7 @@ class Coordinator::Impl {
     } else {
       spdlog::info("ignored a {} result of job {} from worker {}",
                    outcome == JobScheduler::Outcome::kDuplicate ? "duplicate" : "late",
-                   result.job_id(), sender);
+                   JobName(result.job_id()), sender);
     }
   }
 
@@ -490,8 +489,8 @@ class Coordinator::Impl {
       return;
     }
     last_failure_[error.job_id()] = fmt::format("worker {}: {}", sender, error.message());
-    spdlog::warn("worker {} failed on job {} (camera {}): {}", sender, error.job_id(),
-                 JobIdCamera(error.job_id()), error.message());
+    spdlog::warn("worker {} failed on job {}: {}", sender, JobName(error.job_id()),
+                 error.message());
     scheduler_.OnWorkerFailure(peer, sender, error.job_id(), now);
   }
 

@@ -74,5 +74,9 @@ inline uint64_t MakeJobId(uint32_t iteration, uint32_t camera) {
 }
 inline uint32_t JobIdIteration(uint64_t job_id) { return static_cast<uint32_t>(job_id >> 32); }
 inline uint32_t JobIdCamera(uint64_t job_id) { return static_cast<uint32_t>(job_id & 0xffffffffu); }
+// "3/12": iteration 3, camera 12 (for logs).
+inline std::string JobName(uint64_t job_id) {
+  return std::to_string(JobIdIteration(job_id)) + "/" + std::to_string(JobIdCamera(job_id));
+}
 
 }  // namespace ms

@@ -201,7 +201,7 @@ class Worker::Impl {
   }
 
   void FailCurrent(wire::Error::Code code, const std::string& message) {
-    spdlog::warn("job {}: {}", current_->job.job_id(), message);
+    spdlog::warn("job {}: {}", JobName(current_->job.job_id()), message);
     SendError(code, current_->job.job_id(), current_->job.session_id(), message);
     ++summary_.failed_jobs;
     phase_ = Phase::kIdle;
@@ -257,8 +257,9 @@ class Worker::Impl {
     Current& c = *current_;
     c.received_at = Now();
     c.job = std::move(job);
-    const std::string what = fmt::format("job {} (iteration {}, camera {})", c.job.job_id(),
-                                         c.job.iteration(), c.job.camera().id());
+    const std::string what = fmt::format("job {} (iteration {}, camera {})",
+                                         JobName(c.job.job_id()), c.job.iteration(),
+                                         c.job.camera().id());
     phase_ = Phase::kFetching;
     try {
       c.sweep.camera.id = c.job.camera().id();
@@ -278,8 +279,8 @@ class Worker::Impl {
       FailCurrent(wire::Error::BAD_JOB, e.what());
       return;
     }
-    spdlog::debug("{}: {} neighbours, {} faces", what, c.sweep.neighbours.size(),
-                  c.sweep.mesh.NumFaces());
+    spdlog::info("{} started: {} neighbours, {} faces", what, c.sweep.neighbours.size(),
+                 c.sweep.mesh.NumFaces());
     for (const ImageRef& ref : c.refs) c.paths.push_back(cache_.Locate(ref));
     c.fetch = 0;
     NextFetchOrCompute();
@@ -412,7 +413,7 @@ class Worker::Impl {
       result->Swap(outcome_.mutable_result());
       result->set_total_seconds(Now() - c.received_at);
       spdlog::info("job {} (iteration {}, camera {}): {} points; images {:.2f} s, sweep {:.2f} s",
-                   c.job.job_id(), c.job.iteration(), c.job.camera().id(),
+                   JobName(c.job.job_id()), c.job.iteration(), c.job.camera().id(),
                    result->points_size(), result->images_seconds(), result->sweep_seconds());
       ++summary_.jobs;
       summary_.points += result->points_size();
@@ -421,7 +422,7 @@ class Worker::Impl {
       error->Swap(outcome_.mutable_error());
       error->set_job_id(c.job.job_id());
       error->set_session_id(c.job.session_id());
-      spdlog::warn("job {} failed: {}", c.job.job_id(), error->message());
+      spdlog::warn("job {} failed: {}", JobName(c.job.job_id()), error->message());
       ++summary_.failed_jobs;
     }
     Send(envelope);
