@@ -20,8 +20,9 @@ namespace {
 std::atomic<int> g_stop_signal{0};
 
 void OnStopSignal(int sig) {
-  if (g_stop_signal.exchange(sig) != 0) {
-    // Second signal: default action, now.
+  // A second Ctrl-C kills at once. Repeated SIGTERMs do not: batch systems send one to every
+  // process of a job and scripts often forward another.
+  if (g_stop_signal.exchange(sig) != 0 && sig == SIGINT) {
     ::signal(sig, SIG_DFL);
     ::raise(sig);
   }

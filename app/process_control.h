@@ -10,7 +10,7 @@
 
 namespace ms::app {
 
-// SIGINT and SIGTERM set a flag instead of killing the process; a second one restores the
+// SIGINT and SIGTERM set a flag instead of killing the process; a second SIGINT restores the
 // default action (a second Ctrl-C kills at once). SIGPIPE is ignored.
 void InstallStopSignals();
 bool StopRequested();
