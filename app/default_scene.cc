@@ -41,17 +41,15 @@ std::string WritePyramidSceneFiles(const std::string& directory,
     CommitTempFile(temp.string() + ".png", view.image_path);
     scene.views.push_back(view);
   }
-  for (const Eigen::Vector3d& corner :
-       {Eigen::Vector3d(-1, -1, 0), Eigen::Vector3d(1, -1, 0), Eigen::Vector3d(1, 1, 0),
-        Eigen::Vector3d(-1, 1, 0)}) {
+  for (const Eigen::Vector3d& corner : {Eigen::Vector3d(-1, -1, 0), Eigen::Vector3d(1, -1, 0),
+                                        Eigen::Vector3d(1, 1, 0), Eigen::Vector3d(-1, 1, 0)}) {
     ScenePoint point;
     point.position = corner;
     for (size_t v = 0; v < scene.views.size(); ++v) {
       Eigen::Vector2d pixel;
       if (!scene.views[v].Project(corner, &pixel)) continue;
-      point.observations.push_back(Observation{static_cast<int32_t>(v),
-                                               static_cast<float>(pixel.x()),
-                                               static_cast<float>(pixel.y())});
+      point.observations.push_back(Observation{
+          static_cast<int32_t>(v), static_cast<float>(pixel.x()), static_cast<float>(pixel.y())});
     }
     scene.points.push_back(point);
   }

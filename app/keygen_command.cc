@@ -19,9 +19,10 @@ void RunKeygen(const KeygenOptions& options) {
   RequireCurve("keygen");
   const CurveKeyPair keys = GenerateCurveKeyPair();
   WriteCurveKeyFiles(keys, options.output, options.force);
-  spdlog::info("wrote {0}.key (public: give it to the other side) and {0}.key_secret (secret, "
-               "mode 600)",
-               options.output);
+  spdlog::info(
+      "wrote {0}.key (public: give it to the other side) and {0}.key_secret (secret, "
+      "mode 600)",
+      options.output);
 }
 
 }  // namespace
@@ -29,8 +30,9 @@ void RunKeygen(const KeygenOptions& options) {
 void RegisterKeygenCommand(CLI::App& app) {
   auto options = std::make_shared<KeygenOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "keygen", "Make a ZeroMQ CURVE key pair (NAME.key, NAME.key_secret) for `coordinator` "
-                "and `worker`");
+      "keygen",
+      "Make a ZeroMQ CURVE key pair (NAME.key, NAME.key_secret) for `coordinator` "
+      "and `worker`");
   cmd->add_option("-o,--output", options->output, "NAME: writes NAME.key and NAME.key_secret")
       ->required();
   cmd->add_flag("--force", options->force, "replace existing files");

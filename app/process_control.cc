@@ -86,8 +86,7 @@ bool ReapIfExited(pid_t pid, std::string* how) {
 int StopChildren(const std::vector<pid_t>& pids, double grace_s) {
   std::vector<pid_t> alive = pids;
   auto reap = [&](double wait_s) {
-    const auto deadline =
-        std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_s);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_s);
     while (!alive.empty()) {
       for (auto it = alive.begin(); it != alive.end();) {
         int status = 0;

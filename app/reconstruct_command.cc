@@ -99,9 +99,10 @@ void RunReconstruct(ReconstructCommandOptions& options) {
   if (run.input.empty() && !(run.resume && have_checkpoint)) {
     const std::string dir = (fs::path(run.output_dir) / "default_scene").string();
     run.input = MakeDefaultScene(dir);
-    spdlog::info("no --input: reconstructing the embedded default scene (a synthetic textured "
-                 "pyramid) written to {}",
-                 dir);
+    spdlog::info(
+        "no --input: reconstructing the embedded default scene (a synthetic textured "
+        "pyramid) written to {}",
+        dir);
   }
   run.Check();
   InstallStopSignals();
@@ -116,17 +117,25 @@ void RunReconstruct(ReconstructCommandOptions& options) {
   const int threads =
       options.worker_threads > 0 ? options.worker_threads : std::max(1, cores / workers);
   const spdlog::level::level_enum level = spdlog::get_level();
-  const std::string worker_level =
-      level <= spdlog::level::debug ? std::string(spdlog::level::to_string_view(level).data())
-                                    : "warn";
+  const std::string worker_level = level <= spdlog::level::debug
+                                       ? std::string(spdlog::level::to_string_view(level).data())
+                                       : "warn";
   const SchedulerOptions& s = run.scheduler;
   const double give_up = std::max(30.0, 10 * s.liveness * s.heartbeat_interval_s);
-  const std::vector<std::string> worker_args = {
-      "--log-level", worker_level, "worker", "--connect", transport->Endpoint(), "--kernel",
-      options.kernel, "--threads", std::to_string(threads), "--heartbeat-interval",
-      std::to_string(s.heartbeat_interval_s), "--liveness", std::to_string(s.liveness),
-      "--give-up-after", std::to_string(give_up), "--max-message-mb",
-      std::to_string(options.max_message_mb)};
+  // Option/value pairs; the workers use the coordinator's heartbeat settings and message limit.
+  const std::vector<std::pair<std::string, std::string>> worker_options = {
+      {"--connect", transport->Endpoint()},
+      {"--kernel", options.kernel},
+      {"--threads", std::to_string(threads)},
+      {"--heartbeat-interval", std::to_string(s.heartbeat_interval_s)},
+      {"--liveness", std::to_string(s.liveness)},
+      {"--give-up-after", std::to_string(give_up)},
+      {"--max-message-mb", std::to_string(options.max_message_mb)}};
+  std::vector<std::string> worker_args = {"--log-level", worker_level, "worker"};
+  for (const auto& [option, value] : worker_options) {
+    worker_args.push_back(option);
+    worker_args.push_back(value);
+  }
   spdlog::info("starting {} worker processes ({} kernel threads each) on {}", workers, threads,
                transport->Endpoint());
   WorkerPool pool(worker_args, workers,
@@ -159,11 +168,12 @@ void RunReconstruct(ReconstructCommandOptions& options) {
     spdlog::warn("interrupted; continue with the same command and --resume");
     throw CommandExit(kExitInterrupted);
   }
-  spdlog::info("done: {} ({} vertices, {} faces, {}), {} iterations; statistics in {}/run.h5 "
-               "and {}/summary.json",
-               result.final_mesh, result.vertices, result.faces,
-               result.final_is_closed_manifold ? "closed 2-manifold" : "NOT a closed manifold",
-               result.iterations, run.output_dir, run.output_dir);
+  spdlog::info(
+      "done: {} ({} vertices, {} faces, {}), {} iterations; statistics in {}/run.h5 "
+      "and {}/summary.json",
+      result.final_mesh, result.vertices, result.faces,
+      result.final_is_closed_manifold ? "closed 2-manifold" : "NOT a closed manifold",
+      result.iterations, run.output_dir, run.output_dir);
 }
 
 }  // namespace
@@ -181,13 +191,13 @@ void RegisterReconstructCommand(CLI::App& app) {
   cmd->add_option("-o,--output", options->run.output_dir,
                   "output directory: initial.ply, final.ply, run.h5, summary.json")
       ->capture_default_str();
-  cmd->add_option("-w,--workers", options->workers,
-                  "worker processes (0 = one per core)")
+  cmd->add_option("-w,--workers", options->workers, "worker processes (0 = one per core)")
       ->capture_default_str();
   cmd->add_option("--worker-threads", options->worker_threads,
                   "kernel threads per worker (0 = cores / workers)")
       ->capture_default_str();
-  cmd->add_option("--kernel", options->kernel, "sweep kernel of the workers (auto, reference, glsl)")
+  cmd->add_option("--kernel", options->kernel,
+                  "sweep kernel of the workers (auto, reference, glsl)")
       ->capture_default_str();
   cmd->add_option("--max-restarts", options->max_restarts,
                   "restarts of workers that die (-1 = twice the number of workers)")

@@ -40,8 +40,8 @@ void RunWorker(WorkerCommandOptions& options) {
   WorkerOptions& w = options.worker;
   w.limits.max_message_bytes =
       static_cast<uint64_t>(std::llround(options.max_message_mb * 1048576));
-  w.limits.image_chunk_bytes = std::min<uint64_t>(w.limits.image_chunk_bytes,
-                                                  w.limits.max_message_bytes / 2);
+  w.limits.image_chunk_bytes =
+      std::min<uint64_t>(w.limits.image_chunk_bytes, w.limits.max_message_bytes / 2);
   w.cache.memory_bytes = static_cast<uint64_t>(options.image_cache_mb * 1048576);
   w.Check();
   if (options.threads > 0) cv::setNumThreads(options.threads);
@@ -58,10 +58,12 @@ void RunWorker(WorkerCommandOptions& options) {
   }
   if (!client.curve_secret_key_file.empty()) ReadCurveKeyFile(client.curve_secret_key_file, true);
   InstallStopSignals();
-  Worker worker(w, [client] { return MakeZmqClient(client); }, std::move(kernel));
+  Worker worker(
+      w, [client] { return MakeZmqClient(client); }, std::move(kernel));
   InitLogging("worker " + worker.id());
   spdlog::info("worker {} connecting to {} (kernel {}, image cache {})", worker.id(),
-               options.connect, options.kernel, w.cache.directory.empty() ? "default" : w.cache.directory);
+               options.connect, options.kernel,
+               w.cache.directory.empty() ? "default" : w.cache.directory);
   const WorkerSummary summary = worker.Run([] { return StopRequested(); });
   if (summary.exit_reason == "stopped by signal") throw CommandExit(kExitInterrupted);
 }

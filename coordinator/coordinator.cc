@@ -32,8 +32,7 @@ namespace {
 constexpr uint64_t kForeignJob = std::numeric_limits<uint64_t>::max();
 
 double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 // A point returned by a worker, validated.
@@ -100,8 +99,10 @@ class JunkLog {
   void Warn(const std::string& kind, const std::string& line) {
     const int64_t n = ++counts_[kind];
     if (n <= 5 || n % 1000 == 0) {
-      spdlog::warn("{}{}", line, n == 5 ? " (further ones of this kind are logged every 1000th)"
-                                        : n > 5 ? fmt::format(" ({} so far)", n) : "");
+      spdlog::warn("{}{}", line,
+                   n == 5  ? " (further ones of this kind are logged every 1000th)"
+                   : n > 5 ? fmt::format(" ({} so far)", n)
+                           : "");
     }
   }
 
@@ -115,8 +116,7 @@ void CoordinatorOptions::Check() const {
   if (output_dir.empty()) throw InputError("output_dir: required (--output)");
   if (input.empty() && !resume) throw InputError("input: required (--input) unless --resume");
   if (max_iterations < 0 || max_iterations > 1000) {
-    throw InputError("max_iterations: must be in [0, 1000], got " +
-                     std::to_string(max_iterations));
+    throw InputError("max_iterations: must be in [0, 1000], got " + std::to_string(max_iterations));
   }
   if (!(progress_interval_s > 0)) throw InputError("progress_interval_s: must be positive");
   manifold.Check();
@@ -140,7 +140,9 @@ std::string OptionsFingerprint(const CoordinatorOptions& o) {
 class Coordinator::Impl {
  public:
   Impl(const CoordinatorOptions& options, ServerTransport* transport)
-      : options_(options), transport_(transport), scheduler_(options.scheduler),
+      : options_(options),
+        transport_(transport),
+        scheduler_(options.scheduler),
         stamper_("coordinator") {
     options_.Check();
     std::random_device random;
@@ -305,9 +307,8 @@ class Coordinator::Impl {
     int64_t found = 0;
     for (const auto& [id, points] : results_) found += static_cast<int64_t>(points.size());
     spdlog::info("iteration {}: {}/{} jobs done, {} running, {} workers, {} points found, {:.1f} s",
-                 iteration_, scheduler_.num_done(), scheduler_.num_jobs(),
-                 scheduler_.num_running(), scheduler_.num_workers(), found,
-                 Now() - sweep_started_);
+                 iteration_, scheduler_.num_done(), scheduler_.num_jobs(), scheduler_.num_running(),
+                 scheduler_.num_workers(), found, Now() - sweep_started_);
   }
 
   void Handle(const PeerMessage& message) {
@@ -376,8 +377,8 @@ class Coordinator::Impl {
           reply.mutable_image_response()->set_error("the coordinator is still starting");
         }
         if (!reply.image_response().found()) {
-          spdlog::warn("worker {} asked for image {}: {}", sender,
-                       HashHex(request.content_hash()), reply.image_response().error());
+          spdlog::warn("worker {} asked for image {}: {}", sender, HashHex(request.content_hash()),
+                       reply.image_response().error());
         } else if (request.offset() == 0) {
           spdlog::info("sending image {} ({} bytes) to worker {}", HashHex(request.content_hash()),
                        reply.image_response().total_size(), sender);
@@ -397,9 +398,10 @@ class Coordinator::Impl {
     if (kernel_.empty()) {
       kernel_ = kernel;
     } else if (kernel != kernel_ && warned_kernels_.insert(kernel).second) {
-      spdlog::warn("worker {} uses the {} kernel, others {}: the result then depends on which "
-                   "worker swept which camera",
-                   worker, kernel, kernel_);
+      spdlog::warn(
+          "worker {} uses the {} kernel, others {}: the result then depends on which "
+          "worker swept which camera",
+          worker, kernel, kernel_);
     }
   }
 
@@ -482,9 +484,10 @@ class Coordinator::Impl {
           JobScheduler::Outcome::kAccepted) {
         ++bad_jobs_;
         results_[error.job_id()];  // no points from this camera
-        spdlog::warn("camera {}: the kernel refused its job ({}); it gives no points this "
-                     "iteration",
-                     JobIdCamera(error.job_id()), error.message());
+        spdlog::warn(
+            "camera {}: the kernel refused its job ({}); it gives no points this "
+            "iteration",
+            JobIdCamera(error.job_id()), error.message());
       }
       return;
     }
@@ -526,7 +529,8 @@ class Coordinator::Impl {
     if (resuming) {
       record_ = ReadRunFile(run_file);
       if (record_.options_fingerprint != fingerprint) {
-        throw InputError(run_file + ": the run was made with other options (manifold, sweep, "
+        throw InputError(run_file +
+                         ": the run was made with other options (manifold, sweep, "
                          "neighbour or visible-mesh options differ); resume with the same ones");
       }
       if (!options_.input.empty() && SceneFingerprint(input) != record_.scene_fingerprint) {
@@ -562,8 +566,8 @@ class Coordinator::Impl {
       for (int i = 0; i < record_.completed_iterations(); ++i) {
         Timer replay;
         const InsertionStats s = manifold_->Insert(record_.batches[i]);
-        spdlog::info("replayed iteration {}: {} of {} points inserted, {:.2f} s", i + 1,
-                     s.inserted, s.requested, replay.Seconds());
+        spdlog::info("replayed iteration {}: {} of {} points inserted, {:.2f} s", i + 1, s.inserted,
+                     s.requested, replay.Seconds());
         if (s.inserted != record_.iterations[i + 1].points_inserted) {
           throw InputError(fmt::format(
               "{}: replaying iteration {} inserted {} points where the run inserted {}: the "
@@ -651,8 +655,8 @@ class Coordinator::Impl {
       row.seconds_kernel += w.seconds_kernel;
       record_.workers.push_back(w);
     }
-    row.seconds_total = row.seconds_jobs + row.seconds_sweep + row.seconds_insert +
-                        row.seconds_extract;
+    row.seconds_total =
+        row.seconds_jobs + row.seconds_sweep + row.seconds_insert + row.seconds_extract;
     record_.batches.push_back(std::move(batch));
     record_.iterations.push_back(row);
     Checkpoint();

@@ -25,10 +25,10 @@
 namespace ms {
 
 struct CoordinatorOptions {
-  std::string input;       // the scene (any format ReadScene reads); optional with resume
-  std::string output_dir;  // initial.ply, final.ply, run.h5, summary.json (run_store.h)
-  bool resume = false;     // continue from output_dir/run.h5 (start afresh if there is none)
-  int max_iterations = 15;           // it_max of the paper
+  std::string input;        // the scene (any format ReadScene reads); optional with resume
+  std::string output_dir;   // initial.ply, final.ply, run.h5, summary.json (run_store.h)
+  bool resume = false;      // continue from output_dir/run.h5 (start afresh if there is none)
+  int max_iterations = 15;  // it_max of the paper
   bool save_iteration_meshes = false;  // iteration_NN.ply after every iteration
   ManifoldOptions manifold;
   NeighbourOptions neighbours;
@@ -37,7 +37,7 @@ struct CoordinatorOptions {
   SchedulerOptions scheduler;
   WireLimits limits;
   double progress_interval_s = 5;  // progress lines while sweeping
-  void Check() const;  // throws InputError naming the field
+  void Check() const;              // throws InputError naming the field
 };
 
 struct CoordinatorResult {

@@ -26,8 +26,8 @@ ImageCatalog::ImageCatalog(const Scene& scene) {
   for (size_t v = 0; v < scene.views.size(); ++v) {
     const View& view = scene.views[v];
     if (view.image_path.empty()) {
-      throw InputError(fmt::format("{}: view {} ('{}') has no image file", scene.source, v,
-                                   view.name));
+      throw InputError(
+          fmt::format("{}: view {} ('{}') has no image file", scene.source, v, view.name));
     }
     std::error_code ec;
     const std::string path = fs::absolute(view.image_path, ec).lexically_normal().string();
@@ -74,8 +74,8 @@ void ImageCatalog::Serve(uint64_t hash, uint64_t offset, uint64_t max_bytes, uin
     response->set_error(record.path + " changed since the coordinator hashed it");
     return;
   }
-  const uint64_t n = std::min({record.size - offset, std::max<uint64_t>(max_bytes, 1),
-                               chunk_limit});
+  const uint64_t n =
+      std::min({record.size - offset, std::max<uint64_t>(max_bytes, 1), chunk_limit});
   std::string* data = response->mutable_data();
   data->resize(n);
   std::ifstream in(record.path, std::ios::binary);
@@ -89,8 +89,9 @@ void ImageCatalog::Serve(uint64_t hash, uint64_t offset, uint64_t max_bytes, uin
   response->set_found(true);
 }
 
-IterationJobs BuildIterationJobs(const Scene& scene, const std::vector<std::vector<int>>& neighbours,
-                                 const Mesh& mesh, const ImageCatalog& images, uint32_t iteration,
+IterationJobs BuildIterationJobs(const Scene& scene,
+                                 const std::vector<std::vector<int>>& neighbours, const Mesh& mesh,
+                                 const ImageCatalog& images, uint32_t iteration,
                                  uint64_t session_id, const JobBuildOptions& options) {
   IterationJobs result;
   auto set_image = [&](int v, wire::JobCamera* camera) {

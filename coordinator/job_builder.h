@@ -52,7 +52,7 @@ struct JobBuildOptions {
 };
 
 struct IterationJobs {
-  std::vector<wire::Job> jobs;  // by camera id
+  std::vector<wire::Job> jobs;       // by camera id
   std::vector<std::string> skipped;  // "camera 3: no neighbour" ...
   int64_t faces = 0;                 // visible faces over all jobs
   uint64_t bytes = 0;                // serialized size of all jobs
@@ -60,8 +60,9 @@ struct IterationJobs {
 
 // One job per camera that has neighbours and sees at least one face. Throws InputError if a
 // job would exceed limits.max_message_bytes (naming the camera and the option to raise).
-IterationJobs BuildIterationJobs(const Scene& scene, const std::vector<std::vector<int>>& neighbours,
-                                 const Mesh& mesh, const ImageCatalog& images, uint32_t iteration,
+IterationJobs BuildIterationJobs(const Scene& scene,
+                                 const std::vector<std::vector<int>>& neighbours, const Mesh& mesh,
+                                 const ImageCatalog& images, uint32_t iteration,
                                  uint64_t session_id, const JobBuildOptions& options);
 
 }  // namespace ms

@@ -217,15 +217,13 @@ std::vector<JobScheduler::Assignment> JobScheduler::Assign(double now) {
 }
 
 size_t JobScheduler::num_pending() const {
-  return static_cast<size_t>(std::count_if(jobs_.begin(), jobs_.end(), [](const auto& j) {
-    return j.second.state == State::kPending;
-  }));
+  return static_cast<size_t>(std::count_if(
+      jobs_.begin(), jobs_.end(), [](const auto& j) { return j.second.state == State::kPending; }));
 }
 
 size_t JobScheduler::num_running() const {
-  return static_cast<size_t>(std::count_if(jobs_.begin(), jobs_.end(), [](const auto& j) {
-    return j.second.state == State::kRunning;
-  }));
+  return static_cast<size_t>(std::count_if(
+      jobs_.begin(), jobs_.end(), [](const auto& j) { return j.second.state == State::kRunning; }));
 }
 
 std::vector<std::string> JobScheduler::peers() const {

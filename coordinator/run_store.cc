@@ -84,8 +84,8 @@ void WriteTable(H5File& file, const std::string& table, const std::vector<Column
 }
 
 template <typename Row, typename T>
-void ReadColumnInto(const H5File& file, const std::string& table, const char* name,
-                    T Row::*member, std::vector<Row>* rows) {
+void ReadColumnInto(const H5File& file, const std::string& table, const char* name, T Row::*member,
+                    std::vector<Row>* rows) {
   const std::vector<T> values = file.ReadColumn<T>(table, name);
   rows->resize(values.size());
   for (size_t i = 0; i < values.size(); ++i) (*rows)[i].*member = values[i];
@@ -153,8 +153,8 @@ RunRecord ReadRunFile(const std::string& path) {
   };
   if (!file.IsGroup("/checkpoint") || !file.HasAttribute("/checkpoint", "format") ||
       file.ReadStringAttribute("/checkpoint", "format") != kRunFormat) {
-    throw InputError(path + ": not a manisweep run file (no /checkpoint of format " +
-                     kRunFormat + ")");
+    throw InputError(path + ": not a manisweep run file (no /checkpoint of format " + kRunFormat +
+                     ")");
   }
   const int64_t version = file.ReadIntAttribute("/checkpoint", "format_version");
   if (version != kRunFormatVersion) {
@@ -258,25 +258,25 @@ void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
   j["iterations_completed"] = record.completed_iterations();
   json rows = json::array();
   for (const IterationStats& s : record.iterations) {
-    rows.push_back({{"iteration", s.iteration},
-                    {"jobs", s.jobs},
-                    {"jobs_bad", s.jobs_bad},
-                    {"jobs_requeued", s.jobs_requeued},
-                    {"cameras_skipped", s.cameras_skipped},
-                    {"workers", s.workers},
-                    {"points_found", s.points_found},
-                    {"points_inserted", s.points_inserted},
-                    {"points_discarded",
-                     s.discarded_conflict + s.discarded_duplicate + s.discarded_outside},
-                    {"vertices", s.vertices},
-                    {"faces", s.faces},
-                    {"seconds_jobs", s.seconds_jobs},
-                    {"seconds_sweep", s.seconds_sweep},
-                    {"seconds_kernel", s.seconds_kernel},
-                    {"seconds_insert", s.seconds_insert},
-                    {"seconds_extract", s.seconds_extract},
-                    {"seconds_checkpoint", s.seconds_checkpoint},
-                    {"seconds_total", s.seconds_total}});
+    rows.push_back(
+        {{"iteration", s.iteration},
+         {"jobs", s.jobs},
+         {"jobs_bad", s.jobs_bad},
+         {"jobs_requeued", s.jobs_requeued},
+         {"cameras_skipped", s.cameras_skipped},
+         {"workers", s.workers},
+         {"points_found", s.points_found},
+         {"points_inserted", s.points_inserted},
+         {"points_discarded", s.discarded_conflict + s.discarded_duplicate + s.discarded_outside},
+         {"vertices", s.vertices},
+         {"faces", s.faces},
+         {"seconds_jobs", s.seconds_jobs},
+         {"seconds_sweep", s.seconds_sweep},
+         {"seconds_kernel", s.seconds_kernel},
+         {"seconds_insert", s.seconds_insert},
+         {"seconds_extract", s.seconds_extract},
+         {"seconds_checkpoint", s.seconds_checkpoint},
+         {"seconds_total", s.seconds_total}});
   }
   j["iterations"] = rows;
   json workers = json::object();
@@ -300,7 +300,8 @@ void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
                        {"check", info.mesh_check}};
   }
   j["seconds_this_process"] = info.seconds;
-  WriteFileAtomically(path, [&](std::ostream& out) { out << j.dump(2) << "\n"; }, false);
+  WriteFileAtomically(
+      path, [&](std::ostream& out) { out << j.dump(2) << "\n"; }, false);
 }
 
 }  // namespace ms

@@ -78,15 +78,14 @@ RunRecord ReadRunFile(const std::string& path);
 
 // summary.json: scene, options, per-iteration statistics, worker counts, final mesh.
 struct RunSummaryInfo {
-  std::string status;        // "running", "finished", "interrupted", "failed"
-  std::string input;         // the scene file
-  std::string final_mesh;    // path, when finished
-  std::string mesh_check;    // one line from CheckMesh of the final mesh
+  std::string status;      // "running", "finished", "interrupted", "failed"
+  std::string input;       // the scene file
+  std::string final_mesh;  // path, when finished
+  std::string mesh_check;  // one line from CheckMesh of the final mesh
   bool final_is_closed_manifold = false;
-  double seconds = 0;        // wall time of this process
+  double seconds = 0;  // wall time of this process
   bool resumed = false;
 };
-void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
-                      const std::string& path);
+void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info, const std::string& path);
 
 }  // namespace ms

@@ -74,8 +74,7 @@ std::unique_ptr<ClientTransport> InMemoryNetwork::Connect() {
   return std::make_unique<InMemoryClient>(shared_from_this(), peer);
 }
 
-bool InMemoryNetwork::Pop(std::deque<PeerMessage>* queue, double timeout_s,
-                          PeerMessage* message) {
+bool InMemoryNetwork::Pop(std::deque<PeerMessage>* queue, double timeout_s, PeerMessage* message) {
   std::unique_lock<std::mutex> lock(mutex_);
   const auto deadline = std::chrono::steady_clock::now() +
                         std::chrono::microseconds(static_cast<int64_t>(timeout_s * 1e6));

@@ -1,3 +1,5 @@
+#include "proto/transport.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -5,7 +7,6 @@
 #include <thread>
 
 #include "base/error.h"
-#include "proto/transport.h"
 #include "proto/zmq_transport.h"
 
 namespace ms {

@@ -50,11 +50,16 @@ void WireLimits::Check() const {
 
 const char* DecodeStatusName(DecodeStatus status) {
   switch (status) {
-    case DecodeStatus::kOk: return "ok";
-    case DecodeStatus::kOversized: return "oversized";
-    case DecodeStatus::kMalformed: return "malformed";
-    case DecodeStatus::kWrongVersion: return "wrong protocol version";
-    case DecodeStatus::kNoBody: return "no body";
+    case DecodeStatus::kOk:
+      return "ok";
+    case DecodeStatus::kOversized:
+      return "oversized";
+    case DecodeStatus::kMalformed:
+      return "malformed";
+    case DecodeStatus::kWrongVersion:
+      return "wrong protocol version";
+    case DecodeStatus::kNoBody:
+      return "no body";
   }
   return "?";
 }
@@ -102,15 +107,24 @@ std::string Serialize(const google::protobuf::MessageLite& message) {
 
 const char* BodyName(const wire::Envelope& envelope) {
   switch (envelope.body_case()) {
-    case wire::Envelope::kReady: return "ready";
-    case wire::Envelope::kHeartbeat: return "heartbeat";
-    case wire::Envelope::kJob: return "job";
-    case wire::Envelope::kResult: return "result";
-    case wire::Envelope::kError: return "error";
-    case wire::Envelope::kImageRequest: return "image request";
-    case wire::Envelope::kImageResponse: return "image response";
-    case wire::Envelope::kShutdown: return "shutdown";
-    case wire::Envelope::BODY_NOT_SET: return "none";
+    case wire::Envelope::kReady:
+      return "ready";
+    case wire::Envelope::kHeartbeat:
+      return "heartbeat";
+    case wire::Envelope::kJob:
+      return "job";
+    case wire::Envelope::kResult:
+      return "result";
+    case wire::Envelope::kError:
+      return "error";
+    case wire::Envelope::kImageRequest:
+      return "image request";
+    case wire::Envelope::kImageResponse:
+      return "image response";
+    case wire::Envelope::kShutdown:
+      return "shutdown";
+    case wire::Envelope::BODY_NOT_SET:
+      return "none";
   }
   return "?";
 }

@@ -39,8 +39,7 @@ TEST(Wire, WrongVersionIsReportedWithBothVersions) {
             DecodeStatus::kWrongVersion);
   EXPECT_NE(problem.find("protocol version " + std::to_string(kProtocolVersion + 1)),
             std::string::npos);
-  EXPECT_NE(problem.find("speaks version " + std::to_string(kProtocolVersion)),
-            std::string::npos);
+  EXPECT_NE(problem.find("speaks version " + std::to_string(kProtocolVersion)), std::string::npos);
 }
 
 TEST(Wire, MalformedOversizedAndEmptyEnvelopesAreRefused) {

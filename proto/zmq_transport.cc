@@ -6,11 +6,11 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cmath>
-#include <fstream>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <zmq.hpp>
 
@@ -86,11 +86,16 @@ bool ReceiveFrames(zmq::socket_t& socket, std::vector<zmq::message_t>* frames) {
 
 std::string EventName(uint16_t event) {
   switch (event) {
-    case ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL: return "handshake failed";
-    case ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL: return "handshake failed (protocol error)";
-    case ZMQ_EVENT_HANDSHAKE_FAILED_AUTH: return "handshake refused (authentication)";
-    case ZMQ_EVENT_DISCONNECTED: return "disconnected";
-    default: return "event " + std::to_string(event);
+    case ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL:
+      return "handshake failed";
+    case ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL:
+      return "handshake failed (protocol error)";
+    case ZMQ_EVENT_HANDSHAKE_FAILED_AUTH:
+      return "handshake refused (authentication)";
+    case ZMQ_EVENT_DISCONNECTED:
+      return "disconnected";
+    default:
+      return "event " + std::to_string(event);
   }
 }
 
@@ -129,8 +134,8 @@ class ZmqServer : public ServerTransport {
   explicit ZmqServer(const ZmqServerOptions& options)
       : options_(options), context_(1), router_(context_, zmq::socket_type::router) {
     router_.set(zmq::sockopt::linger, 1000);
-    router_.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(std::min<uint64_t>(
-                                              2 * options.max_message_bytes, INT64_MAX)));
+    router_.set(zmq::sockopt::maxmsgsize,
+                static_cast<int64_t>(std::min<uint64_t>(2 * options.max_message_bytes, INT64_MAX)));
     router_.set(zmq::sockopt::sndhwm, 10000);
     router_.set(zmq::sockopt::rcvhwm, 10000);
     const bool curve = !options.curve_secret_key_file.empty();
@@ -158,10 +163,10 @@ class ZmqServer : public ServerTransport {
       spdlog::info("CURVE security on: {} allowed worker key(s){}", allowed_.size(),
                    allowed_.empty() ? " (any worker that knows the server key)" : "");
     }
-    monitor_ = std::make_unique<Monitor>(
-        context_, router_, "router",
-        ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
-            ZMQ_EVENT_HANDSHAKE_FAILED_AUTH);
+    monitor_ = std::make_unique<Monitor>(context_, router_, "router",
+                                         ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL |
+                                             ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                                             ZMQ_EVENT_HANDSHAKE_FAILED_AUTH);
     try {
       router_.bind(options.bind);
     } catch (const zmq::error_t& e) {
@@ -253,7 +258,7 @@ class ZmqServer : public ServerTransport {
                              ? spdlog::level::debug
                              : spdlog::level::warn;
       spdlog::log(level, "connection from {}: {} (code {}){}", address, EventName(event), value,
-                   zap_ ? ": a worker with a wrong --curve-server-key, or without CURVE?" : "");
+                  zap_ ? ": a worker with a wrong --curve-server-key, or without CURVE?" : "");
     }
   }
 
@@ -273,8 +278,8 @@ class ZmqClient : public ClientTransport {
   explicit ZmqClient(const ZmqClientOptions& options)
       : context_(1), dealer_(context_, zmq::socket_type::dealer) {
     dealer_.set(zmq::sockopt::linger, 200);  // reconnecting must not wait long
-    dealer_.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(std::min<uint64_t>(
-                                              2 * options.max_message_bytes, INT64_MAX)));
+    dealer_.set(zmq::sockopt::maxmsgsize,
+                static_cast<int64_t>(std::min<uint64_t>(2 * options.max_message_bytes, INT64_MAX)));
     if (!options.curve_server_key_file.empty()) {
       RequireCurve("--curve-server-key");
       const CurveKeyPair server = ReadCurveKeyFile(options.curve_server_key_file, false);
@@ -285,10 +290,11 @@ class ZmqClient : public ClientTransport {
       SetBinaryOption(dealer_, ZMQ_CURVE_PUBLICKEY, Z85Decode(own.public_key));
       SetBinaryOption(dealer_, ZMQ_CURVE_SECRETKEY, Z85Decode(own.secret_key));
     } else if (!options.curve_secret_key_file.empty()) {
-      throw InputError("--curve-secret-key needs --curve-server-key (the coordinator's public key)");
+      throw InputError(
+          "--curve-secret-key needs --curve-server-key (the coordinator's public key)");
     }
-    monitor_ = std::make_unique<Monitor>(context_, dealer_, "dealer",
-                                         ZMQ_EVENT_HANDSHAKE_FAILED_AUTH);
+    monitor_ =
+        std::make_unique<Monitor>(context_, dealer_, "dealer", ZMQ_EVENT_HANDSHAKE_FAILED_AUTH);
     try {
       dealer_.connect(options.connect);
     } catch (const zmq::error_t& e) {

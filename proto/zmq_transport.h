@@ -42,8 +42,8 @@ struct ZmqServerOptions {
   // Messages larger than this are logged and dropped by the protocol layer; ZeroMQ itself
   // drops the connection of a peer whose message exceeds twice this (memory protection).
   uint64_t max_message_bytes = uint64_t{64} << 20;
-  std::string curve_secret_key_file;   // non-empty: CURVE server with this key pair
-  std::string curve_public_keys_dir;   // non-empty: only workers with a key in here
+  std::string curve_secret_key_file;  // non-empty: CURVE server with this key pair
+  std::string curve_public_keys_dir;  // non-empty: only workers with a key in here
 };
 // Binds and returns the server. Throws InputError naming the address if it cannot bind, or for
 // bad key files.

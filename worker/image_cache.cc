@@ -79,9 +79,9 @@ std::string ImageCache::Locate(const ImageRef& ref) {
 
 std::string ImageCache::Store(const ImageRef& ref, const std::string& bytes) {
   if (bytes.size() != ref.size || HashBytes(bytes) != ref.hash) {
-    throw InputError(fmt::format("{}: fetched {} bytes with hash {}, expected {} bytes with hash {}",
-                                 ref.path, bytes.size(), HashHex(HashBytes(bytes)), ref.size,
-                                 HashHex(ref.hash)));
+    throw InputError(
+        fmt::format("{}: fetched {} bytes with hash {}, expected {} bytes with hash {}", ref.path,
+                    bytes.size(), HashHex(HashBytes(bytes)), ref.size, HashHex(ref.hash)));
   }
   const std::string cached = directory_ + "/" + HashHex(ref.hash) + ".img";
   WriteFileAtomically(cached, [&](std::ostream& out) { out.write(bytes.data(), bytes.size()); });
@@ -94,9 +94,9 @@ SweepCamera ImageCache::Load(int32_t id, const View& view, uint64_t hash,
                              const std::string& local_path) {
   const Intrinsics& k = view.intrinsics;
   // Undistortion depends on the intrinsics, so they are part of the key.
-  const std::string key = fmt::format("{:016x} {} {} {} {} {} {} {} {} {} {} {}", hash, k.width,
-                                      k.height, k.fx, k.fy, k.cx, k.cy, k.k1, k.k2, k.p1, k.p2,
-                                      k.k3);
+  const std::string key =
+      fmt::format("{:016x} {} {} {} {} {} {} {} {} {} {} {}", hash, k.width, k.height, k.fx, k.fy,
+                  k.cx, k.cy, k.k1, k.k2, k.p1, k.p2, k.k3);
   SweepCamera camera;
   {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -56,8 +56,8 @@ std::unique_ptr<SweepKernel> MakeSweepKernel(const std::string& name) {
   for (const KernelEntry& entry : Kernels()) {
     if (name != entry.name) continue;
     if (!entry.make) {
-      throw InputError(fmt::format("--kernel {}: {} (use --kernel reference)", name,
-                                   entry.unavailable_reason));
+      throw InputError(
+          fmt::format("--kernel {}: {} (use --kernel reference)", name, entry.unavailable_reason));
     }
     return entry.make();
   }

@@ -21,8 +21,7 @@ namespace ms {
 namespace {
 
 double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 std::string DefaultWorkerId() {
@@ -31,7 +30,9 @@ std::string DefaultWorkerId() {
   return fmt::format("{}:{}", host, getpid());
 }
 
-ImageRef RefFromWire(const wire::ImageRef& w) { return ImageRef{w.path(), w.content_hash(), w.byte_size()}; }
+ImageRef RefFromWire(const wire::ImageRef& w) {
+  return ImageRef{w.path(), w.content_hash(), w.byte_size()};
+}
 
 }  // namespace
 
@@ -92,8 +93,7 @@ class Worker::Impl {
       }
       const std::string refused = transport_->AuthFailure();
       if (!refused.empty()) {
-        throw InputError(refused +
-                         "; check --curve-secret-key here and --curve-public-keys there");
+        throw InputError(refused + "; check --curve-secret-key here and --curve-public-keys there");
       }
       now = Now();
       if (now >= next_heartbeat) {
@@ -147,11 +147,11 @@ class Worker::Impl {
 
   struct Current {
     wire::Job job;
-    SweepJob sweep;                // views, mesh, options; images filled by the compute thread
-    std::vector<ImageRef> refs;    // one per camera: C, then the neighbours
+    SweepJob sweep;                  // views, mesh, options; images filled by the compute thread
+    std::vector<ImageRef> refs;      // one per camera: C, then the neighbours
     std::vector<std::string> paths;  // local file of each camera's image ("" until fetched)
-    size_t fetch = 0;              // index into refs being fetched
-    std::string buffer;            // bytes fetched so far
+    size_t fetch = 0;                // index into refs being fetched
+    std::string buffer;              // bytes fetched so far
     double received_at = 0;
     double fetch_s = 0;
   };
@@ -257,9 +257,9 @@ class Worker::Impl {
     Current& c = *current_;
     c.received_at = Now();
     c.job = std::move(job);
-    const std::string what = fmt::format("job {} (iteration {}, camera {})",
-                                         JobName(c.job.job_id()), c.job.iteration(),
-                                         c.job.camera().id());
+    const std::string what =
+        fmt::format("job {} (iteration {}, camera {})", JobName(c.job.job_id()), c.job.iteration(),
+                    c.job.camera().id());
     phase_ = Phase::kFetching;
     try {
       c.sweep.camera.id = c.job.camera().id();
@@ -329,9 +329,8 @@ class Worker::Impl {
     if (response.total_size() != ref.size || response.data().empty() ||
         c.buffer.size() + response.data().size() > ref.size) {
       FailCurrent(wire::Error::WORKER_FAILURE,
-                  fmt::format("{}: inconsistent image response (size {}, piece {} at {})",
-                              ref.path, response.total_size(), response.data().size(),
-                              response.offset()));
+                  fmt::format("{}: inconsistent image response (size {}, piece {} at {})", ref.path,
+                              response.total_size(), response.data().size(), response.offset()));
       return;
     }
     c.buffer += response.data();

@@ -30,8 +30,9 @@ class FakeKernel : public SweepKernel {
   explicit FakeKernel(double seconds = 0) : seconds_(seconds) {}
   SweepResult Run(const SweepJob& job) override {
     if (seconds_ > 0) std::this_thread::sleep_for(std::chrono::duration<double>(seconds_));
-    if (job.mesh.faces.empty()) throw InputError("camera " + std::to_string(job.camera.id) +
-                                                 ": no face in front of the camera");
+    if (job.mesh.faces.empty())
+      throw InputError("camera " + std::to_string(job.camera.id) +
+                       ": no face in front of the camera");
     EXPECT_EQ(job.camera.image.cols, job.camera.view.intrinsics.width);
     SweepResult result;
     for (const SweepCamera& n : job.neighbours) {
@@ -81,10 +82,13 @@ class WorkerProcessTest : public ::testing::Test {
   void StartWorker(double kernel_seconds = 0) {
     thread_ = std::thread([this, kernel_seconds] {
       try {
-        Worker worker(options_, [this] {
-          ++connections_;
-          return network_->Connect();
-        }, std::make_unique<FakeKernel>(kernel_seconds));
+        Worker worker(
+            options_,
+            [this] {
+              ++connections_;
+              return network_->Connect();
+            },
+            std::make_unique<FakeKernel>(kernel_seconds));
         summary_ = worker.Run([this] { return stop_.load(); });
       } catch (const InputError& e) {
         error_ = e.what();
@@ -94,8 +98,8 @@ class WorkerProcessTest : public ::testing::Test {
 
   // Next envelope from the worker that is not a heartbeat (those are counted).
   bool Next(wire::Envelope* envelope, double timeout_s = 5.0) {
-    const auto deadline = std::chrono::steady_clock::now() +
-                          std::chrono::duration<double>(timeout_s);
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
     while (std::chrono::steady_clock::now() < deadline) {
       PeerMessage message;
       if (!server_->Receive(0.01, &message)) continue;

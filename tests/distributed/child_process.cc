@@ -50,8 +50,7 @@ void ChildProcess::Signal(int sig) {
 }
 
 bool ChildProcess::Wait(double timeout_s) {
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   while (!exited_) {
     int status = 0;
     const pid_t r = ::waitpid(pid_, &status, WNOHANG);
@@ -77,8 +76,7 @@ std::string ChildProcess::Log() const {
 }
 
 bool ChildProcess::WaitForLog(const std::string& text, double timeout_s) {
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   while (std::chrono::steady_clock::now() < deadline) {
     if (Log().find(text) != std::string::npos) return true;
     if (!running()) return Log().find(text) != std::string::npos;

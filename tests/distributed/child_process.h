@@ -22,7 +22,7 @@ class ChildProcess {
   // Waits up to timeout_s; returns true once exited (then exit_code() / term_signal() apply).
   bool Wait(double timeout_s);
   bool running();
-  int exit_code() const { return exit_code_; }    // -1 unless it exited normally
+  int exit_code() const { return exit_code_; }      // -1 unless it exited normally
   int term_signal() const { return term_signal_; }  // 0 unless killed by a signal
   std::string Log() const;
   // Waits until the log contains `text` (or the process exits / timeout). True if found.

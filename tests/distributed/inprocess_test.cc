@@ -64,7 +64,8 @@ class InProcessRun : public ::testing::Test {
         w.heartbeat_interval_s = 0.05;
         w.liveness = 4;
         w.cache.directory = (root_ / "cache").string();
-        Worker worker(w, [network] { return network->Connect(); }, MakeSweepKernel("reference"));
+        Worker worker(
+            w, [network] { return network->Connect(); }, MakeSweepKernel("reference"));
         const WorkerSummary summary = worker.Run([&] { return stop.load(); });
         EXPECT_EQ(summary.exit_reason, "shutdown: the run is complete");
       });

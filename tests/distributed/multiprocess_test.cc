@@ -11,6 +11,7 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -32,6 +33,18 @@ namespace fs = std::filesystem;
 using test::ChildProcess;
 
 const char* const kBinary = MS_BINARY;
+// Short heartbeats so deaths are noticed within a second (a loaded machine does not fake one),
+// and sweep options scaled to the 160 x 120 images.
+const char* const kRunOptions =
+    "--heartbeat-interval 0.1 --liveness 8 --sweep.tile-size-px 10 --sweep.gaussian-sigma-px 4";
+
+// Splits on spaces (the test's paths have none).
+std::vector<std::string> Split(const std::string& text) {
+  std::vector<std::string> words;
+  std::istringstream in(text);
+  for (std::string word; in >> word;) words.push_back(word);
+  return words;
+}
 
 class MultiProcessTest : public ::testing::Test {
  protected:
@@ -57,21 +70,19 @@ class MultiProcessTest : public ::testing::Test {
     return dir.string();
   }
 
-  // The options every run shares: short heartbeats so deaths are noticed in well under a
-  // second, and sweep options scaled to the 160 x 120 images.
   static std::vector<std::string> CoordinatorArgs(const std::string& out, int port,
                                                   int iterations = 3) {
-    return {"coordinator", "--input", *scene_, "--bind",
-            "tcp://127.0.0.1:" + std::to_string(port), "--output", out, "--max-iterations",
-            std::to_string(iterations), "--heartbeat-interval", "0.1", "--liveness", "4",
-            "--lease", "60", "--progress-interval", "1", "--sweep.tile-size-px", "10",
-            "--sweep.gaussian-sigma-px", "4"};
+    return Split("coordinator --input " + *scene_ +
+                 " --bind tcp://127.0.0.1:" + std::to_string(port) + " --output " + out +
+                 " --max-iterations " + std::to_string(iterations) + " " + kRunOptions +
+                 " --lease 60 --progress-interval 1");
   }
   static std::vector<std::string> WorkerArgs(int port, const std::string& id) {
-    return {"--log-level", "info", "worker", "--connect", "tcp://127.0.0.1:" + std::to_string(port),
-            "--id", id, "--threads", "1", "--heartbeat-interval", "0.1", "--liveness", "4",
-            "--reconnect-initial", "0.1", "--reconnect-max", "0.5", "--give-up-after", "30",
-            "--cache-dir", (*root_ / "cache" / id).string()};
+    return Split("--log-level info worker --connect tcp://127.0.0.1:" + std::to_string(port) +
+                 " --id " + id +
+                 " --threads 1 --heartbeat-interval 0.1 --liveness 8 --reconnect-initial 0.1"
+                 " --reconnect-max 0.5 --give-up-after 30 --cache-dir " +
+                 (*root_ / "cache" / id).string());
   }
 
   // A complete run: a coordinator and `workers` worker processes. Returns the output dir.
@@ -82,8 +93,8 @@ class MultiProcessTest : public ::testing::Test {
     std::vector<std::unique_ptr<ChildProcess>> pool;
     for (int i = 0; i < workers; ++i) {
       const std::string id = "w" + std::to_string(i + 1);
-      pool.push_back(std::make_unique<ChildProcess>(kBinary, WorkerArgs(port, id),
-                                                    out + "/" + id + ".log"));
+      pool.push_back(
+          std::make_unique<ChildProcess>(kBinary, WorkerArgs(port, id), out + "/" + id + ".log"));
     }
     EXPECT_TRUE(coordinator.Wait(90)) << coordinator.Log();
     EXPECT_EQ(coordinator.exit_code(), 0) << coordinator.Log();
@@ -126,9 +137,9 @@ TEST_F(MultiProcessTest, TwoWorkersGiveAClosedManifoldAndTheOutputs) {
   std::set<std::string> workers;
   for (const IterationStats& s : record.iterations) {
     jobs += s.jobs;
-    EXPECT_EQ(s.points_inserted + s.discarded_conflict + s.discarded_duplicate +
-                  s.discarded_outside,
-              s.points_found)
+    EXPECT_EQ(
+        s.points_inserted + s.discarded_conflict + s.discarded_duplicate + s.discarded_outside,
+        s.points_found)
         << "iteration " << s.iteration;
   }
   for (const WorkerIterationStats& w : record.workers) {
@@ -145,12 +156,12 @@ TEST_F(MultiProcessTest, TwoWorkersGiveAClosedManifoldAndTheOutputs) {
   EXPECT_EQ(summary["final_mesh"]["closed_manifold"], true);
   EXPECT_EQ(summary["iterations_completed"], 3);
   for (const auto& row : summary["iterations"]) {
-    std::printf("iteration %d: %d jobs, %d points found, %d inserted, %d vertices; sweep %.2f s, "
-                "insert %.3f s\n",
-                row["iteration"].get<int>(), row["jobs"].get<int>(),
-                row["points_found"].get<int>(), row["points_inserted"].get<int>(),
-                row["vertices"].get<int>(), row["seconds_sweep"].get<double>(),
-                row["seconds_insert"].get<double>());
+    std::printf(
+        "iteration %d: %d jobs, %d points found, %d inserted, %d vertices; sweep %.2f s, "
+        "insert %.3f s\n",
+        row["iteration"].get<int>(), row["jobs"].get<int>(), row["points_found"].get<int>(),
+        row["points_inserted"].get<int>(), row["vertices"].get<int>(),
+        row["seconds_sweep"].get<double>(), row["seconds_insert"].get<double>());
   }
 }
 
@@ -191,8 +202,8 @@ TEST_F(MultiProcessTest, AKilledCoordinatorResumesToTheIdenticalMesh) {
   {
     ChildProcess first(kBinary, CoordinatorArgs(out, port), out + "/coordinator1.log");
     for (const char* id : {"w1", "w2"}) {
-      pool.push_back(std::make_unique<ChildProcess>(kBinary, WorkerArgs(port, id),
-                                                    out + "/" + id + ".log"));
+      pool.push_back(
+          std::make_unique<ChildProcess>(kBinary, WorkerArgs(port, id), out + "/" + id + ".log"));
     }
     ASSERT_TRUE(first.WaitForLog("iteration 1 done", 60)) << first.Log();
     first.Signal(SIGKILL);
@@ -203,7 +214,7 @@ TEST_F(MultiProcessTest, AKilledCoordinatorResumesToTheIdenticalMesh) {
   EXPECT_GE(checkpoint.completed_iterations(), 1);
   EXPECT_FALSE(fs::exists(out + "/final.ply"));
   // Longer than the workers' liveness: they go through reconnection with back-off.
-  std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   std::vector<std::string> args = CoordinatorArgs(out, port);
   args.push_back("--resume");
   ChildProcess second(kBinary, args, out + "/coordinator2.log");
@@ -231,16 +242,14 @@ TEST_F(MultiProcessTest, AKilledCoordinatorResumesToTheIdenticalMesh) {
 TEST_F(MultiProcessTest, ReconstructStopsEverythingOnCtrlCAndResumesToTheIdenticalMesh) {
   const std::string reference = FinalMesh(Reference());
   const std::string out = Dir("reconstruct");
-  std::vector<std::string> args = {"reconstruct", "--input", *scene_, "--output", out,
-                                   "--workers", "2", "--max-iterations", "3",
-                                   "--heartbeat-interval", "0.1", "--liveness", "4",
-                                   "--sweep.tile-size-px", "10", "--sweep.gaussian-sigma-px", "4"};
+  std::vector<std::string> args = Split("reconstruct --input " + *scene_ + " --output " + out +
+                                        " --workers 2 --max-iterations 3 " + kRunOptions);
   std::vector<pid_t> children;
   {
     ChildProcess run(kBinary, args, out + "/reconstruct1.log");
     ASSERT_TRUE(run.WaitForLog("iteration 1 done", 60)) << run.Log();
-    std::ifstream list("/proc/" + std::to_string(run.pid()) + "/task/" +
-                       std::to_string(run.pid()) + "/children");
+    std::ifstream list("/proc/" + std::to_string(run.pid()) + "/task/" + std::to_string(run.pid()) +
+                       "/children");
     for (pid_t pid; list >> pid;) children.push_back(pid);
     EXPECT_EQ(children.size(), 2u);
     run.Signal(SIGINT);
@@ -275,12 +284,12 @@ TEST_F(MultiProcessTest, AWorkerWithTheWrongCurveKeyIsRefused) {
   fs::copy_file(keys + "/good.key", keys + "/allowed/good.key");
   const int port = test::FreePort();
   std::vector<std::string> args = CoordinatorArgs(out, port, 1);
-  args.insert(args.end(), {"--curve-secret-key", keys + "/server.key_secret",
-                           "--curve-public-keys", keys + "/allowed"});
+  args.insert(args.end(), {"--curve-secret-key", keys + "/server.key_secret", "--curve-public-keys",
+                           keys + "/allowed"});
   ChildProcess coordinator(kBinary, args, out + "/coordinator.log");
   std::vector<std::string> bad_args = WorkerArgs(port, "intruder");
-  bad_args.insert(bad_args.end(), {"--curve-server-key", keys + "/server.key",
-                                   "--curve-secret-key", keys + "/bad.key_secret"});
+  bad_args.insert(bad_args.end(), {"--curve-server-key", keys + "/server.key", "--curve-secret-key",
+                                   keys + "/bad.key_secret"});
   ChildProcess intruder(kBinary, bad_args, out + "/intruder.log");
   ASSERT_TRUE(intruder.Wait(20)) << intruder.Log();
   EXPECT_EQ(intruder.exit_code(), 2) << intruder.Log();
