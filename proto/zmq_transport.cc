@@ -1,5 +1,6 @@
 #include "proto/zmq_transport.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <sys/stat.h>
 #include <zmq.h>
@@ -11,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <zmq.hpp>
 
@@ -251,17 +253,29 @@ class ZmqServer : public ServerTransport {
     std::string address;
     while (monitor_->Read(&event, &value, &address)) {
       // Refusals by ZAP are logged by HandleZap; the others mean a peer with a wrong server
-      // key (CURVE) or a peer that does not speak ZMTP.
+      // key (CURVE), a peer with another security mechanism, or one that does not speak ZMTP.
       if (event == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) continue;
+      // ZeroMQ retries a failed connection every 100 ms: the first few per peer address and
+      // kind, then every 100th.
+      const int64_t n = ++handshake_failures_[address + "/" + std::to_string(value)];
+      if (n > 3 && n % 100 != 0) continue;
       // A peer that hangs up during the handshake (value = errno) is noise without CURVE.
       const auto level = event == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL && !zap_
                              ? spdlog::level::debug
                              : spdlog::level::warn;
-      spdlog::log(level, "connection from {}: {} (code {}){}", address, EventName(event), value,
-                  zap_ ? ": a worker with a wrong --curve-server-key, or without CURVE?" : "");
+      std::string why;
+      if (value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH) {
+        why = zap_ ? ": the worker does not use CURVE (--curve-server-key)"
+                   : ": the worker uses CURVE, this coordinator does not";
+      } else if (zap_) {
+        why = ": a worker with a wrong --curve-server-key?";
+      }
+      spdlog::log(level, "connection from {}: {} (code {:#x}){}{}", address, EventName(event),
+                  value, why, n > 3 ? fmt::format(" ({} times)", n) : "");
     }
   }
 
+  std::map<std::string, int64_t> handshake_failures_;
   ZmqServerOptions options_;
   zmq::context_t context_;
   zmq::socket_t router_;

@@ -103,7 +103,9 @@ class Worker::Impl {
       if (now - std::max(last_heard, connected_at) > silence) {
         if (now - last_heard > options_.give_up_after_s) {
           throw InputError(fmt::format(
-              "no coordinator answered for {:.0f} s (--give-up-after {:.0f} s); giving up",
+              "no coordinator answered for {:.0f} s (--give-up-after {:.0f} s); giving up (is "
+              "it running, is the address right, and do both sides agree on CURVE: "
+              "--curve-server-key here iff --curve-secret-key there, with its public key?)",
               now - last_heard, options_.give_up_after_s));
         }
         spdlog::warn("no message from the coordinator for {:.1f} s; reconnecting in {:.1f} s",
