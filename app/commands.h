@@ -5,7 +5,21 @@
 
 #include <CLI/CLI.hpp>
 
+#include <exception>
+
 namespace ms::app {
+
+// Thrown by a command that ends without an error but with a non-zero exit code (e.g.
+// kExitInterrupted after Ctrl-C); main() returns the code.
+class CommandExit : public std::exception {
+ public:
+  explicit CommandExit(int code) : code_(code) {}
+  int code() const { return code_; }
+  const char* what() const noexcept override { return "exit"; }
+
+ private:
+  int code_;
+};
 
 void RegisterInfoCommand(CLI::App& app);
 void RegisterManifoldCommand(CLI::App& app);
@@ -14,5 +28,9 @@ void RegisterSweepCommand(CLI::App& app);
 void RegisterSynthCommand(CLI::App& app);
 void RegisterEvaluateCommand(CLI::App& app);
 void RegisterConvertCommand(CLI::App& app);
+void RegisterReconstructCommand(CLI::App& app);
+void RegisterCoordinatorCommand(CLI::App& app);
+void RegisterWorkerCommand(CLI::App& app);
+void RegisterKeygenCommand(CLI::App& app);
 
 }  // namespace ms::app

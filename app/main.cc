@@ -35,6 +35,10 @@ int main(int argc, char** argv) {
   ms::app::RegisterSynthCommand(app);
   ms::app::RegisterEvaluateCommand(app);
   ms::app::RegisterConvertCommand(app);
+  ms::app::RegisterReconstructCommand(app);
+  ms::app::RegisterCoordinatorCommand(app);
+  ms::app::RegisterWorkerCommand(app);
+  ms::app::RegisterKeygenCommand(app);
 
   try {
     app.parse(argc, argv);
@@ -51,6 +55,8 @@ int main(int argc, char** argv) {
         std::fputs(app.help().c_str(), stdout);
       }
     }
+  } catch (const ms::app::CommandExit& e) {
+    return e.code();
   } catch (const CLI::CallForHelp&) {
     // --help on the app or a subcommand: print the help of the one asked.
     const CLI::App* target = &app;

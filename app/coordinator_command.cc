@@ -1,0 +1,69 @@
+// `manisweep coordinator`: the coordinator process of a distributed run. Binds a ZeroMQ ROUTER,
+// builds the initial manifold, hands sweep jobs to the workers that connect, inserts their
+// points, checkpoints after every iteration (docs/distributed.md, proto/PROTOCOL.md).
+#include <memory>
+#include <string>
+
+#include "app/commands.h"
+#include "app/distributed_options.h"
+#include "app/process_control.h"
+#include "base/error.h"
+#include "base/log.h"
+#include "coordinator/coordinator.h"
+#include "proto/zmq_transport.h"
+
+namespace ms::app {
+namespace {
+
+struct CoordinatorCommandOptions {
+  CoordinatorOptions run;
+  SweepOptions sweep;
+  double max_message_mb = 64;
+  std::string bind = "tcp://*:5555";
+  std::string curve_secret_key;
+  std::string curve_public_keys;
+};
+
+void RunCoordinator(CoordinatorCommandOptions& options) {
+  FinishRunOptions(options.sweep, options.max_message_mb, &options.run);
+  options.run.Check();
+  InitLogging("coordinator");
+  InstallStopSignals();
+  ZmqServerOptions server;
+  server.bind = options.bind;
+  server.max_message_bytes = options.run.limits.max_message_bytes;
+  server.curve_secret_key_file = options.curve_secret_key;
+  server.curve_public_keys_dir = options.curve_public_keys;
+  std::unique_ptr<ServerTransport> transport = MakeZmqServer(server);
+  Coordinator coordinator(options.run, transport.get());
+  const CoordinatorResult result = coordinator.Run([] { return StopRequested(); });
+  if (result.status == "interrupted") throw CommandExit(kExitInterrupted);
+}
+
+}  // namespace
+
+void RegisterCoordinatorCommand(CLI::App& app) {
+  auto options = std::make_shared<CoordinatorCommandOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "coordinator",
+      "Coordinator of a distributed run: owns the manifold, hands sweep jobs to workers");
+  cmd->add_option("-i,--input", options->run.input,
+                  "scene (any supported format); optional with --resume")
+      ->capture_default_str();
+  cmd->add_option("-o,--output", options->run.output_dir,
+                  "output directory: initial.ply, final.ply, run.h5, summary.json")
+      ->required();
+  cmd->add_option("--bind", options->bind,
+                  "ZeroMQ address to listen on (tcp://*:PORT, tcp://IP:PORT; PORT * = any free)")
+      ->capture_default_str();
+  cmd->add_option("--curve-secret-key", options->curve_secret_key,
+                  "CURVE: this coordinator's key pair (NAME.key_secret from `manisweep keygen`); "
+                  "workers then need its public key");
+  cmd->add_option("--curve-public-keys", options->curve_public_keys,
+                  "CURVE: directory of the allowed workers' public keys (*.key); others are "
+                  "refused");
+  AddRunOptions(cmd, &options->run, &options->sweep, &options->max_message_mb);
+  cmd->callback([options] { RunCoordinator(*options); });
+}
+
+}  // namespace ms::app

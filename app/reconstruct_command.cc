@@ -1,0 +1,209 @@
+// `manisweep reconstruct`: the all-in-one local run. Starts a coordinator (in this process) and
+// N worker processes (this binary, `manisweep worker`) on loopback, shows progress, and stops
+// them all at the end or on Ctrl-C. Without --input it reconstructs the embedded default scene.
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "app/commands.h"
+#include "app/default_scene.h"
+#include "app/distributed_options.h"
+#include "app/process_control.h"
+#include "base/error.h"
+#include "base/log.h"
+#include "coordinator/coordinator.h"
+#include "proto/zmq_transport.h"
+#include "worker/kernel_factory.h"
+
+namespace ms::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ReconstructCommandOptions {
+  CoordinatorOptions run;
+  SweepOptions sweep;
+  double max_message_mb = 64;
+  int workers = 0;
+  int worker_threads = 0;
+  std::string kernel = "auto";
+  int max_restarts = -1;
+};
+
+class WorkerPool {
+ public:
+  WorkerPool(std::vector<std::string> base_args, int count, int max_restarts)
+      : base_args_(std::move(base_args)), max_restarts_(max_restarts) {
+    for (int i = 0; i < count; ++i) Start(i);
+  }
+
+  // Called from the coordinator's loop: reaps exited workers and restarts them. Returns false
+  // when no worker is left and none may be restarted.
+  bool Check() {
+    for (size_t i = 0; i < pids_.size(); ++i) {
+      std::string how;
+      if (pids_[i] <= 0 || !ReapIfExited(pids_[i], &how)) continue;
+      pids_[i] = 0;
+      if (StopRequested() || how == "exit code 0" || how == "exit code 130") continue;
+      if (restarts_ < max_restarts_) {
+        ++restarts_;
+        spdlog::warn("worker-{} exited unexpectedly ({}); starting it again ({} of {} restarts)",
+                     i + 1, how, restarts_, max_restarts_);
+        Start(static_cast<int>(i));
+      } else {
+        spdlog::error("worker-{} exited unexpectedly ({}); no restarts left", i + 1, how);
+      }
+    }
+    return std::any_of(pids_.begin(), pids_.end(), [](pid_t p) { return p > 0; });
+  }
+
+  int Stop(double grace_s) {
+    std::vector<pid_t> alive;
+    for (pid_t p : pids_) {
+      if (p > 0) alive.push_back(p);
+    }
+    pids_.assign(pids_.size(), 0);
+    return StopChildren(alive, grace_s);
+  }
+
+ private:
+  void Start(int index) {
+    std::vector<std::string> args = base_args_;
+    args.insert(args.end(), {"--id", "worker-" + std::to_string(index + 1)});
+    if (static_cast<size_t>(index) >= pids_.size()) pids_.resize(index + 1, 0);
+    pids_[index] = SpawnSelf(args);
+  }
+
+  std::vector<std::string> base_args_;
+  std::vector<pid_t> pids_;
+  int max_restarts_;
+  int restarts_ = 0;
+};
+
+void RunReconstruct(ReconstructCommandOptions& options) {
+  FinishRunOptions(options.sweep, options.max_message_mb, &options.run);
+  if (options.workers < 0 || options.workers > 1024) {
+    throw InputError("--workers: must be in [0, 1024]");
+  }
+  if (options.worker_threads < 0) throw InputError("--worker-threads: must be >= 0");
+  MakeSweepKernel(options.kernel);  // an unknown or unavailable kernel fails here, once
+  InitLogging("reconstruct");
+  CoordinatorOptions& run = options.run;
+  if (run.output_dir.empty()) throw InputError("--output: required");
+  const bool have_checkpoint = fs::exists(fs::path(run.output_dir) / "run.h5");
+  if (run.input.empty() && !(run.resume && have_checkpoint)) {
+    const std::string dir = (fs::path(run.output_dir) / "default_scene").string();
+    run.input = MakeDefaultScene(dir);
+    spdlog::info(
+        "no --input: reconstructing the embedded default scene (a synthetic textured "
+        "pyramid) written to {}",
+        dir);
+  }
+  run.Check();
+  InstallStopSignals();
+
+  ZmqServerOptions server;
+  server.bind = "tcp://127.0.0.1:*";
+  server.max_message_bytes = run.limits.max_message_bytes;
+  std::unique_ptr<ServerTransport> transport = MakeZmqServer(server);
+
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int workers = options.workers > 0 ? options.workers : cores;
+  const int threads =
+      options.worker_threads > 0 ? options.worker_threads : std::max(1, cores / workers);
+  const spdlog::level::level_enum level = spdlog::get_level();
+  const std::string worker_level = level <= spdlog::level::debug
+                                       ? std::string(spdlog::level::to_string_view(level).data())
+                                       : "warn";
+  const SchedulerOptions& s = run.scheduler;
+  const double give_up = std::max(30.0, 10 * s.liveness * s.heartbeat_interval_s);
+  // Option/value pairs; the workers use the coordinator's heartbeat settings and message limit.
+  const std::vector<std::pair<std::string, std::string>> worker_options = {
+      {"--connect", transport->Endpoint()},
+      {"--kernel", options.kernel},
+      {"--threads", std::to_string(threads)},
+      {"--heartbeat-interval", std::to_string(s.heartbeat_interval_s)},
+      {"--liveness", std::to_string(s.liveness)},
+      {"--give-up-after", std::to_string(give_up)},
+      {"--max-message-mb", std::to_string(options.max_message_mb)}};
+  std::vector<std::string> worker_args = {"--log-level", worker_level, "worker"};
+  for (const auto& [option, value] : worker_options) {
+    worker_args.push_back(option);
+    worker_args.push_back(value);
+  }
+  spdlog::info("starting {} worker processes ({} kernel threads each) on {}", workers, threads,
+               transport->Endpoint());
+  WorkerPool pool(worker_args, workers,
+                  options.max_restarts >= 0 ? options.max_restarts : 2 * workers);
+
+  bool no_workers = false;
+  CoordinatorResult result;
+  {
+    Coordinator coordinator(run, transport.get());
+    try {
+      result = coordinator.Run([&] {
+        if (StopRequested()) return true;
+        if (!pool.Check()) {
+          no_workers = true;
+          return true;
+        }
+        return false;
+      });
+    } catch (...) {
+      pool.Stop(2.0);
+      throw;
+    }
+  }
+  const int signalled = pool.Stop(5.0);
+  if (signalled > 0) spdlog::warn("{} worker(s) had to be stopped with a signal", signalled);
+  if (no_workers && !StopRequested()) {
+    throw InputError("every worker process died and none may be restarted; see the log above");
+  }
+  if (result.status == "interrupted") {
+    spdlog::warn("interrupted; continue with the same command and --resume");
+    throw CommandExit(kExitInterrupted);
+  }
+  spdlog::info(
+      "done: {} ({} vertices, {} faces, {}), {} iterations; statistics in {}/run.h5 "
+      "and {}/summary.json",
+      result.final_mesh, result.vertices, result.faces,
+      result.final_is_closed_manifold ? "closed 2-manifold" : "NOT a closed manifold",
+      result.iterations, run.output_dir, run.output_dir);
+}
+
+}  // namespace
+
+void RegisterReconstructCommand(CLI::App& app) {
+  auto options = std::make_shared<ReconstructCommandOptions>();
+  options->run.output_dir = "manisweep_output";
+  options->run.progress_interval_s = 2;
+  CLI::App* cmd = app.add_subcommand(
+      "reconstruct",
+      "All-in-one local run: a coordinator and N sweep workers on this machine (no --input: "
+      "the embedded default scene)");
+  cmd->add_option("-i,--input", options->run.input,
+                  "scene (any supported format); omitted: a synthetic pyramid made on the fly");
+  cmd->add_option("-o,--output", options->run.output_dir,
+                  "output directory: initial.ply, final.ply, run.h5, summary.json")
+      ->capture_default_str();
+  cmd->add_option("-w,--workers", options->workers, "worker processes (0 = one per core)")
+      ->capture_default_str();
+  cmd->add_option("--worker-threads", options->worker_threads,
+                  "kernel threads per worker (0 = cores / workers)")
+      ->capture_default_str();
+  cmd->add_option("--kernel", options->kernel,
+                  "sweep kernel of the workers (auto, reference, glsl)")
+      ->capture_default_str();
+  cmd->add_option("--max-restarts", options->max_restarts,
+                  "restarts of workers that die (-1 = twice the number of workers)")
+      ->capture_default_str();
+  AddRunOptions(cmd, &options->run, &options->sweep, &options->max_message_mb);
+  cmd->callback([options] { RunReconstruct(*options); });
+}
+
+}  // namespace ms::app

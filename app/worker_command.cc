@@ -1,0 +1,123 @@
+// `manisweep worker`: a sweep worker. Connects to a coordinator, pulls jobs, runs the sweep
+// kernel, returns points; reconnects when the coordinator goes away, exits on its Shutdown
+// (docs/distributed.md, proto/PROTOCOL.md).
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <cmath>
+#include <memory>
+#include <opencv2/core/utility.hpp>
+#include <string>
+
+#include "app/commands.h"
+#include "app/process_control.h"
+#include "base/error.h"
+#include "base/log.h"
+#include "proto/zmq_transport.h"
+#include "worker/kernel_factory.h"
+#include "worker/worker_process.h"
+
+namespace ms::app {
+namespace {
+
+struct WorkerCommandOptions {
+  WorkerOptions worker;
+  std::string connect;
+  std::string kernel = "auto";
+  int threads = 0;
+  double max_message_mb = 64;
+  double image_cache_mb = 2048;
+  std::string curve_server_key;
+  std::string curve_secret_key;
+};
+
+void RunWorker(WorkerCommandOptions& options) {
+  if (!(options.max_message_mb >= 0.0625 && options.max_message_mb <= 2048)) {
+    throw InputError("--max-message-mb: must be in [1/16, 2048]");
+  }
+  if (!(options.image_cache_mb >= 0)) throw InputError("--image-cache-mb: must be >= 0");
+  if (options.threads < 0) throw InputError("--threads: must be >= 0");
+  WorkerOptions& w = options.worker;
+  w.limits.max_message_bytes =
+      static_cast<uint64_t>(std::llround(options.max_message_mb * 1048576));
+  w.limits.image_chunk_bytes =
+      std::min<uint64_t>(w.limits.image_chunk_bytes, w.limits.max_message_bytes / 2);
+  w.cache.memory_bytes = static_cast<uint64_t>(options.image_cache_mb * 1048576);
+  w.Check();
+  if (options.threads > 0) cv::setNumThreads(options.threads);
+  std::unique_ptr<SweepKernel> kernel = MakeSweepKernel(options.kernel);
+  ZmqClientOptions client;
+  client.connect = options.connect;
+  client.max_message_bytes = w.limits.max_message_bytes;
+  client.curve_server_key_file = options.curve_server_key;
+  client.curve_secret_key_file = options.curve_secret_key;
+  // Key files are checked now; the address at the first connection (Worker::Run).
+  if (!client.curve_server_key_file.empty()) {
+    RequireCurve("--curve-server-key");
+    ReadCurveKeyFile(client.curve_server_key_file, false);
+  }
+  if (!client.curve_secret_key_file.empty()) ReadCurveKeyFile(client.curve_secret_key_file, true);
+  InstallStopSignals();
+  Worker worker(
+      w, [client] { return MakeZmqClient(client); }, std::move(kernel));
+  InitLogging("worker " + worker.id());
+  spdlog::info("worker {} connecting to {} (kernel {}, image cache {})", worker.id(),
+               options.connect, options.kernel,
+               w.cache.directory.empty() ? "default" : w.cache.directory);
+  const WorkerSummary summary = worker.Run([] { return StopRequested(); });
+  if (summary.exit_reason == "stopped by signal") throw CommandExit(kExitInterrupted);
+}
+
+}  // namespace
+
+void RegisterWorkerCommand(CLI::App& app) {
+  auto options = std::make_shared<WorkerCommandOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "worker", "Sweep worker of a distributed run: pulls jobs from a coordinator");
+  cmd->add_option("-c,--connect", options->connect,
+                  "the coordinator's address, e.g. tcp://node01:5555")
+      ->required();
+  cmd->add_option("--kernel", options->kernel,
+                  fmt::format("sweep kernel: {} (auto = the best available)",
+                              fmt::join(SweepKernelNames(), ", ")))
+      ->capture_default_str();
+  cmd->add_option("--id", options->worker.id,
+                  "name in the coordinator's logs and statistics (default host:pid)");
+  cmd->add_option("--threads", options->threads, "threads for the kernel (0 = all cores)")
+      ->capture_default_str();
+  cmd->add_option("--heartbeat-interval", options->worker.heartbeat_interval_s,
+                  "seconds between heartbeats (use the coordinator's value)")
+      ->capture_default_str();
+  cmd->add_option("--liveness", options->worker.liveness,
+                  "the coordinator is presumed gone after this many silent heartbeat intervals")
+      ->capture_default_str();
+  cmd->add_option("--reconnect-initial", options->worker.reconnect_initial_s,
+                  "first back-off before reconnecting (seconds); doubles each time")
+      ->capture_default_str();
+  cmd->add_option("--reconnect-max", options->worker.reconnect_max_s,
+                  "longest back-off between reconnections (seconds)")
+      ->capture_default_str();
+  cmd->add_option("--give-up-after", options->worker.give_up_after_s,
+                  "exit with an error after this many seconds without a coordinator")
+      ->capture_default_str();
+  cmd->add_option("--cache-dir", options->worker.cache.directory,
+                  "where images fetched from the coordinator are cached (default "
+                  "$TMPDIR/manisweep-image-cache-UID)");
+  cmd->add_option("--image-cache-mb", options->image_cache_mb,
+                  "decoded images kept in memory (MiB)")
+      ->capture_default_str();
+  cmd->add_option("--max-message-mb", options->max_message_mb,
+                  "largest protocol message in MiB (use the coordinator's value)")
+      ->capture_default_str();
+  cmd->add_option("--curve-server-key", options->curve_server_key,
+                  "CURVE: the coordinator's public key file (NAME.key)");
+  cmd->add_option("--curve-secret-key", options->curve_secret_key,
+                  "CURVE: this worker's key pair (NAME.key_secret); its NAME.key must be in the "
+                  "coordinator's --curve-public-keys");
+  cmd->add_option("--debug.delay-s", options->worker.debug_delay_s,
+                  "testing: sleep this long before each sweep")
+      ->capture_default_str();
+  cmd->callback([options] { RunWorker(*options); });
+}
+
+}  // namespace ms::app

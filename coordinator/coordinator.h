@@ -1,0 +1,75 @@
+// The coordinator process (`manisweep coordinator`, and the heart of `manisweep reconstruct`):
+// owns the scene, the Delaunay manifold and the job queue; builds the initial manifold, then
+// per iteration extracts the surface, sends one sweep job per camera to the workers, collects
+// their points, sorts them by (camera, pixel) and inserts them, writes statistics and a
+// checkpoint, and stops when no point was inserted or after max_iterations
+// (docs/distributed.md, proto/PROTOCOL.md).
+//
+// The network loop runs on the calling thread and never blocks on the manifold: building,
+// inserting, extracting and checkpointing run on a background thread meanwhile, so heartbeats
+// and image requests are answered at all times.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "coordinator/job_scheduler.h"
+#include "coordinator/manifold_options.h"
+#include "mesh/visible_mesh.h"
+#include "proto/manisweep.pb.h"
+#include "proto/transport.h"
+#include "proto/wire.h"
+#include "scene/view_selection.h"
+
+namespace ms {
+
+struct CoordinatorOptions {
+  std::string input;        // the scene (any format ReadScene reads); optional with resume
+  std::string output_dir;   // initial.ply, final.ply, run.h5, summary.json (run_store.h)
+  bool resume = false;      // continue from output_dir/run.h5 (start afresh if there is none)
+  int max_iterations = 15;  // it_max of the paper
+  bool save_iteration_meshes = false;  // iteration_NN.ply after every iteration
+  ManifoldOptions manifold;
+  NeighbourOptions neighbours;
+  VisibleMeshOptions visible;
+  wire::SweepOptions sweep;  // sent with every job (the app converts the kernel's options)
+  SchedulerOptions scheduler;
+  WireLimits limits;
+  double progress_interval_s = 5;  // progress lines while sweeping
+  void Check() const;              // throws InputError naming the field
+};
+
+struct CoordinatorResult {
+  std::string status;       // "finished" or "interrupted"
+  std::string stop_reason;  // why the iterations stopped
+  int iterations = 0;       // completed iterations
+  std::string final_mesh;   // path of final.ply ("" if interrupted)
+  int64_t vertices = 0, faces = 0;
+  bool final_is_closed_manifold = false;
+};
+
+// Options that change the result, as a fingerprint stored in checkpoints: a resumed run must
+// use the same ones.
+std::string OptionsFingerprint(const CoordinatorOptions& options);
+
+class Coordinator {
+ public:
+  // The transport is bound already; the coordinator does not own it.
+  Coordinator(const CoordinatorOptions& options, ServerTransport* transport);
+  ~Coordinator();
+  Coordinator(const Coordinator&) = delete;
+  Coordinator& operator=(const Coordinator&) = delete;
+
+  // Runs to the end, or until stop_requested() (polled every few ms; the step in progress is
+  // completed and the last checkpoint stays valid). Tells every worker to shut down before
+  // returning. Throws InputError for bad input, a job that failed on max_attempts workers, or a
+  // checkpoint that does not match.
+  CoordinatorResult Run(const std::function<bool()>& stop_requested);
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ms

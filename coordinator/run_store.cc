@@ -1,0 +1,307 @@
+#include "coordinator/run_store.h"
+
+#include <fmt/format.h>
+
+#include <functional>
+#include <nlohmann/json.hpp>
+
+#include "base/error.h"
+#include "base/file_util.h"
+#include "proto/content_hash.h"
+#include "scene/h5_file.h"
+#include "scene/scene_h5.h"
+
+namespace ms {
+namespace {
+
+constexpr char kRunFormat[] = "manisweep-run";
+constexpr int64_t kRunFormatVersion = 1;
+
+// A column of a statistics table and how it maps to the struct.
+template <typename Row>
+struct Column {
+  H5Column column;
+  std::function<H5Value(const Row&)> get;
+};
+
+template <typename Row, typename T>
+Column<Row> Field(const char* name, T Row::*member) {
+  Column<Row> c;
+  c.column.name = name;
+  if constexpr (std::is_same_v<T, double>) c.column.type = H5Type::kFloat64;
+  if constexpr (std::is_same_v<T, int32_t>) c.column.type = H5Type::kInt32;
+  if constexpr (std::is_same_v<T, int64_t>) c.column.type = H5Type::kInt64;
+  if constexpr (std::is_same_v<T, std::string>) {
+    c.column.type = H5Type::kString;
+    c.column.string_width = 256;
+  }
+  c.get = [member](const Row& row) { return H5Value(row.*member); };
+  return c;
+}
+
+std::vector<Column<IterationStats>> IterationColumns() {
+  using S = IterationStats;
+  return {Field("iteration", &S::iteration),
+          Field("jobs", &S::jobs),
+          Field("jobs_bad", &S::jobs_bad),
+          Field("jobs_requeued", &S::jobs_requeued),
+          Field("cameras_skipped", &S::cameras_skipped),
+          Field("workers", &S::workers),
+          Field("points_found", &S::points_found),
+          Field("points_inserted", &S::points_inserted),
+          Field("discarded_conflict", &S::discarded_conflict),
+          Field("discarded_duplicate", &S::discarded_duplicate),
+          Field("discarded_outside", &S::discarded_outside),
+          Field("vertices", &S::vertices),
+          Field("faces", &S::faces),
+          Field("outside_cells", &S::outside_cells),
+          Field("seconds_jobs", &S::seconds_jobs),
+          Field("seconds_sweep", &S::seconds_sweep),
+          Field("seconds_kernel", &S::seconds_kernel),
+          Field("seconds_insert", &S::seconds_insert),
+          Field("seconds_extract", &S::seconds_extract),
+          Field("seconds_checkpoint", &S::seconds_checkpoint),
+          Field("seconds_total", &S::seconds_total)};
+}
+
+std::vector<Column<WorkerIterationStats>> WorkerColumns() {
+  using W = WorkerIterationStats;
+  return {Field("iteration", &W::iteration), Field("worker", &W::worker), Field("jobs", &W::jobs),
+          Field("points", &W::points), Field("seconds_kernel", &W::seconds_kernel)};
+}
+
+template <typename Row>
+void WriteTable(H5File& file, const std::string& table, const std::vector<Column<Row>>& columns,
+                const std::vector<Row>& rows) {
+  std::vector<H5Column> spec;
+  for (const auto& c : columns) spec.push_back(c.column);
+  file.CreateTable(table, spec);
+  for (const Row& row : rows) {
+    std::vector<H5Value> values;
+    for (const auto& c : columns) values.push_back(c.get(row));
+    file.AppendRow(table, values);
+  }
+}
+
+template <typename Row, typename T>
+void ReadColumnInto(const H5File& file, const std::string& table, const char* name, T Row::*member,
+                    std::vector<Row>* rows) {
+  const std::vector<T> values = file.ReadColumn<T>(table, name);
+  rows->resize(values.size());
+  for (size_t i = 0; i < values.size(); ++i) (*rows)[i].*member = values[i];
+}
+
+void HashValue(Xxh64& h, double v) { h.Update(&v, sizeof(v)); }
+void HashValue(Xxh64& h, int64_t v) { h.Update(&v, sizeof(v)); }
+
+}  // namespace
+
+std::string SceneFingerprint(const Scene& scene) {
+  Xxh64 h;
+  HashValue(h, static_cast<int64_t>(scene.views.size()));
+  for (const View& v : scene.views) {
+    const Intrinsics& k = v.intrinsics;
+    HashValue(h, static_cast<int64_t>(k.width));
+    HashValue(h, static_cast<int64_t>(k.height));
+    for (double x : {k.fx, k.fy, k.cx, k.cy, k.k1, k.k2, k.p1, k.p2, k.k3}) HashValue(h, x);
+    for (int i = 0; i < 9; ++i) HashValue(h, v.R(i / 3, i % 3));
+    for (int i = 0; i < 3; ++i) HashValue(h, v.t[i]);
+  }
+  HashValue(h, static_cast<int64_t>(scene.points.size()));
+  for (const ScenePoint& p : scene.points) {
+    for (int i = 0; i < 3; ++i) HashValue(h, p.position[i]);
+    HashValue(h, static_cast<int64_t>(p.observations.size()));
+    for (const Observation& o : p.observations) HashValue(h, static_cast<int64_t>(o.view));
+  }
+  return HashHex(h.Digest());
+}
+
+void WriteRunFile(const RunRecord& record, const std::string& path) {
+  H5File file = H5File::Create(path);
+  WriteSceneH5(record.scene, file, "/scene");
+  file.CreateGroup("/checkpoint");
+  file.SetStringAttribute("/checkpoint", "format", kRunFormat);
+  file.SetIntAttribute("/checkpoint", "format_version", kRunFormatVersion);
+  file.SetIntAttribute("/checkpoint", "completed_iterations", record.completed_iterations());
+  file.SetStringAttribute("/checkpoint", "scene_fingerprint", record.scene_fingerprint);
+  file.SetStringAttribute("/checkpoint", "options_fingerprint", record.options_fingerprint);
+  file.SetStringAttribute("/checkpoint", "stop_reason", record.stop_reason);
+  std::vector<int64_t> batch_offsets = {0}, camera_offsets = {0};
+  std::vector<double> positions;
+  std::vector<int32_t> cameras;
+  for (const auto& batch : record.batches) {
+    for (const RayPoint& p : batch) {
+      positions.insert(positions.end(), {p.position.x(), p.position.y(), p.position.z()});
+      cameras.insert(cameras.end(), p.cameras.begin(), p.cameras.end());
+      camera_offsets.push_back(static_cast<int64_t>(cameras.size()));
+    }
+    batch_offsets.push_back(static_cast<int64_t>(camera_offsets.size() - 1));
+  }
+  file.Write("/checkpoint/batch_offsets", batch_offsets);
+  file.Write("/checkpoint/positions", positions, H5Shape{positions.size() / 3, 3});
+  file.Write("/checkpoint/camera_offsets", camera_offsets);
+  file.Write("/checkpoint/cameras", cameras);
+  WriteTable(file, "/stats/iterations", IterationColumns(), record.iterations);
+  WriteTable(file, "/stats/workers", WorkerColumns(), record.workers);
+  file.Commit();
+}
+
+RunRecord ReadRunFile(const std::string& path) {
+  const H5File file = H5File::OpenReadOnly(path);
+  auto fail = [&](const std::string& what) -> void {
+    throw InputError(path + ": /checkpoint: " + what);
+  };
+  if (!file.IsGroup("/checkpoint") || !file.HasAttribute("/checkpoint", "format") ||
+      file.ReadStringAttribute("/checkpoint", "format") != kRunFormat) {
+    throw InputError(path + ": not a manisweep run file (no /checkpoint of format " + kRunFormat +
+                     ")");
+  }
+  const int64_t version = file.ReadIntAttribute("/checkpoint", "format_version");
+  if (version != kRunFormatVersion) {
+    fail(fmt::format("format_version {} (this build reads {})", version, kRunFormatVersion));
+  }
+  RunRecord record;
+  record.scene = ReadSceneH5(file, "/scene");
+  record.scene_fingerprint = file.ReadStringAttribute("/checkpoint", "scene_fingerprint");
+  record.options_fingerprint = file.ReadStringAttribute("/checkpoint", "options_fingerprint");
+  record.stop_reason = file.ReadStringAttribute("/checkpoint", "stop_reason");
+  const int64_t completed = file.ReadIntAttribute("/checkpoint", "completed_iterations");
+  const auto batch_offsets = file.Read<int64_t>("/checkpoint/batch_offsets", {kH5Any});
+  const auto positions = file.Read<double>("/checkpoint/positions", {kH5Any, 3});
+  const auto camera_offsets = file.Read<int64_t>("/checkpoint/camera_offsets", {kH5Any});
+  const auto cameras = file.Read<int32_t>("/checkpoint/cameras", {kH5Any});
+  const int64_t num_points = static_cast<int64_t>(positions.size() / 3);
+  if (completed < 0 || static_cast<int64_t>(batch_offsets.size()) != completed + 1) {
+    fail("batch_offsets has " + std::to_string(batch_offsets.size()) + " entries for " +
+         std::to_string(completed) + " completed iterations");
+  }
+  if (static_cast<int64_t>(camera_offsets.size()) != num_points + 1 || camera_offsets[0] != 0 ||
+      camera_offsets.back() != static_cast<int64_t>(cameras.size())) {
+    fail("camera_offsets do not match positions and cameras");
+  }
+  if (batch_offsets[0] != 0 || batch_offsets.back() != num_points) {
+    fail("batch_offsets do not cover the positions");
+  }
+  const int32_t num_views = static_cast<int32_t>(record.scene.views.size());
+  for (int64_t b = 0; b < completed; ++b) {
+    if (batch_offsets[b + 1] < batch_offsets[b]) fail("batch_offsets decrease");
+    std::vector<RayPoint> batch;
+    for (int64_t i = batch_offsets[b]; i < batch_offsets[b + 1]; ++i) {
+      if (camera_offsets[i + 1] < camera_offsets[i]) fail("camera_offsets decrease");
+      RayPoint p;
+      p.position = Eigen::Vector3d(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]);
+      for (int64_t c = camera_offsets[i]; c < camera_offsets[i + 1]; ++c) {
+        if (cameras[c] < 0 || cameras[c] >= num_views) {
+          fail(fmt::format("cameras[{}] = {} is not a view of the scene", c, cameras[c]));
+        }
+        p.cameras.push_back(cameras[c]);
+      }
+      batch.push_back(std::move(p));
+    }
+    record.batches.push_back(std::move(batch));
+  }
+  {
+    using S = IterationStats;
+    const std::string t = "/stats/iterations";
+    std::vector<S>& rows = record.iterations;
+    ReadColumnInto(file, t, "iteration", &S::iteration, &rows);
+    ReadColumnInto(file, t, "jobs", &S::jobs, &rows);
+    ReadColumnInto(file, t, "jobs_bad", &S::jobs_bad, &rows);
+    ReadColumnInto(file, t, "jobs_requeued", &S::jobs_requeued, &rows);
+    ReadColumnInto(file, t, "cameras_skipped", &S::cameras_skipped, &rows);
+    ReadColumnInto(file, t, "workers", &S::workers, &rows);
+    ReadColumnInto(file, t, "points_found", &S::points_found, &rows);
+    ReadColumnInto(file, t, "points_inserted", &S::points_inserted, &rows);
+    ReadColumnInto(file, t, "discarded_conflict", &S::discarded_conflict, &rows);
+    ReadColumnInto(file, t, "discarded_duplicate", &S::discarded_duplicate, &rows);
+    ReadColumnInto(file, t, "discarded_outside", &S::discarded_outside, &rows);
+    ReadColumnInto(file, t, "vertices", &S::vertices, &rows);
+    ReadColumnInto(file, t, "faces", &S::faces, &rows);
+    ReadColumnInto(file, t, "outside_cells", &S::outside_cells, &rows);
+    ReadColumnInto(file, t, "seconds_jobs", &S::seconds_jobs, &rows);
+    ReadColumnInto(file, t, "seconds_sweep", &S::seconds_sweep, &rows);
+    ReadColumnInto(file, t, "seconds_kernel", &S::seconds_kernel, &rows);
+    ReadColumnInto(file, t, "seconds_insert", &S::seconds_insert, &rows);
+    ReadColumnInto(file, t, "seconds_extract", &S::seconds_extract, &rows);
+    ReadColumnInto(file, t, "seconds_checkpoint", &S::seconds_checkpoint, &rows);
+    ReadColumnInto(file, t, "seconds_total", &S::seconds_total, &rows);
+    if (static_cast<int64_t>(rows.size()) != completed + 1) {
+      throw InputError(fmt::format("{}: {}: {} rows for {} completed iterations (+ the build)",
+                                   path, t, rows.size(), completed));
+    }
+  }
+  {
+    using W = WorkerIterationStats;
+    const std::string t = "/stats/workers";
+    std::vector<W>& rows = record.workers;
+    ReadColumnInto(file, t, "iteration", &W::iteration, &rows);
+    ReadColumnInto(file, t, "worker", &W::worker, &rows);
+    ReadColumnInto(file, t, "jobs", &W::jobs, &rows);
+    ReadColumnInto(file, t, "points", &W::points, &rows);
+    ReadColumnInto(file, t, "seconds_kernel", &W::seconds_kernel, &rows);
+  }
+  return record;
+}
+
+void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
+                      const std::string& path) {
+  using nlohmann::json;
+  json j;
+  j["status"] = info.status;
+  j["input"] = info.input;
+  j["resumed"] = info.resumed;
+  j["stop_reason"] = record.stop_reason;
+  j["scene"] = {{"views", record.scene.views.size()},
+                {"points", record.scene.points.size()},
+                {"fingerprint", record.scene_fingerprint}};
+  j["options_fingerprint"] = record.options_fingerprint;
+  j["iterations_completed"] = record.completed_iterations();
+  json rows = json::array();
+  for (const IterationStats& s : record.iterations) {
+    rows.push_back(
+        {{"iteration", s.iteration},
+         {"jobs", s.jobs},
+         {"jobs_bad", s.jobs_bad},
+         {"jobs_requeued", s.jobs_requeued},
+         {"cameras_skipped", s.cameras_skipped},
+         {"workers", s.workers},
+         {"points_found", s.points_found},
+         {"points_inserted", s.points_inserted},
+         {"points_discarded", s.discarded_conflict + s.discarded_duplicate + s.discarded_outside},
+         {"vertices", s.vertices},
+         {"faces", s.faces},
+         {"seconds_jobs", s.seconds_jobs},
+         {"seconds_sweep", s.seconds_sweep},
+         {"seconds_kernel", s.seconds_kernel},
+         {"seconds_insert", s.seconds_insert},
+         {"seconds_extract", s.seconds_extract},
+         {"seconds_checkpoint", s.seconds_checkpoint},
+         {"seconds_total", s.seconds_total}});
+  }
+  j["iterations"] = rows;
+  json workers = json::object();
+  for (const WorkerIterationStats& w : record.workers) {
+    json& entry = workers[w.worker];
+    if (entry.is_null()) entry = {{"jobs", 0}, {"points", 0}, {"seconds_kernel", 0.0}};
+    entry["jobs"] = entry["jobs"].get<int64_t>() + w.jobs;
+    entry["points"] = entry["points"].get<int64_t>() + w.points;
+    entry["seconds_kernel"] = entry["seconds_kernel"].get<double>() + w.seconds_kernel;
+  }
+  j["workers"] = workers;
+  if (!record.iterations.empty()) {
+    const IterationStats& first = record.iterations.front();
+    const IterationStats& last = record.iterations.back();
+    j["initial_mesh"] = {{"vertices", first.vertices}, {"faces", first.faces}};
+    j["current_mesh"] = {{"vertices", last.vertices}, {"faces", last.faces}};
+  }
+  if (!info.final_mesh.empty()) {
+    j["final_mesh"] = {{"path", info.final_mesh},
+                       {"closed_manifold", info.final_is_closed_manifold},
+                       {"check", info.mesh_check}};
+  }
+  j["seconds_this_process"] = info.seconds;
+  WriteFileAtomically(
+      path, [&](std::ostream& out) { out << j.dump(2) << "\n"; }, false);
+}
+
+}  // namespace ms

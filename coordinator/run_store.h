@@ -1,0 +1,91 @@
+// What a coordinator run leaves in its output directory and how it resumes (docs/distributed.md):
+//
+//   initial.ply          the surface after Build (the paper's initial manifold)
+//   iteration_NN.ply     the surface after iteration NN (with --save-iterations)
+//   final.ply            the surface at the end
+//   run.h5               /scene: the scene; /stats/iterations and /stats/workers: per-iteration
+//                        statistics; /checkpoint: every iteration's accepted, sorted batch of
+//                        points (the input of DelaunayManifold::Insert)
+//   summary.json         the numbers for scripts
+//
+// Checkpoints work by deterministic replay: Build(scene points) followed by Insert(batch 1),
+// Insert(batch 2), ... gives the identical manifold, so a resumed run continues exactly where
+// the interrupted one was. Every file is written atomically (temporary name, then rename), so a
+// killed coordinator leaves the previous complete version.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "coordinator/delaunay_manifold.h"
+#include "scene/scene.h"
+
+namespace ms {
+
+// One row of /stats/iterations. Iteration 0 is the initial build.
+struct IterationStats {
+  int32_t iteration = 0;
+  int32_t jobs = 0;             // jobs sent (one per camera that has neighbours and sees faces)
+  int32_t jobs_bad = 0;         // jobs the kernel refused (no points from that camera)
+  int32_t jobs_requeued = 0;    // hand-outs repeated after a dead worker or an expired lease
+  int32_t cameras_skipped = 0;  // no neighbour, or no visible face
+  int32_t workers = 0;          // distinct workers that delivered
+  int64_t points_found = 0;     // returned by the workers (iteration 0: input points)
+  int64_t points_inserted = 0;
+  int64_t discarded_conflict = 0;
+  int64_t discarded_duplicate = 0;
+  int64_t discarded_outside = 0;
+  int64_t vertices = 0;  // of the surface mesh after the iteration
+  int64_t faces = 0;
+  int64_t outside_cells = 0;
+  double seconds_jobs = 0;        // building this iteration's jobs (visible meshes)
+  double seconds_sweep = 0;       // first job sent -> last result in
+  double seconds_kernel = 0;      // sum of the workers' kernel times
+  double seconds_insert = 0;      // Insert (Build for iteration 0)
+  double seconds_extract = 0;     // surface extraction and mesh files
+  double seconds_checkpoint = 0;  // writing run.h5 (of the previous iteration's checkpoint)
+  double seconds_total = 0;       // wall time of the iteration
+};
+
+// One row of /stats/workers: what one worker did in one iteration.
+struct WorkerIterationStats {
+  int32_t iteration = 0;
+  std::string worker;
+  int64_t jobs = 0;
+  int64_t points = 0;
+  double seconds_kernel = 0;
+};
+
+struct RunRecord {
+  Scene scene;
+  std::string scene_fingerprint;    // HashHex of the scene's content
+  std::string options_fingerprint;  // options that change the result (manifold, sweep, ...)
+  std::vector<std::vector<RayPoint>> batches;  // iterations 1..N, sorted as inserted
+  std::vector<IterationStats> iterations;      // 0..N
+  std::vector<WorkerIterationStats> workers;
+  std::string stop_reason;  // empty while running
+  int completed_iterations() const { return static_cast<int>(batches.size()); }
+};
+
+// A stable hash of everything in the scene that the reconstruction uses.
+std::string SceneFingerprint(const Scene& scene);
+
+// Writes run.h5 atomically. Throws InputError naming the file on failure.
+void WriteRunFile(const RunRecord& record, const std::string& path);
+// Reads and checks it. Throws InputError naming the file and the dataset.
+RunRecord ReadRunFile(const std::string& path);
+
+// summary.json: scene, options, per-iteration statistics, worker counts, final mesh.
+struct RunSummaryInfo {
+  std::string status;      // "running", "finished", "interrupted", "failed"
+  std::string input;       // the scene file
+  std::string final_mesh;  // path, when finished
+  std::string mesh_check;  // one line from CheckMesh of the final mesh
+  bool final_is_closed_manifold = false;
+  double seconds = 0;  // wall time of this process
+  bool resumed = false;
+};
+void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info, const std::string& path);
+
+}  // namespace ms

@@ -1,0 +1,128 @@
+// The coordinator and workers in one process, over the in-memory transport: the whole protocol
+// and the iteration loop without sockets (the multi-process test does the same with sockets).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <thread>
+
+#include "app/default_scene.h"
+#include "base/error.h"
+#include "base/file_util.h"
+#include "coordinator/coordinator.h"
+#include "coordinator/run_store.h"
+#include "mesh/mesh_checker.h"
+#include "mesh/mesh_io.h"
+#include "proto/transport.h"
+#include "worker/job_codec.h"
+#include "worker/kernel_factory.h"
+#include "worker/worker_process.h"
+
+namespace ms {
+namespace {
+
+namespace fs = std::filesystem;
+
+class InProcessRun : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::path(::testing::TempDir()) / ("manisweep_inprocess_" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    app::PyramidSceneFileOptions options;
+    options.width = 160;
+    options.height = 120;
+    scene_ = app::WritePyramidSceneFiles((root_ / "scene").string(), options);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(root_);
+  }
+
+  // Runs to the end with `workers` worker threads; `junk` is sent first by a rogue client.
+  CoordinatorResult Run(const std::string& name, int workers,
+                        const std::vector<std::string>& junk = {}) {
+    auto network = InMemoryNetwork::Create();
+    auto server = network->Bind();
+    CoordinatorOptions options;
+    options.input = scene_;
+    options.output_dir = (root_ / name).string();
+    options.max_iterations = 2;
+    options.scheduler.heartbeat_interval_s = 0.05;
+    options.scheduler.liveness = 4;
+    SweepOptions sweep;
+    sweep.tile_size_px = 10;
+    sweep.gaussian_sigma_px = 4;
+    SweepOptionsToWire(sweep, &options.sweep);
+    auto rogue = network->Connect();
+    for (const std::string& message : junk) rogue->Send(message);
+    // Workers end with the coordinator's Shutdown; the flag only unblocks a broken test.
+    std::atomic<bool> stop{false};
+    std::vector<std::thread> threads;
+    for (int i = 0; i < workers; ++i) {
+      threads.emplace_back([&, i] {
+        WorkerOptions w;
+        w.id = "thread-" + std::to_string(i);
+        w.heartbeat_interval_s = 0.05;
+        w.liveness = 4;
+        w.cache.directory = (root_ / "cache").string();
+        Worker worker(
+            w, [network] { return network->Connect(); }, MakeSweepKernel("reference"));
+        const WorkerSummary summary = worker.Run([&] { return stop.load(); });
+        EXPECT_EQ(summary.exit_reason, "shutdown: the run is complete");
+      });
+    }
+    Coordinator coordinator(options, server.get());
+    const CoordinatorResult result = coordinator.Run({});
+    std::thread watchdog([&] {
+      for (int i = 0; i < 500 && !stop; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      }
+      stop = true;
+    });
+    for (std::thread& t : threads) t.join();
+    stop = true;
+    watchdog.join();
+    return result;
+  }
+
+  fs::path root_;
+  std::string scene_;
+};
+
+TEST_F(InProcessRun, ConvergesToTheSameClosedManifoldWithOneOrTwoWorkers) {
+  const CoordinatorResult one = Run("one", 1);
+  EXPECT_EQ(one.status, "finished");
+  EXPECT_EQ(one.iterations, 2);
+  EXPECT_TRUE(one.final_is_closed_manifold);
+  const CoordinatorResult two =
+      Run("two", 2, {"", "\x08\x01 junk", std::string(1000, '\xff')});  // junk never crashes it
+  EXPECT_EQ(ReadFileToString(one.final_mesh), ReadFileToString(two.final_mesh));
+  const MeshReport report = CheckMesh(ReadMesh(two.final_mesh));
+  EXPECT_TRUE(report.is_closed_manifold) << report.ToTable();
+  const RunRecord record = ReadRunFile((root_ / "two" / "run.h5").string());
+  ASSERT_EQ(record.batches.size(), 2u);
+  EXPECT_GT(record.batches[0].size(), 100u);
+  // The batch is in insertion order: by camera first.
+  for (size_t i = 1; i < record.batches[0].size(); ++i) {
+    EXPECT_LE(record.batches[0][i - 1].cameras[0], record.batches[0][i].cameras[0]);
+  }
+}
+
+TEST_F(InProcessRun, ChangedOptionsCannotResumeARun) {
+  Run("first", 1);
+  auto network = InMemoryNetwork::Create();
+  auto server = network->Bind();
+  CoordinatorOptions options;
+  options.output_dir = (root_ / "first").string();
+  options.resume = true;
+  options.manifold.w1 = 3.0;  // differs from the checkpoint
+  Coordinator coordinator(options, server.get());
+  try {
+    coordinator.Run({});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("other options"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace ms
