@@ -104,7 +104,11 @@ void BM_GlslSweep(benchmark::State& state) {
   state.counters["ref_points"] = static_cast<double>(reference.points.size());
   state.counters["same_winners"] = same;
 }
-BENCHMARK(BM_GlslSweep)->Arg(640)->Arg(1280)->Unit(benchmark::kMillisecond)->UseManualTime()
+BENCHMARK(BM_GlslSweep)
+    ->Arg(640)
+    ->Arg(1280)
+    ->Unit(benchmark::kMillisecond)
+    ->UseManualTime()
     ->Iterations(3);
 
 void BM_ReferenceSweep(benchmark::State& state) {

@@ -23,7 +23,9 @@ namespace {
 
 constexpr float kUndefinedNcc = -2.0f;  // below every NCC; NaN where the reference has NaN
 constexpr int kReduceThreads = 64;
-constexpr int kUnrolledBlock = 16;
+// Outputs per invocation of the unrolled blur: 8 is as fast as 16 or 24 on llvmpipe and halves
+// the JIT time of the unrolled code (about a second per window size).
+constexpr int kUnrolledBlock = 8;
 constexpr int64_t kMaxFaces = int64_t{1} << 24;  // face ids travel as exact floats
 constexpr char kUnrolledMarker[] = "// @MS_UNROLLED_TAPS@";
 
@@ -126,7 +128,9 @@ class LayeredTarget {
  public:
   LayeredTarget(const std::vector<const gl::Texture2DArray*>& colors,
                 const gl::Texture2DArray& depth)
-      : width_(depth.width()), height_(depth.height()), num_colors_(static_cast<int>(colors.size())) {
+      : width_(depth.width()),
+        height_(depth.height()),
+        num_colors_(static_cast<int>(colors.size())) {
     glGenFramebuffers(1, &fbo_);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
     std::vector<GLenum> buffers;
@@ -195,12 +199,11 @@ double FarPlane(const View& view, const Mesh& mesh, double max_shift) {
 void GlslSweepKernelOptions::Check() const {
   context.Check();
   if (blur_block < 0 || blur_block > 64) {
-    throw InputError(fmt::format("glsl.blur_block must be in [0, 64] (0 = auto), got {}",
-                                 blur_block));
+    throw InputError(
+        fmt::format("glsl.blur_block must be in [0, 64] (0 = auto), got {}", blur_block));
   }
   if (max_batch_bytes < 1) {
-    throw InputError(fmt::format("glsl.max_batch_bytes must be positive, got {}",
-                                 max_batch_bytes));
+    throw InputError(fmt::format("glsl.max_batch_bytes must be positive, got {}", max_batch_bytes));
   }
   if (max_batch_offsets < 0) {
     throw InputError(fmt::format("glsl.max_batch_offsets must be >= 0 (0 = as many as fit), got {}",
@@ -222,10 +225,11 @@ struct GlslSweepKernel::Impl {
 
   std::unique_ptr<gl::ShaderProgram> raster_depth;
   std::map<int, std::unique_ptr<gl::ShaderProgram>> raster_world;  // by neighbours per draw
-  struct ComputePrograms {
-    gl::ShaderProgram rows, ncc, tile_best;
+  struct BlurPrograms {
+    gl::ShaderProgram rows, ncc;
   };
-  std::map<std::pair<int, int>, std::unique_ptr<ComputePrograms>> compute;  // (radius, words)
+  std::map<int, std::unique_ptr<BlurPrograms>> blur;            // by window radius
+  std::map<int, std::unique_ptr<gl::ShaderProgram>> tile_best;  // by radius and bit words
 
   // Textures kept between jobs of the same shape (sizes, batch, radius, neighbours).
   struct Resources {
@@ -266,7 +270,9 @@ struct GlslSweepKernel::Impl {
     // The default job's programs (sigma 8 px, two neighbours), so that a driver that cannot
     // compile them fails here rather than in the first job.
     RasterWorld(std::min(2, max_group));
-    Compute(static_cast<int>(std::ceil(3 * SweepOptions().gaussian_sigma_px)), 1);
+    const int radius = static_cast<int>(std::ceil(3 * SweepOptions().gaussian_sigma_px));
+    Blur(radius);
+    TileBest(radius, 1);
   }
 
   gl::ShaderProgram& RasterWorld(int neighbours) {
@@ -287,26 +293,41 @@ struct GlslSweepKernel::Impl {
     return *slot;
   }
 
-  ComputePrograms& Compute(int radius, int match_words) {
-    auto& slot = compute[{radius, match_words}];
-    if (slot) return *slot;
+  std::vector<std::string> ComputeDefines(int radius, int match_words) const {
     const bool unrolled = variant == GlslBlurVariant::kUnrolled;
-    std::vector<std::string> defines = {
-        fmt::format("RADIUS {}", radius),
-        fmt::format("BLOCK {}", block),
-        fmt::format("UNROLLED {}", unrolled ? 1 : 0),
-        fmt::format("TRANSPOSED {}", unrolled ? 1 : 0),
-        fmt::format("LOCAL_X {}", local_x),
-        fmt::format("LOCAL_Y {}", local_y),
-        fmt::format("UNDEFINED_NCC {:.1f}", kUndefinedNcc),
-        fmt::format("REDUCE_THREADS {}", kReduceThreads),
-        fmt::format("MATCH_WORDS {}", match_words)};
+    std::vector<std::string> defines = {fmt::format("RADIUS {}", radius),
+                                        fmt::format("BLOCK {}", block),
+                                        fmt::format("UNROLLED {}", unrolled ? 1 : 0),
+                                        fmt::format("TRANSPOSED {}", unrolled ? 1 : 0),
+                                        fmt::format("LOCAL_X {}", local_x),
+                                        fmt::format("LOCAL_Y {}", local_y),
+                                        fmt::format("UNDEFINED_NCC {:.1f}", kUndefinedNcc),
+                                        fmt::format("REDUCE_THREADS {}", kReduceThreads),
+                                        fmt::format("MATCH_WORDS {}", match_words)};
     defines.insert(defines.end(), options.shader_defines.begin(), options.shader_defines.end());
-    const std::string taps = unrolled ? UnrolledTaps(radius, block) : std::string();
-    slot = std::make_unique<ComputePrograms>(ComputePrograms{
-        Program("sweep row blur", {"sweep_blur_rows.comp"}, defines, taps),
-        Program("sweep column blur + NCC", {"sweep_blur_ncc.comp"}, defines, taps),
-        Program("sweep tile-best", {"sweep_tile_best.comp"}, defines)});
+    return defines;
+  }
+
+  BlurPrograms& Blur(int radius) {
+    auto& slot = blur[radius];
+    if (!slot) {
+      const std::vector<std::string> defines = ComputeDefines(radius, 1);
+      const std::string taps =
+          variant == GlslBlurVariant::kUnrolled ? UnrolledTaps(radius, block) : std::string();
+      slot = std::make_unique<BlurPrograms>(
+          BlurPrograms{Program("sweep row blur", {"sweep_blur_rows.comp"}, defines, taps),
+                       Program("sweep column blur + NCC", {"sweep_blur_ncc.comp"}, defines, taps)});
+    }
+    return *slot;
+  }
+
+  // The tile-best pass reads C's padded render: it depends on the radius too.
+  gl::ShaderProgram& TileBest(int radius, int match_words) {
+    auto& slot = tile_best[radius * 1000 + match_words];
+    if (!slot) {
+      slot = std::make_unique<gl::ShaderProgram>(Program(
+          "sweep tile-best", {"sweep_tile_best.comp"}, ComputeDefines(radius, match_words)));
+    }
     return *slot;
   }
 
@@ -364,8 +385,8 @@ void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, 
   const bool transposed = variant == GlslBlurVariant::kUnrolled;
   const int sums_w = transposed ? height + 2 * radius + block : width;
   const int sums_h = transposed ? width : height + 2 * radius + block;
-  resources.sums0 = std::make_unique<gl::Texture2D>(
-      ZeroTexture(sums_w, sums_h, TextureFormat::kRGBA32F));
+  resources.sums0 =
+      std::make_unique<gl::Texture2D>(ZeroTexture(sums_w, sums_h, TextureFormat::kRGBA32F));
   resources.sums1 =
       std::make_unique<gl::Texture2D>(ZeroTexture(sums_w, sums_h, TextureFormat::kRG32F));
   gl::CheckGlError("allocating sweep textures");
@@ -379,7 +400,8 @@ GlslSweepKernel::GlslSweepKernel(const GlslSweepKernelOptions& options)
   impl_->Init(options);
 }
 
-GlslSweepKernel::GlslSweepKernel(const gl::GlContext& context, const GlslSweepKernelOptions& options)
+GlslSweepKernel::GlslSweepKernel(const gl::GlContext& context,
+                                 const GlslSweepKernelOptions& options)
     : impl_(std::make_unique<Impl>()) {
   impl_->context = &context;
   if (!context.IsCurrent()) context.MakeCurrent();
@@ -390,7 +412,8 @@ GlslSweepKernel::~GlslSweepKernel() {
   if (impl_->context != nullptr && !impl_->context->IsCurrent()) impl_->context->MakeCurrent();
   // GL objects before their context.
   impl_->resources = Impl::Resources();
-  impl_->compute.clear();
+  impl_->blur.clear();
+  impl_->tile_best.clear();
   impl_->raster_world.clear();
   impl_->raster_depth.reset();
 }
@@ -418,8 +441,8 @@ GlslSweepKernel::MemoryPlan GlslSweepKernel::PlanMemory(const PreparedSweep& pre
   }
   const int num_offsets = static_cast<int>(prep.offsets.size());
   const int64_t room = std::max<int64_t>(0, impl_->options.max_batch_bytes - plan.fixed_bytes);
-  int64_t fit = std::clamp<int64_t>(room / std::max<int64_t>(1, plan.per_offset_bytes), 1,
-                                    num_offsets);
+  int64_t fit =
+      std::clamp<int64_t>(room / std::max<int64_t>(1, plan.per_offset_bytes), 1, num_offsets);
   if (impl_->options.max_batch_offsets > 0) {
     fit = std::min<int64_t>(fit, impl_->options.max_batch_offsets);
   }
@@ -478,8 +501,8 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
   // The driver's limits: texture sizes with the blur padding.
   int64_t longest = std::max<int64_t>(padded_width, height + 2 * radius + block);
   for (const SweepCamera& n : prep.neighbours) {
-    longest = std::max<int64_t>(longest,
-                                std::max(n.view.intrinsics.width, n.view.intrinsics.height));
+    longest =
+        std::max<int64_t>(longest, std::max(n.view.intrinsics.width, n.view.intrinsics.height));
   }
   if (info.max_texture_size > 0 && longest > info.max_texture_size) {
     throw InputError(fmt::format(
@@ -496,7 +519,8 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
   const MemoryPlan plan = kernel->PlanMemory(prep);
   const int batch_size = plan.offsets_per_batch;
   const int num_batches = DivUp(num_offsets, batch_size);
-  ComputePrograms& programs = Compute(radius, match_words);
+  BlurPrograms& programs = Blur(radius);
+  gl::ShaderProgram& tile_best = TileBest(radius, match_words);
   Allocate(prep, batch_size, radius);
 
   // ---- Per-job GL state ----
@@ -518,8 +542,8 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
   const gl::Buffer best_ncc = gl::Buffer::FromVector(std::vector<float>(num_tiles, threshold));
   const gl::Buffer best_info =
       gl::Buffer::FromVector(std::vector<Eigen::Vector4i>(num_tiles, {0, -1, 0, -1}));
-  const gl::Buffer best_position = gl::Buffer::FromVector(
-      std::vector<Eigen::Vector4f>(num_tiles, Eigen::Vector4f::Zero()));
+  const gl::Buffer best_position =
+      gl::Buffer::FromVector(std::vector<Eigen::Vector4f>(num_tiles, Eigen::Vector4f::Zero()));
   const gl::Buffer best_matched =
       gl::Buffer::FromVector(std::vector<uint32_t>(size_t{1} * num_tiles * match_words, 0));
   const gl::Buffer counters =
@@ -528,8 +552,8 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
   // ---- Rendering state ----
   const int max_offset = std::max(std::abs(prep.offsets.front()), std::abs(prep.offsets.back()));
   const double max_shift = std::abs(prep.alpha) * max_offset;
-  const gl::DepthRange range = info.clip_control ? gl::DepthRange::kReversedZeroToOne
-                                                 : gl::DepthRange::kNegativeOneToOne;
+  const gl::DepthRange range =
+      info.clip_control ? gl::DepthRange::kReversedZeroToOne : gl::DepthRange::kNegativeOneToOne;
   const float clear_depth = info.clip_control ? 0.0f : 1.0f;
   const Eigen::Vector3f center = (view.Center() - origin).cast<float>();
   const auto set_sweep = [&](const gl::ShaderProgram& p, const View& v, double far) {
@@ -544,7 +568,8 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
   for (const SweepCamera& n : prep.neighbours) {
     far_n.push_back(FarPlane(n.view, job.mesh, max_shift));
   }
-  // One draw from C per group of neighbours (colour attachments are limited).
+  // One draw from C per group of neighbours (colour attachments are limited). Groups of the
+  // same size share a program: set_group sets its uniforms before each draw.
   struct Group {
     int first, count;
     gl::ShaderProgram* program;
@@ -552,12 +577,15 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
   std::vector<Group> groups;
   for (int first = 0; first < num_neighbours; first += max_group) {
     const int count = std::min(max_group, num_neighbours - first);
-    gl::ShaderProgram& p = RasterWorld(count);
-    set_sweep(p, view, std::max(far_c, 2 * prep.near));
+    groups.push_back({first, count, &RasterWorld(count)});
+  }
+  const auto set_group = [&](const Group& group) {
+    const gl::ShaderProgram& p = *group.program;
+    set_sweep(p, view, far_c);
     p.Set("u_pixel_offset", radius);
     p.Set("u_occlusion", static_cast<float>(1 + sweep.occlusion_tolerance));
-    for (int i = 0; i < count; ++i) {
-      const View& n = prep.neighbours[first + i].view;
+    for (int i = 0; i < group.count; ++i) {
+      const View& n = prep.neighbours[group.first + i].view;
       p.Set(fmt::format("u_neighbour_size[{}]", i),
             Eigen::Vector2i(n.intrinsics.width, n.intrinsics.height));
       p.Set(fmt::format("u_rotation[{}]", i), n.R.cast<float>().eval());
@@ -565,8 +593,7 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
       p.Set(fmt::format("u_intrinsics[{}]", i),
             Eigen::Vector4f(n.intrinsics.fx, n.intrinsics.fy, n.intrinsics.cx, n.intrinsics.cy));
     }
-    groups.push_back({first, count, &p});
-  }
+  };
 
   // Constant uniforms of the compute passes.
   const std::vector<float> weights(prep.window.begin<float>(), prep.window.end<float>());
@@ -576,9 +603,9 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
   programs.ncc.Set("u_weights", weights);
   SetDouble(programs.ncc, "u_min_window_weight", sweep.min_window_weight);
   SetDouble(programs.ncc, "u_min_texture_variance", sweep.min_texture_variance);
-  programs.tile_best.Set("u_neighbours", num_neighbours);
-  programs.tile_best.Set("u_width", width);
-  programs.tile_best.Set("u_threshold", threshold);
+  tile_best.Set("u_neighbours", num_neighbours);
+  tile_best.Set("u_width", width);
+  tile_best.Set("u_threshold", threshold);
   gl::CheckGlError("sweep setup");
 
   const int rows_groups_x = DivUp(DivUp(width, block), local_x);
@@ -599,11 +626,10 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
     const int first = batch * batch_size;
     const int layers = std::min(batch_size, num_offsets - first);
     const int first_offset = prep.offsets[first];
-    const int capture_layer =
-        capture != nullptr && capture->offset >= first_offset &&
-                capture->offset < first_offset + layers
-            ? capture->offset - first_offset
-            : -1;
+    const int capture_layer = capture != nullptr && capture->offset >= first_offset &&
+                                      capture->offset < first_offset + layers
+                                  ? capture->offset - first_offset
+                                  : -1;
 
     // ---- Shadow maps, then C's view with the reprojections (one instanced draw each) ----
     glEnable(GL_DEPTH_TEST);
@@ -620,8 +646,8 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
     const float infinity = std::numeric_limits<float>::infinity();
     for (int j = 0; j < num_neighbours; ++j) {
       const Intrinsics& k = prep.neighbours[j].view.intrinsics;
-      resources.shadow_targets[j]->BindAndClear({Eigen::Vector4f(infinity, 0, 0, 0)},
-                                                clear_depth, cv::Rect(0, 0, k.width, k.height));
+      resources.shadow_targets[j]->BindAndClear({Eigen::Vector4f(infinity, 0, 0, 0)}, clear_depth,
+                                                cv::Rect(0, 0, k.width, k.height));
       if (!(far_n[j] > prep.near)) continue;
       set_sweep(*raster_depth, prep.neighbours[j].view, far_n[j]);
       raster_depth->Set("u_first_offset", first_offset);
@@ -641,6 +667,7 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
         neighbour_images[group.first + i].Bind(1 + i);
         resources.shadow[group.first + i]->Bind(1 + group.count + i);
       }
+      set_group(group);
       group.program->Set("u_first_offset", first_offset);
       group.program->Use();
       glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, layers);
@@ -671,8 +698,8 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
       capture->mask.clear();
       for (int j = 0; j < num_neighbours; ++j) {
         capture->shadow.push_back(DownloadLayer(*resources.shadow[j], capture_layer));
-        const cv::Mat reprojected =
-            DownloadLayer(*resources.reprojected[j], capture_layer).colRange(radius, radius + width);
+        const cv::Mat reprojected = DownloadLayer(*resources.reprojected[j], capture_layer)
+                                        .colRange(radius, radius + width);
         cv::Mat values(height, width, CV_32F, cv::Scalar(0));
         cv::Mat mask(height, width, CV_8U, cv::Scalar(0));
         for (int r = 0; r < height; ++r) {
@@ -723,10 +750,10 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
     best_position.BindStorage(4);
     best_matched.BindStorage(5);
     counters.BindStorage(6);
-    programs.tile_best.Set("u_layers", layers);
-    programs.tile_best.Set("u_first_offset", first_offset);
-    programs.tile_best.Set("u_batch", batch);
-    programs.tile_best.Dispatch(tiles.tiles_x, tiles.tiles_y);
+    tile_best.Set("u_layers", layers);
+    tile_best.Set("u_first_offset", first_offset);
+    tile_best.Set("u_batch", batch);
+    tile_best.Dispatch(tiles.tiles_x, tiles.tiles_y);
     Barrier();
     gl::CheckGlError("sweep tile-best");
     book(&stats.reduce_s);

@@ -50,10 +50,10 @@ struct GlslSweepKernelOptions {
 // Per-stage images of one offset, for comparisons with the reference (tests, debugging).
 // Captured when GlslSweepKernel::Run is given a capture; all at the swept resolution.
 struct GlslSweepCapture {
-  int offset = 0;               // k to capture (must be one of the job's offsets)
-  cv::Mat world;                // CV_32FC3 world position of M_k seen from C (0 where empty)
-  cv::Mat face;                 // CV_32S face of the job mesh (-1 where empty)
-  std::vector<cv::Mat> shadow;  // per neighbour: CV_32F camera z of M_k, +inf where empty
+  int offset = 0;                    // k to capture (must be one of the job's offsets)
+  cv::Mat world;                     // CV_32FC3 world position of M_k seen from C (0 where empty)
+  cv::Mat face;                      // CV_32S face of the job mesh (-1 where empty)
+  std::vector<cv::Mat> shadow;       // per neighbour: CV_32F camera z of M_k, +inf where empty
   std::vector<cv::Mat> reprojected;  // per neighbour: CV_32F I_k^j, 0 where invalid
   std::vector<cv::Mat> mask;         // per neighbour: CV_8U, 255 where valid
   std::vector<cv::Mat> ncc;          // per neighbour: CV_32F, NaN where undefined
