@@ -202,8 +202,9 @@ void GlslSweepKernelOptions::Check() const {
     throw InputError(
         fmt::format("glsl.blur_block must be in [0, 64] (0 = auto), got {}", blur_block));
   }
-  if (max_batch_bytes < 1) {
-    throw InputError(fmt::format("glsl.max_batch_bytes must be positive, got {}", max_batch_bytes));
+  if (max_batch_bytes < 0) {
+    throw InputError(
+        fmt::format("glsl.max_batch_bytes must be >= 0 (0 = auto), got {}", max_batch_bytes));
   }
   if (max_batch_offsets < 0) {
     throw InputError(fmt::format("glsl.max_batch_offsets must be >= 0 (0 = as many as fit), got {}",
@@ -440,7 +441,9 @@ GlslSweepKernel::MemoryPlan GlslSweepKernel::PlanMemory(const PreparedSweep& pre
     plan.fixed_bytes += n_pixels * 4;             // the image
   }
   const int num_offsets = static_cast<int>(prep.offsets.size());
-  const int64_t room = std::max<int64_t>(0, impl_->options.max_batch_bytes - plan.fixed_bytes);
+  int64_t budget = impl_->options.max_batch_bytes;
+  if (budget == 0) budget = impl_->context->info().software ? int64_t{128} << 20 : int64_t{1} << 30;
+  const int64_t room = std::max<int64_t>(0, budget - plan.fixed_bytes);
   int64_t fit =
       std::clamp<int64_t>(room / std::max<int64_t>(1, plan.per_offset_bytes), 1, num_offsets);
   if (impl_->options.max_batch_offsets > 0) {

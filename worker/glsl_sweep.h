@@ -34,9 +34,10 @@ struct GlslSweepKernelOptions {
   // Outputs per invocation of the blur passes; 0 = the variant's default (1 for loops, 16
   // unrolled).
   int blur_block = 0;
-  // GPU memory for the per-offset textures of one batch (C's render, shadow maps, NCC maps);
-  // offsets are batched so that a batch fits (at least one offset per batch).
-  int64_t max_batch_bytes = int64_t{512} << 20;
+  // GPU memory for one batch's textures (C's render and reprojections, shadow maps, NCC maps,
+  // plus the per-job ones); offsets are batched so that a batch fits (at least one offset per
+  // batch). 0 = 1 GiB on a GPU, 128 MiB on a CPU rasterizer (where batching gains nothing).
+  int64_t max_batch_bytes = 0;
   // At most this many offsets per batch; 0 = as many as fit max_batch_bytes.
   int max_batch_offsets = 0;
   // Wait for the GPU at stage boundaries so SweepStats has per-stage times (a few waits per

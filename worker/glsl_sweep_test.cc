@@ -541,7 +541,7 @@ TEST_F(GlslSweepTest, FactoryMakesKernelsByName) {
   }
   // Bad options are the caller's error even for "auto" (no silent fallback).
   GlslSweepKernelOptions bad;
-  bad.max_batch_bytes = 0;
+  bad.max_batch_bytes = -1;
   EXPECT_THROW(MakeSweepKernel("auto", bad), InputError);
   // A kernel made by the factory runs on the thread that made it.
   const SweepJob job = MakeJob(NoisyPyramid(), MakeFlatSquare(0.15, 1.3, 2));
