@@ -21,7 +21,7 @@
 namespace ms {
 namespace {
 
-constexpr float kUndefinedNcc = -2.0f;  // below every NCC; NaN where the reference has NaN
+constexpr float kUndefinedNcc = -2.0f;  // an undefined NCC (the reference's NaN): below all
 constexpr int kReduceThreads = 64;
 // Outputs per invocation of the unrolled blur: 8 is as fast as 16 or 24 on llvmpipe and halves
 // the JIT time of the unrolled code (about a second per window size).
@@ -100,10 +100,9 @@ void BindImageArray(const gl::Texture2DArray& texture, int unit, GLenum access, 
   glBindImageTexture(static_cast<GLuint>(unit), texture.id(), 0, GL_TRUE, 0, access, format);
 }
 
-void Barrier() {
-  glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
-                  GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-}
+// After every compute pass: its image and buffer stores become visible to every later access
+// (the next pass's image loads, the next batch's rendering into the same arrays, read-backs).
+void Barrier() { glMemoryBarrier(GL_ALL_BARRIER_BITS); }
 
 int DivUp(int64_t a, int64_t b) { return static_cast<int>((a + b - 1) / b); }
 
@@ -112,7 +111,6 @@ cv::Mat DownloadLayer(const gl::Texture2DArray& texture, int layer) {
   const bool rgba = texture.format() == gl::TextureFormat::kRGBA32F;
   MS_CHECK(rgba || texture.format() == gl::TextureFormat::kR32F) << "capture of an odd format";
   const int type = rgba ? CV_32FC4 : CV_32FC1;
-  std::vector<cv::Mat> layers;
   cv::Mat all(texture.height() * texture.layers(), texture.width(), type);
   glBindTexture(GL_TEXTURE_2D_ARRAY, texture.id());
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
