@@ -22,7 +22,6 @@ namespace ms {
 namespace {
 
 constexpr float kUndefinedNcc = -2.0f;  // an undefined NCC (the reference's NaN): below all
-constexpr int kReduceThreads = 64;
 // Outputs per invocation of the unrolled blur: 8 is as fast as 16 or 24 on llvmpipe and halves
 // the JIT time of the unrolled code (about a second per window size).
 constexpr int kUnrolledBlock = 8;
@@ -294,15 +293,14 @@ struct GlslSweepKernel::Impl {
 
   std::vector<std::string> ComputeDefines(int radius, int match_words) const {
     const bool unrolled = variant == GlslBlurVariant::kUnrolled;
-    std::vector<std::string> defines = {fmt::format("RADIUS {}", radius),
-                                        fmt::format("BLOCK {}", block),
-                                        fmt::format("UNROLLED {}", unrolled ? 1 : 0),
-                                        fmt::format("TRANSPOSED {}", unrolled ? 1 : 0),
-                                        fmt::format("LOCAL_X {}", local_x),
-                                        fmt::format("LOCAL_Y {}", local_y),
-                                        fmt::format("UNDEFINED_NCC {:.1f}", kUndefinedNcc),
-                                        fmt::format("REDUCE_THREADS {}", kReduceThreads),
-                                        fmt::format("MATCH_WORDS {}", match_words)};
+    std::vector<std::string> defines = {
+        fmt::format("RADIUS {}", radius), fmt::format("BLOCK {}", block),
+        fmt::format("UNROLLED {}", unrolled ? 1 : 0),
+        fmt::format("TRANSPOSED {}", unrolled ? 1 : 0), fmt::format("LOCAL_X {}", local_x),
+        fmt::format("LOCAL_Y {}", local_y), fmt::format("UNDEFINED_NCC {:.1f}", kUndefinedNcc),
+        // Tile-best work groups: 64 invocations for llvmpipe, 256 to fill a GPU's multiprocessors.
+        fmt::format("REDUCE_THREADS {}", unrolled ? 64 : 256),
+        fmt::format("MATCH_WORDS {}", match_words)};
     defines.insert(defines.end(), options.shader_defines.begin(), options.shader_defines.end());
     return defines;
   }
@@ -681,11 +679,16 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
       const cv::Mat world4 =
           DownloadLayer(*resources.world, capture_layer).colRange(radius, radius + width);
       capture->world.create(height, width, CV_32FC3);
+      capture->depth.create(height, width, CV_32F);
       capture->face.create(height, width, CV_32S);
       for (int r = 0; r < height; ++r) {
         for (int c = 0; c < width; ++c) {
           const cv::Vec4f w = world4.at<cv::Vec4f>(r, c);
           const bool covered = w[3] >= 0;
+          const Eigen::Vector3d x(w[0], w[1], w[2]);
+          capture->depth.at<float>(r, c) = covered
+                                               ? static_cast<float>(view.ToCamera(x + origin).z())
+                                               : std::numeric_limits<float>::infinity();
           capture->face.at<int32_t>(r, c) = covered ? static_cast<int32_t>(w[3]) : -1;
           capture->world.at<cv::Vec3f>(r, c) =
               covered ? cv::Vec3f(static_cast<float>(w[0] + origin.x()),

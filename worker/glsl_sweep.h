@@ -53,6 +53,7 @@ struct GlslSweepKernelOptions {
 struct GlslSweepCapture {
   int offset = 0;                    // k to capture (must be one of the job's offsets)
   cv::Mat world;                     // CV_32FC3 world position of M_k seen from C (0 where empty)
+  cv::Mat depth;                     // CV_32F its camera z in C (from world), +inf where empty
   cv::Mat face;                      // CV_32S face of the job mesh (-1 where empty)
   std::vector<cv::Mat> shadow;       // per neighbour: CV_32F camera z of M_k, +inf where empty
   std::vector<cv::Mat> reprojected;  // per neighbour: CV_32F I_k^j, 0 where invalid

@@ -161,9 +161,9 @@ TEST_F(GlslSweepTest, StagesMatchTheReference) {
     ASSERT_EQ(capture.world.size(), cv::Size(width, height));
     ASSERT_EQ(capture.shadow.size(), 2u);
 
-    // Swept mesh seen from C: coverage, face and world position.
+    // Swept mesh seen from C: coverage, face, world position and depth.
     int64_t coverage_differs = 0, face_differs = 0, both = 0;
-    double worst_position = 0;
+    double worst_position = 0, worst_c_depth = 0;
     for (int r = 0; r < height; ++r) {
       for (int c = 0; c < width; ++c) {
         const size_t i = ref.camera->Index(c, r);
@@ -178,20 +178,22 @@ TEST_F(GlslSweepTest, StagesMatchTheReference) {
         }
         const cv::Vec3f w = capture.world.at<cv::Vec3f>(r, c);
         const Eigen::Vector3d gl_world(w[0], w[1], w[2]);
-        worst_position = std::max(
-            worst_position, (gl_world - ref.camera->world()[i]).norm() / ref.camera->depth()[i]);
+        const double z = ref.camera->depth()[i];
+        worst_position = std::max(worst_position, (gl_world - ref.camera->world()[i]).norm() / z);
+        worst_c_depth = std::max(worst_c_depth, std::abs(capture.depth.at<float>(r, c) - z) / z);
       }
     }
     std::printf(
         "[%s] C view: %lld covered, coverage differs at %lld, face at %lld; worst "
-        "position error %.2e x depth\n",
+        "position error %.2e x depth, depth %.2e relative\n",
         Label(kernel).c_str(), static_cast<long long>(both),
         static_cast<long long>(coverage_differs), static_cast<long long>(face_differs),
-        worst_position);
+        worst_position, worst_c_depth);
     EXPECT_GT(both, pixels * 9 / 10);
     EXPECT_LE(coverage_differs, pixels / 1000);  // pixel centres within float error of an edge
     EXPECT_LE(face_differs, both / 200);
     EXPECT_LT(worst_position, 1e-5);
+    EXPECT_LT(worst_c_depth, 1e-5);
 
     for (int j = 0; j < 2; ++j) {
       // Shadow maps.
