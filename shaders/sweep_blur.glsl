@@ -11,8 +11,7 @@
 // reuse).
 uniform float u_weights[2 * RADIUS + 1];  // GaussianWindow(sigma), normalised to sum 1
 
-// fma(): one fused instruction per channel and tap, also on llvmpipe (which does not fuse a
-// multiply and an add by itself).
+// fma(): one rounding per channel and tap (the sums differ from OpenCV's only in their order).
 void Tap(inout Sums acc, float w, Sums s) {
   acc.a = fma(vec4(w), s.a, acc.a);
   acc.b = fma(vec2(w), s.b, acc.b);
