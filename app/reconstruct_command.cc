@@ -18,7 +18,7 @@
 #include "base/log.h"
 #include "coordinator/coordinator.h"
 #include "proto/zmq_transport.h"
-#include "worker/kernel_factory.h"
+#include "worker/sweep_kernel_factory.h"
 
 namespace ms::app {
 namespace {

@@ -9,12 +9,13 @@
 #include "app/commands.h"
 #include "base/error.h"
 #include "base/log.h"
+#include "gl/context.h"
 #include "mesh/mesh_io.h"
 #include "mesh/visible_mesh.h"
 #include "scene/scene_io.h"
 #include "scene/view_selection.h"
-#include "worker/reference_sweep.h"
 #include "worker/sweep_images.h"
+#include "worker/sweep_kernel_factory.h"
 
 namespace ms::app {
 namespace {
@@ -24,24 +25,24 @@ struct SweepCommandOptions {
   std::string mesh;
   int camera = 0;
   std::string output;
+  std::string kernel = "glsl";
   bool reference = false;
+  std::string gl_backend = "auto";
   NeighbourOptions neighbours;
   SweepOptions sweep;
 };
 
-std::unique_ptr<SweepKernel> MakeKernel(bool reference) {
-  if (!reference) {
-    throw InputError(
-        "sweep: the GLSL kernel is not part of this build yet; pass --reference "
-        "to use the C++ reference kernel");
-  }
-  return std::make_unique<ReferenceSweepKernel>();
-}
-
 void RunSweep(const SweepCommandOptions& options) {
   options.sweep.Check();
   options.neighbours.Check();
-  std::unique_ptr<SweepKernel> kernel = MakeKernel(options.reference);
+  GlslSweepKernelOptions glsl;
+  glsl.context.backend = gl::ParseGlBackend(options.gl_backend);
+  // The GL context (and its shaders) before reading anything: a missing driver fails fast.
+  std::unique_ptr<SweepKernel> kernel =
+      MakeSweepKernel(options.reference ? "reference" : options.kernel, glsl);
+  if (const auto* g = dynamic_cast<const GlslSweepKernel*>(kernel.get())) {
+    spdlog::info("sweep: GLSL kernel on {}", g->gl_info().Summary());
+  }
   Timer timer;
   Scene scene = ReadScene(options.input);
   scene.Validate();
@@ -92,8 +93,17 @@ void RegisterSweepCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("-o,--output", options->output, "points found (.ply, NCC as 'quality')")
       ->required();
-  cmd->add_flag("--reference", options->reference,
-                "use the C++ reference kernel (the only kernel in this build)");
+  cmd->add_option("--kernel", options->kernel,
+                  "sweep kernel: glsl (OpenGL 4.3 through EGL: the GPU, else Mesa's llvmpipe), "
+                  "reference (the C++ reference, slow) or auto (glsl if a GL context can be "
+                  "created, else reference)")
+      ->check(CLI::IsMember({"auto", "glsl", "reference"}))
+      ->capture_default_str();
+  cmd->add_flag("--reference", options->reference, "same as --kernel reference");
+  cmd->add_option("--gl-backend", options->gl_backend,
+                  "OpenGL through EGL: auto (GPU device, else Mesa surfaceless), device or "
+                  "surfaceless")
+      ->capture_default_str();
   NeighbourOptions& n = options->neighbours;
   cmd->add_option("--neighbours.count", n.count, "neighbour cameras to match against")
       ->capture_default_str();

@@ -411,6 +411,10 @@ void GlContext::MakeCurrent() const {
 
 bool GlContext::IsCurrent() const { return eglGetCurrentContext() == impl_->context; }
 
+void GlContext::ReleaseCurrent() const {
+  if (IsCurrent()) eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+}
+
 std::string DescribeGl(const GlContextOptions& options) {
   try {
     GlContext context(options);

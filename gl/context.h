@@ -57,6 +57,9 @@ class GlContext {
   const GlInfo& info() const;
   void MakeCurrent() const;
   bool IsCurrent() const;
+  // Unbinds the context from the calling thread (if bound), so another thread may bind it: an
+  // EGL context is current on at most one thread at a time.
+  void ReleaseCurrent() const;
 
  private:
   struct Impl;

@@ -17,7 +17,7 @@
 #include "proto/wire.h"
 #include "worker/image_cache.h"
 #include "worker/job_codec.h"
-#include "worker/kernel_factory.h"
+#include "worker/sweep_kernel_factory.h"
 
 namespace ms {
 namespace {
@@ -340,21 +340,6 @@ TEST_F(WorkerProcessTest, ReconnectsWithBackOffAndGivesUpWhenNobodyAnswers) {
   EXPECT_GE(elapsed, 0.6);
   EXPECT_LT(elapsed, 3.0);
   EXPECT_GE(connections_.load(), 4);  // the first connection and several reconnections
-}
-
-TEST(KernelFactory, NamesUnknownAndUnavailableKernels) {
-  const std::vector<std::string> names = SweepKernelNames();
-  ASSERT_FALSE(names.empty());
-  EXPECT_EQ(names[0], "auto");
-  EXPECT_EQ(MakeSweepKernel("reference")->Name(), "reference");
-  EXPECT_EQ(MakeSweepKernel("auto")->Name(), "reference");  // until the GLSL kernel exists
-  try {
-    MakeSweepKernel("cuda");
-    FAIL();
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown kernel"), std::string::npos);
-  }
-  EXPECT_THROW(MakeSweepKernel("glsl"), InputError);
 }
 
 TEST(ImageCache, UsesLocalFilesOnlyWhenSizeAndHashMatch) {

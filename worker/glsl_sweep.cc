@@ -1,0 +1,822 @@
+#include "worker/glsl_sweep.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <opencv2/core.hpp>
+
+#include "base/check.h"
+#include "base/error.h"
+#include "base/log.h"
+#include "gl/context.h"
+#include "gl/gl_api.h"
+#include "gl/mesh_renderer.h"
+#include "gl/objects.h"
+#include "gl/projection.h"
+#include "shaders/shaders.h"
+
+namespace ms {
+namespace {
+
+constexpr float kUndefinedNcc = -2.0f;  // an undefined NCC (the reference's NaN): below all
+// Outputs per invocation of the unrolled blur: 8 is as fast as 16 or 24 on llvmpipe and halves
+// the JIT time of the unrolled code (about a second per window size).
+constexpr int kUnrolledBlock = 8;
+constexpr int64_t kMaxFaces = int64_t{1} << 24;  // face ids travel as exact floats
+constexpr char kUnrolledMarker[] = "// @MS_UNROLLED_TAPS@";
+
+// ---- Shader sources ----
+
+// `#define`s go right after the #version line, followed by a #line that keeps the compiler's
+// line numbers those of the file (as gl::ShaderProgram::FromEmbedded does).
+std::string InsertDefines(const std::string& text, const std::vector<std::string>& defines) {
+  size_t pos = 0;
+  int line = 0;
+  while (pos < text.size()) {
+    size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    ++line;
+    if (text.compare(pos, 8, "#version") == 0) {
+      std::string block;
+      for (const std::string& d : defines) block += "#define " + d + "\n";
+      block += "#line " + std::to_string(line + 1) + " 0\n";
+      return text.substr(0, end + 1) + block + text.substr(std::min(end + 1, text.size()));
+    }
+    pos = end + 1;
+  }
+  throw InternalError("sweep shader without a #version line");
+}
+
+// The tap loop of sweep_blur.glsl fully unrolled, on one line (so line numbers do not move):
+// every sample loaded once, then each output's 2 radius + 1 taps.
+std::string UnrolledTaps(int radius, int block) {
+  std::string s;
+  const int samples = block + 2 * radius;
+  for (int i = 0; i < samples; ++i) s += fmt::format("Sums s{0} = LoadSample({0}); ", i);
+  for (int o = 0; o < block; ++o) {
+    s += "{ Sums acc = ZeroSums(); ";
+    for (int i = 0; i <= 2 * radius; ++i) {
+      s += fmt::format("Tap(acc, u_weights[{}], s{}); ", i, o + i);
+    }
+    s += fmt::format("FinishOutput({}, acc); }} ", o);
+  }
+  return s;
+}
+
+gl::ShaderSource Source(const std::string& name, const std::vector<std::string>& defines,
+                        const std::string& unrolled = {}) {
+  gl::ShaderSource source;
+  source.stage = gl::ShaderStageFromName(name);
+  source.name = name;
+  std::string text = shaders::Expand(name, &source.included_names);
+  if (!unrolled.empty()) {
+    const size_t at = text.find(kUnrolledMarker);
+    MS_CHECK(at != std::string::npos) << name << " has no unrolling marker";
+    text.replace(at, sizeof(kUnrolledMarker) - 1, unrolled);
+  }
+  source.text = InsertDefines(text, defines);
+  return source;
+}
+
+gl::ShaderProgram Program(const std::string& name, const std::vector<std::string>& names,
+                          const std::vector<std::string>& defines,
+                          const std::string& unrolled = {}) {
+  std::vector<gl::ShaderSource> sources;
+  for (const std::string& n : names) sources.push_back(Source(n, defines, unrolled));
+  return gl::ShaderProgram(name, sources);
+}
+
+// ---- GL helpers ----
+
+void SetDouble(const gl::ShaderProgram& program, const char* name, double value) {
+  glProgramUniform1d(program.id(), program.Location(name), value);
+}
+
+void BindImageArray(const gl::Texture2DArray& texture, int unit, GLenum access, GLenum format) {
+  glBindImageTexture(static_cast<GLuint>(unit), texture.id(), 0, GL_TRUE, 0, access, format);
+}
+
+// After every compute pass: its image and buffer stores become visible to every later access
+// (the next pass's image loads, the next batch's rendering into the same arrays, read-backs).
+void Barrier() { glMemoryBarrier(GL_ALL_BARRIER_BITS); }
+
+int DivUp(int64_t a, int64_t b) { return static_cast<int>((a + b - 1) / b); }
+
+// One layer of a texture array (the whole array is read: for captures only).
+cv::Mat DownloadLayer(const gl::Texture2DArray& texture, int layer) {
+  const bool rgba = texture.format() == gl::TextureFormat::kRGBA32F;
+  MS_CHECK(rgba || texture.format() == gl::TextureFormat::kR32F) << "capture of an odd format";
+  const int type = rgba ? CV_32FC4 : CV_32FC1;
+  cv::Mat all(texture.height() * texture.layers(), texture.width(), type);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, texture.id());
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, rgba ? GL_RGBA : GL_RED, GL_FLOAT, all.data);
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  gl::CheckGlError("capture read-back");
+  return all.rowRange(layer * texture.height(), (layer + 1) * texture.height()).clone();
+}
+
+// Colour texture arrays and a depth texture array attached as one layered framebuffer: an
+// instanced draw routes each instance to its layer (gl_Layer), colour output i to colors[i].
+class LayeredTarget {
+ public:
+  LayeredTarget(const std::vector<const gl::Texture2DArray*>& colors,
+                const gl::Texture2DArray& depth)
+      : width_(depth.width()),
+        height_(depth.height()),
+        num_colors_(static_cast<int>(colors.size())) {
+    glGenFramebuffers(1, &fbo_);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+    std::vector<GLenum> buffers;
+    for (size_t i = 0; i < colors.size(); ++i) {
+      glFramebufferTexture(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(i),
+                           colors[i]->id(), 0);
+      buffers.push_back(GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(i));
+    }
+    glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, depth.id(), 0);
+    glDrawBuffers(static_cast<GLsizei>(buffers.size()), buffers.data());
+    const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE) {
+      glDeleteFramebuffers(1, &fbo_);
+      throw InternalError(fmt::format("{}x{}x{} layered framebuffer incomplete (0x{:x})",
+                                      depth.width(), depth.height(), depth.layers(), status));
+    }
+    gl::CheckGlError("creating a layered framebuffer");
+  }
+  ~LayeredTarget() {
+    if (fbo_ != 0) glDeleteFramebuffers(1, &fbo_);
+  }
+  LayeredTarget(const LayeredTarget&) = delete;
+  LayeredTarget& operator=(const LayeredTarget&) = delete;
+
+  // Binds for drawing, clears colour i to colors[i] (all layers) and depth, and sets the
+  // viewport to `viewport` (x, y, width, height).
+  void BindAndClear(const std::vector<Eigen::Vector4f>& colors, float depth,
+                    const cv::Rect& viewport) const {
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+    glViewport(0, 0, width_, height_);
+    glDepthMask(GL_TRUE);
+    for (int i = 0; i < num_colors_; ++i) glClearBufferfv(GL_COLOR, i, colors[i].data());
+    glClearBufferfv(GL_DEPTH, 0, &depth);
+    glViewport(viewport.x, viewport.y, viewport.width, viewport.height);
+  }
+
+ private:
+  int width_, height_, num_colors_;
+  GLuint fbo_ = 0;
+};
+
+gl::Texture2D ZeroTexture(int width, int height, gl::TextureFormat format) {
+  gl::Texture2D texture(width, height, format);
+  texture.Upload(cv::Mat::zeros(height, width, gl::CvTypeOf(format)));
+  return texture;
+}
+
+gl::Texture2D ImageTexture(const cv::Mat& image) {
+  gl::Texture2D texture(image.cols, image.rows, gl::TextureFormat::kR32F);
+  texture.Upload(image);
+  return texture;
+}
+
+// The farthest camera z any swept vertex can reach (sweeping moves a vertex by at most
+// |alpha k_max| along a ray), padded; 0 if the mesh lies behind the camera.
+double FarPlane(const View& view, const Mesh& mesh, double max_shift) {
+  double z_max = -std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d& v : mesh.vertices) z_max = std::max(z_max, view.ToCamera(v).z());
+  z_max += max_shift;
+  if (!(z_max > 0)) return 0;
+  return z_max * 1.01 + 1e-9;
+}
+
+}  // namespace
+
+void GlslSweepKernelOptions::Check() const {
+  context.Check();
+  if (blur_block < 0 || blur_block > 64) {
+    throw InputError(
+        fmt::format("glsl.blur_block must be in [0, 64] (0 = auto), got {}", blur_block));
+  }
+  if (max_batch_bytes < 0) {
+    throw InputError(
+        fmt::format("glsl.max_batch_bytes must be >= 0 (0 = auto), got {}", max_batch_bytes));
+  }
+  if (max_batch_offsets < 0) {
+    throw InputError(fmt::format("glsl.max_batch_offsets must be >= 0 (0 = as many as fit), got {}",
+                                 max_batch_offsets));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+struct GlslSweepKernel::Impl {
+  std::unique_ptr<gl::GlContext> owned_context;
+  const gl::GlContext* context = nullptr;
+  GlslSweepKernelOptions options;
+  GlslBlurVariant variant = GlslBlurVariant::kLoops;
+  int block = 1;
+  int local_x = 64, local_y = 1;  // blur passes' work-group shape
+  int max_array_layers = 0;
+  int max_group = 1;  // neighbours reprojected by one draw (colour attachments - 1)
+
+  std::unique_ptr<gl::ShaderProgram> raster_depth;
+  std::map<int, std::unique_ptr<gl::ShaderProgram>> raster_world;  // by neighbours per draw
+  struct BlurPrograms {
+    gl::ShaderProgram rows, ncc;
+  };
+  std::map<int, std::unique_ptr<BlurPrograms>> blur;            // by window radius
+  std::map<int, std::unique_ptr<gl::ShaderProgram>> tile_best;  // by radius and bit words
+
+  // Textures kept between jobs of the same shape (sizes, batch, radius, neighbours).
+  struct Resources {
+    std::vector<int> key;
+    std::unique_ptr<gl::Texture2DArray> world, world_depth, ncc;
+    std::vector<std::unique_ptr<gl::Texture2DArray>> reprojected;  // per neighbour
+    std::vector<std::unique_ptr<gl::Texture2DArray>> shadow, shadow_depth;
+    std::vector<std::unique_ptr<LayeredTarget>> world_targets;  // per group of neighbours
+    std::vector<std::unique_ptr<LayeredTarget>> shadow_targets;
+    std::unique_ptr<gl::Texture2D> sums0, sums1;
+  };
+  Resources resources;
+
+  void Init(const GlslSweepKernelOptions& o) {
+    o.Check();
+    options = o;
+    const gl::GlInfo& info = context->info();
+    variant = o.blur;
+    if (variant == GlslBlurVariant::kAuto) {
+      variant = info.software ? GlslBlurVariant::kUnrolled : GlslBlurVariant::kLoops;
+    }
+    const bool unrolled = variant == GlslBlurVariant::kUnrolled;
+    block = o.blur_block > 0 ? o.blur_block : (unrolled ? kUnrolledBlock : 1);
+    // Unrolled: 8x8 invocations (llvmpipe runs 8 lanes at a time, lanes along a line's
+    // blocks); loops: 64 invocations along image rows (coalesced on GPUs).
+    local_x = unrolled ? 8 : 64;
+    local_y = unrolled ? 8 : 1;
+    glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_array_layers);
+    GLint attachments = 0, draw_buffers = 0, units = 0;
+    glGetIntegerv(GL_MAX_COLOR_ATTACHMENTS, &attachments);
+    glGetIntegerv(GL_MAX_DRAW_BUFFERS, &draw_buffers);
+    glGetIntegerv(GL_MAX_TEXTURE_IMAGE_UNITS, &units);
+    max_group = std::max(1, std::min({attachments - 1, draw_buffers - 1, (units - 1) / 2}));
+    raster_depth = std::make_unique<gl::ShaderProgram>(
+        Program("sweep raster (shadow maps)",
+                {"sweep_raster.vert", "sweep_raster.geom", "sweep_raster_depth.frag"},
+                options.shader_defines));
+    // The default job's programs (sigma 8 px, two neighbours), so that a driver that cannot
+    // compile them fails here rather than in the first job.
+    RasterWorld(std::min(2, max_group));
+    const int radius = static_cast<int>(std::ceil(3 * SweepOptions().gaussian_sigma_px));
+    Blur(radius);
+    TileBest(radius, 1);
+  }
+
+  gl::ShaderProgram& RasterWorld(int neighbours) {
+    auto& slot = raster_world[neighbours];
+    if (!slot) {
+      std::vector<std::string> defines = {fmt::format("NEIGHBOURS {}", neighbours)};
+      defines.insert(defines.end(), options.shader_defines.begin(), options.shader_defines.end());
+      slot = std::make_unique<gl::ShaderProgram>(
+          Program("sweep raster (C) + reprojection",
+                  {"sweep_raster.vert", "sweep_raster.geom", "sweep_raster_world.frag"}, defines));
+      // Texture units: I_C 0, neighbour images 1..n, shadow maps n+1..2n.
+      slot->Set("u_image", 0);
+      for (int j = 0; j < neighbours; ++j) {
+        slot->Set(fmt::format("u_neighbour[{}]", j), 1 + j);
+        slot->Set(fmt::format("u_shadow[{}]", j), 1 + neighbours + j);
+      }
+    }
+    return *slot;
+  }
+
+  std::vector<std::string> ComputeDefines(int radius, int match_words) const {
+    const bool unrolled = variant == GlslBlurVariant::kUnrolled;
+    std::vector<std::string> defines = {
+        fmt::format("RADIUS {}", radius), fmt::format("BLOCK {}", block),
+        fmt::format("UNROLLED {}", unrolled ? 1 : 0),
+        fmt::format("TRANSPOSED {}", unrolled ? 1 : 0), fmt::format("LOCAL_X {}", local_x),
+        fmt::format("LOCAL_Y {}", local_y), fmt::format("UNDEFINED_NCC {:.1f}", kUndefinedNcc),
+        // Tile-best work groups: 64 invocations for llvmpipe, 256 to fill a GPU's multiprocessors.
+        fmt::format("REDUCE_THREADS {}", unrolled ? 64 : 256),
+        fmt::format("MATCH_WORDS {}", match_words)};
+    defines.insert(defines.end(), options.shader_defines.begin(), options.shader_defines.end());
+    return defines;
+  }
+
+  BlurPrograms& Blur(int radius) {
+    auto& slot = blur[radius];
+    if (!slot) {
+      const std::vector<std::string> defines = ComputeDefines(radius, 1);
+      const std::string taps =
+          variant == GlslBlurVariant::kUnrolled ? UnrolledTaps(radius, block) : std::string();
+      slot = std::make_unique<BlurPrograms>(
+          BlurPrograms{Program("sweep row blur", {"sweep_blur_rows.comp"}, defines, taps),
+                       Program("sweep column blur + NCC", {"sweep_blur_ncc.comp"}, defines, taps)});
+    }
+    return *slot;
+  }
+
+  // The tile-best pass reads C's padded render: it depends on the radius too.
+  gl::ShaderProgram& TileBest(int radius, int match_words) {
+    auto& slot = tile_best[radius * 1000 + match_words];
+    if (!slot) {
+      slot = std::make_unique<gl::ShaderProgram>(Program(
+          "sweep tile-best", {"sweep_tile_best.comp"}, ComputeDefines(radius, match_words)));
+    }
+    return *slot;
+  }
+
+  // Padded width of C's targets: pixel x at column x + radius, zeros around (the row pass reads
+  // radius columns beyond each side, and up to block - 1 more after the last block).
+  int PaddedWidth(int width, int radius) const { return width + 2 * radius + block; }
+
+  void Allocate(const PreparedSweep& prep, int batch_size, int radius);
+  SweepResult Run(GlslSweepKernel* kernel, const SweepJob& job, GlslSweepCapture* capture);
+};
+
+void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, int radius) {
+  const int width = prep.camera.view.intrinsics.width;
+  const int height = prep.camera.view.intrinsics.height;
+  const int num_neighbours = static_cast<int>(prep.neighbours.size());
+  std::vector<int> key = {width, height, batch_size, radius, block, num_neighbours};
+  for (const SweepCamera& n : prep.neighbours) {
+    key.push_back(n.view.intrinsics.width);
+    key.push_back(n.view.intrinsics.height);
+  }
+  if (resources.key == key) return;
+  resources = Resources();
+  resources.key = key;
+  const int padded = PaddedWidth(width, radius);
+  using gl::Texture2DArray;
+  using gl::TextureFormat;
+  resources.world =
+      std::make_unique<Texture2DArray>(padded, height, batch_size, TextureFormat::kRGBA32F);
+  resources.world_depth =
+      std::make_unique<Texture2DArray>(padded, height, batch_size, TextureFormat::kDepth32F);
+  for (int j = 0; j < num_neighbours; ++j) {
+    resources.reprojected.push_back(
+        std::make_unique<Texture2DArray>(padded, height, batch_size, TextureFormat::kRGBA32F));
+    const Intrinsics& k = prep.neighbours[j].view.intrinsics;
+    resources.shadow.push_back(
+        std::make_unique<Texture2DArray>(k.width, k.height, batch_size, TextureFormat::kR32F));
+    resources.shadow_depth.push_back(
+        std::make_unique<Texture2DArray>(k.width, k.height, batch_size, TextureFormat::kDepth32F));
+    resources.shadow_targets.push_back(std::make_unique<LayeredTarget>(
+        std::vector<const Texture2DArray*>{resources.shadow.back().get()},
+        *resources.shadow_depth.back()));
+  }
+  for (int first = 0; first < num_neighbours; first += max_group) {
+    std::vector<const Texture2DArray*> colors = {resources.world.get()};
+    for (int j = first; j < std::min(num_neighbours, first + max_group); ++j) {
+      colors.push_back(resources.reprojected[j].get());
+    }
+    resources.world_targets.push_back(
+        std::make_unique<LayeredTarget>(colors, *resources.world_depth));
+  }
+  resources.ncc = std::make_unique<Texture2DArray>(width, height, batch_size * num_neighbours,
+                                                   TextureFormat::kR32F);
+  // Row sums, padded by zeros along the columns (transposed: along the rows); never written
+  // outside the image afterwards.
+  const bool transposed = variant == GlslBlurVariant::kUnrolled;
+  const int sums_w = transposed ? height + 2 * radius + block : width;
+  const int sums_h = transposed ? width : height + 2 * radius + block;
+  resources.sums0 =
+      std::make_unique<gl::Texture2D>(ZeroTexture(sums_w, sums_h, TextureFormat::kRGBA32F));
+  resources.sums1 =
+      std::make_unique<gl::Texture2D>(ZeroTexture(sums_w, sums_h, TextureFormat::kRG32F));
+  gl::CheckGlError("allocating sweep textures");
+}
+
+GlslSweepKernel::GlslSweepKernel(const GlslSweepKernelOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  options.Check();
+  impl_->owned_context = std::make_unique<gl::GlContext>(options.context);
+  impl_->context = impl_->owned_context.get();
+  impl_->Init(options);
+  // An owned context is bound only while the kernel works, so any thread may run it (the
+  // worker process sweeps each job on a fresh thread).
+  impl_->owned_context->ReleaseCurrent();
+}
+
+GlslSweepKernel::GlslSweepKernel(const gl::GlContext& context,
+                                 const GlslSweepKernelOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->context = &context;
+  if (!context.IsCurrent()) context.MakeCurrent();
+  impl_->Init(options);
+}
+
+GlslSweepKernel::~GlslSweepKernel() {
+  if (impl_->context != nullptr && !impl_->context->IsCurrent()) impl_->context->MakeCurrent();
+  // GL objects before their context.
+  impl_->resources = Impl::Resources();
+  impl_->blur.clear();
+  impl_->tile_best.clear();
+  impl_->raster_world.clear();
+  impl_->raster_depth.reset();
+}
+
+const gl::GlInfo& GlslSweepKernel::gl_info() const { return impl_->context->info(); }
+GlslBlurVariant GlslSweepKernel::blur_variant() const { return impl_->variant; }
+int GlslSweepKernel::blur_block() const { return impl_->block; }
+
+GlslSweepKernel::MemoryPlan GlslSweepKernel::PlanMemory(const PreparedSweep& prep) const {
+  const int64_t width = prep.camera.view.intrinsics.width;
+  const int64_t height = prep.camera.view.intrinsics.height;
+  const int64_t radius = (prep.window.rows - 1) / 2;
+  const int64_t block = impl_->block;
+  const int64_t padded = (width + 2 * radius + block) * height;
+  const int64_t neighbours = static_cast<int64_t>(prep.neighbours.size());
+  MemoryPlan plan;
+  // Per offset: C's world + depth and one reprojection per neighbour (padded), NCC maps.
+  plan.per_offset_bytes = padded * (16 + 4 + 16 * neighbours) + width * height * 4 * neighbours;
+  // Per job: C's image, the row sums (RGBA32F + RG32F, padded).
+  plan.fixed_bytes = width * height * 4 + (height + 2 * radius + block) * width * (16 + 8);
+  for (const SweepCamera& n : prep.neighbours) {
+    const int64_t n_pixels = int64_t{n.view.intrinsics.width} * n.view.intrinsics.height;
+    plan.per_offset_bytes += n_pixels * (4 + 4);  // shadow map + its depth buffer
+    plan.fixed_bytes += n_pixels * 4;             // the image
+  }
+  const int num_offsets = static_cast<int>(prep.offsets.size());
+  int64_t budget = impl_->options.max_batch_bytes;
+  if (budget == 0) budget = impl_->context->info().software ? int64_t{128} << 20 : int64_t{1} << 30;
+  const int64_t room = std::max<int64_t>(0, budget - plan.fixed_bytes);
+  int64_t fit =
+      std::clamp<int64_t>(room / std::max<int64_t>(1, plan.per_offset_bytes), 1, num_offsets);
+  if (impl_->options.max_batch_offsets > 0) {
+    fit = std::min<int64_t>(fit, impl_->options.max_batch_offsets);
+  }
+  if (impl_->max_array_layers > 0) {
+    fit = std::min<int64_t>(fit, std::max<int64_t>(1, impl_->max_array_layers / neighbours));
+  }
+  // Even batches: as many batches as needed, as small as possible.
+  const int batches = DivUp(num_offsets, fit);
+  plan.offsets_per_batch = DivUp(num_offsets, batches);
+  return plan;
+}
+
+SweepResult GlslSweepKernel::Run(const SweepJob& job) { return Run(job, nullptr); }
+
+SweepResult GlslSweepKernel::Run(const SweepJob& job, GlslSweepCapture* capture) {
+  struct ReleaseOwned {
+    const gl::GlContext* owned;
+    ~ReleaseOwned() {
+      if (owned != nullptr) owned->ReleaseCurrent();
+    }
+  } release{impl_->owned_context.get()};
+  return impl_->Run(this, job, capture);
+}
+
+SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& job,
+                                       GlslSweepCapture* capture) {
+  Timer total;
+  Timer stage;
+  const PreparedSweep prep = PrepareSweep(job);
+  const SweepOptions& sweep = job.options;
+  const bool time_stages = options.time_stages;
+  const std::string name = fmt::format("sweep job for camera {}", job.camera.id);
+  if (static_cast<int64_t>(job.mesh.faces.size()) >= kMaxFaces) {
+    throw InputError(fmt::format("{}: {} faces; the GLSL kernel takes fewer than {}", name,
+                                 job.mesh.faces.size(), kMaxFaces));
+  }
+  if (!context->IsCurrent()) context->MakeCurrent();
+  const gl::GlInfo& info = context->info();
+
+  const View& view = prep.camera.view;
+  const int width = view.intrinsics.width, height = view.intrinsics.height;
+  const int num_neighbours = static_cast<int>(prep.neighbours.size());
+  const int num_offsets = static_cast<int>(prep.offsets.size());
+  const int radius = (prep.window.rows - 1) / 2;
+  const int padded_width = PaddedWidth(width, radius);
+  const int match_words = DivUp(num_neighbours, 32);
+  const bool transposed = variant == GlslBlurVariant::kUnrolled;
+
+  SweepResult result;
+  SweepStats& stats = result.stats;
+  stats.image_width = width;
+  stats.image_height = height;
+  stats.pyramid_level = prep.pyramid_level;
+  stats.alpha = prep.alpha;
+  stats.median_depth = prep.median_depth;
+  stats.num_offsets = num_offsets;
+  stats.num_neighbours = num_neighbours;
+  stats.tiles_x = prep.tiles.tiles_x;
+  stats.tiles_y = prep.tiles.tiles_y;
+  stats.hypotheses = int64_t{width} * height * num_offsets * num_neighbours;
+
+  // The driver's limits: texture sizes with the blur padding.
+  int64_t longest = std::max<int64_t>(padded_width, height + 2 * radius + block);
+  for (const SweepCamera& n : prep.neighbours) {
+    longest =
+        std::max<int64_t>(longest, std::max(n.view.intrinsics.width, n.view.intrinsics.height));
+  }
+  if (info.max_texture_size > 0 && longest > info.max_texture_size) {
+    throw InputError(fmt::format(
+        "{}: images of {}x{} (swept resolution, plus {} px of blur padding) exceed the GL "
+        "driver's texture size limit of {}; lower --sweep.max-image-dimension",
+        name, width, height, 2 * radius + block, info.max_texture_size));
+  }
+  if (capture != nullptr &&
+      std::find(prep.offsets.begin(), prep.offsets.end(), capture->offset) == prep.offsets.end()) {
+    throw InputError(fmt::format("{}: capture of offset {}, which the job does not sweep", name,
+                                 capture->offset));
+  }
+
+  const MemoryPlan plan = kernel->PlanMemory(prep);
+  const int batch_size = plan.offsets_per_batch;
+  const int num_batches = DivUp(num_offsets, batch_size);
+  BlurPrograms& programs = Blur(radius);
+  gl::ShaderProgram& tile_best = TileBest(radius, match_words);
+  Allocate(prep, batch_size, radius);
+
+  // ---- Per-job GL state ----
+  const gl::GpuMesh mesh(job.mesh);
+  const Eigen::Vector3d origin = mesh.origin();
+  const gl::Texture2D image = ImageTexture(prep.camera.image);
+  std::vector<gl::Texture2D> neighbour_images;
+  for (const SweepCamera& n : prep.neighbours) neighbour_images.push_back(ImageTexture(n.image));
+
+  // Tile records (see sweep_tile_best.comp).
+  const TileGrid& tiles = prep.tiles;
+  const int num_tiles = tiles.NumTiles();
+  std::vector<int32_t> x_begin(tiles.tiles_x + 1), y_begin(tiles.tiles_y + 1);
+  for (int t = 0; t <= tiles.tiles_x; ++t) x_begin[t] = tiles.XBegin(t);
+  for (int t = 0; t <= tiles.tiles_y; ++t) y_begin[t] = tiles.YBegin(t);
+  const float threshold = static_cast<float>(sweep.ncc_threshold);
+  const gl::Buffer tile_columns = gl::Buffer::FromVector(x_begin);
+  const gl::Buffer tile_rows = gl::Buffer::FromVector(y_begin);
+  const gl::Buffer best_ncc = gl::Buffer::FromVector(std::vector<float>(num_tiles, threshold));
+  const gl::Buffer best_info =
+      gl::Buffer::FromVector(std::vector<Eigen::Vector4i>(num_tiles, {0, -1, 0, -1}));
+  const gl::Buffer best_position =
+      gl::Buffer::FromVector(std::vector<Eigen::Vector4f>(num_tiles, Eigen::Vector4f::Zero()));
+  const gl::Buffer best_matched =
+      gl::Buffer::FromVector(std::vector<uint32_t>(size_t{1} * num_tiles * match_words, 0));
+  const gl::Buffer counters =
+      gl::Buffer::FromVector(std::vector<uint32_t>(2 * size_t{1} * num_batches, 0));
+
+  // ---- Rendering state ----
+  const int max_offset = std::max(std::abs(prep.offsets.front()), std::abs(prep.offsets.back()));
+  const double max_shift = std::abs(prep.alpha) * max_offset;
+  const gl::DepthRange range =
+      info.clip_control ? gl::DepthRange::kReversedZeroToOne : gl::DepthRange::kNegativeOneToOne;
+  const float clear_depth = info.clip_control ? 0.0f : 1.0f;
+  const Eigen::Vector3f center = (view.Center() - origin).cast<float>();
+  const auto set_sweep = [&](const gl::ShaderProgram& p, const View& v, double far) {
+    p.Set("u_center", center);
+    p.Set("u_alpha", static_cast<float>(prep.alpha));
+    p.Set("u_model_view", gl::ModelView(v, origin).cast<float>().eval());
+    p.Set("u_projection",
+          gl::GlProjection(v.intrinsics, prep.near, far, range).cast<float>().eval());
+  };
+  const double far_c = FarPlane(view, job.mesh, max_shift);
+  std::vector<double> far_n;
+  for (const SweepCamera& n : prep.neighbours) {
+    far_n.push_back(FarPlane(n.view, job.mesh, max_shift));
+  }
+  // One draw from C per group of neighbours (colour attachments are limited). Groups of the
+  // same size share a program: set_group sets its uniforms before each draw.
+  struct Group {
+    int first, count;
+    gl::ShaderProgram* program;
+  };
+  std::vector<Group> groups;
+  for (int first = 0; first < num_neighbours; first += max_group) {
+    const int count = std::min(max_group, num_neighbours - first);
+    groups.push_back({first, count, &RasterWorld(count)});
+  }
+  const auto set_group = [&](const Group& group) {
+    const gl::ShaderProgram& p = *group.program;
+    set_sweep(p, view, far_c);
+    p.Set("u_pixel_offset", radius);
+    p.Set("u_occlusion", static_cast<float>(1 + sweep.occlusion_tolerance));
+    for (int i = 0; i < group.count; ++i) {
+      const View& n = prep.neighbours[group.first + i].view;
+      p.Set(fmt::format("u_neighbour_size[{}]", i),
+            Eigen::Vector2i(n.intrinsics.width, n.intrinsics.height));
+      p.Set(fmt::format("u_rotation[{}]", i), n.R.cast<float>().eval());
+      p.Set(fmt::format("u_translation[{}]", i), (n.R * origin + n.t).cast<float>().eval());
+      p.Set(fmt::format("u_intrinsics[{}]", i),
+            Eigen::Vector4f(n.intrinsics.fx, n.intrinsics.fy, n.intrinsics.cx, n.intrinsics.cy));
+    }
+  };
+
+  // Constant uniforms of the compute passes.
+  const std::vector<float> weights(prep.window.begin<float>(), prep.window.end<float>());
+  programs.rows.Set("u_size", Eigen::Vector2i(width, height));
+  programs.rows.Set("u_weights", weights);
+  programs.ncc.Set("u_size", Eigen::Vector2i(width, height));
+  programs.ncc.Set("u_weights", weights);
+  SetDouble(programs.ncc, "u_min_window_weight", sweep.min_window_weight);
+  SetDouble(programs.ncc, "u_min_texture_variance", sweep.min_texture_variance);
+  tile_best.Set("u_neighbours", num_neighbours);
+  tile_best.Set("u_width", width);
+  tile_best.Set("u_threshold", threshold);
+  gl::CheckGlError("sweep setup");
+
+  const int rows_groups_x = DivUp(DivUp(width, block), local_x);
+  const int rows_groups_y = DivUp(height, local_y);
+  const int ncc_groups_x = DivUp(transposed ? DivUp(height, block) : width, local_x);
+  const int ncc_groups_y = DivUp(transposed ? width : DivUp(height, block), local_y);
+  // Waits for the GPU and books the time since the last stage boundary (time_stages only).
+  const auto book = [&](double* seconds) {
+    if (!time_stages) return;
+    glFinish();
+    *seconds += stage.Seconds();
+    stage.Restart();
+  };
+  stats.prepare_s = stage.Seconds();
+  stage.Restart();
+
+  for (int batch = 0; batch < num_batches; ++batch) {
+    const int first = batch * batch_size;
+    const int layers = std::min(batch_size, num_offsets - first);
+    const int first_offset = prep.offsets[first];
+    const int capture_layer = capture != nullptr && capture->offset >= first_offset &&
+                                      capture->offset < first_offset + layers
+                                  ? capture->offset - first_offset
+                                  : -1;
+
+    // ---- Shadow maps, then C's view with the reprojections (one instanced draw each) ----
+    glEnable(GL_DEPTH_TEST);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_BLEND);
+    if (info.clip_control) {
+      glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+      glDepthFunc(GL_GREATER);
+    } else {
+      glDepthFunc(GL_LESS);
+    }
+    mesh.vertex_array().Bind();
+    const GLsizei index_count = static_cast<GLsizei>(3 * mesh.num_faces());
+    const float infinity = std::numeric_limits<float>::infinity();
+    for (int j = 0; j < num_neighbours; ++j) {
+      const Intrinsics& k = prep.neighbours[j].view.intrinsics;
+      resources.shadow_targets[j]->BindAndClear({Eigen::Vector4f(infinity, 0, 0, 0)}, clear_depth,
+                                                cv::Rect(0, 0, k.width, k.height));
+      if (!(far_n[j] > prep.near)) continue;
+      set_sweep(*raster_depth, prep.neighbours[j].view, far_n[j]);
+      raster_depth->Set("u_first_offset", first_offset);
+      raster_depth->Use();
+      glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, layers);
+    }
+    book(&stats.raster_s);
+    image.Bind(0);
+    for (size_t g = 0; g < groups.size(); ++g) {
+      const Group& group = groups[g];
+      std::vector<Eigen::Vector4f> clear(1 + group.count, Eigen::Vector4f::Zero());
+      clear[0] = Eigen::Vector4f(0, 0, 0, -1);  // no surface
+      resources.world_targets[g]->BindAndClear(clear, clear_depth,
+                                               cv::Rect(radius, 0, width, height));
+      if (!(far_c > prep.near)) continue;
+      for (int i = 0; i < group.count; ++i) {
+        neighbour_images[group.first + i].Bind(1 + i);
+        resources.shadow[group.first + i]->Bind(1 + group.count + i);
+      }
+      set_group(group);
+      group.program->Set("u_first_offset", first_offset);
+      group.program->Use();
+      glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, layers);
+    }
+    if (info.clip_control) glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    gl::CheckGlError("sweep rasterization and reprojection");
+    book(&stats.reproject_s);
+    if (capture_layer >= 0) {
+      const cv::Mat world4 =
+          DownloadLayer(*resources.world, capture_layer).colRange(radius, radius + width);
+      capture->world.create(height, width, CV_32FC3);
+      capture->depth.create(height, width, CV_32F);
+      capture->face.create(height, width, CV_32S);
+      for (int r = 0; r < height; ++r) {
+        for (int c = 0; c < width; ++c) {
+          const cv::Vec4f w = world4.at<cv::Vec4f>(r, c);
+          const bool covered = w[3] >= 0;
+          const Eigen::Vector3d x(w[0], w[1], w[2]);
+          capture->depth.at<float>(r, c) = covered
+                                               ? static_cast<float>(view.ToCamera(x + origin).z())
+                                               : std::numeric_limits<float>::infinity();
+          capture->face.at<int32_t>(r, c) = covered ? static_cast<int32_t>(w[3]) : -1;
+          capture->world.at<cv::Vec3f>(r, c) =
+              covered ? cv::Vec3f(static_cast<float>(w[0] + origin.x()),
+                                  static_cast<float>(w[1] + origin.y()),
+                                  static_cast<float>(w[2] + origin.z()))
+                      : cv::Vec3f(0, 0, 0);
+        }
+      }
+      capture->shadow.clear();
+      capture->reprojected.clear();
+      capture->mask.clear();
+      for (int j = 0; j < num_neighbours; ++j) {
+        capture->shadow.push_back(DownloadLayer(*resources.shadow[j], capture_layer));
+        const cv::Mat reprojected = DownloadLayer(*resources.reprojected[j], capture_layer)
+                                        .colRange(radius, radius + width);
+        cv::Mat values(height, width, CV_32F, cv::Scalar(0));
+        cv::Mat mask(height, width, CV_8U, cv::Scalar(0));
+        for (int r = 0; r < height; ++r) {
+          for (int c = 0; c < width; ++c) {
+            const cv::Vec4f v = reprojected.at<cv::Vec4f>(r, c);
+            if (v[0] > 0) {
+              mask.at<uint8_t>(r, c) = 255;
+              values.at<float>(r, c) = v[3];
+            }
+          }
+        }
+        capture->reprojected.push_back(values);
+        capture->mask.push_back(mask);
+      }
+      stage.Restart();
+    }
+
+    // ---- Per offset and neighbour: row sums, column sums + NCC ----
+    for (int b = 0; b < layers; ++b) {
+      for (int j = 0; j < num_neighbours; ++j) {
+        BindImageArray(*resources.reprojected[j], 2, GL_READ_ONLY, GL_RGBA32F);
+        resources.sums0->BindImage(0, gl::ImageAccess::kWriteOnly);
+        resources.sums1->BindImage(1, gl::ImageAccess::kWriteOnly);
+        programs.rows.Set("u_layer", b);
+        programs.rows.Dispatch(rows_groups_x, rows_groups_y);
+        Barrier();
+
+        resources.sums0->BindImage(1, gl::ImageAccess::kReadOnly);
+        resources.sums1->BindImage(2, gl::ImageAccess::kReadOnly);
+        BindImageArray(*resources.reprojected[j], 3, GL_READ_ONLY, GL_RGBA32F);
+        BindImageArray(*resources.ncc, 0, GL_WRITE_ONLY, GL_R32F);
+        programs.ncc.Set("u_layer", b);
+        programs.ncc.Set("u_ncc_layer", b * num_neighbours + j);
+        programs.ncc.Dispatch(ncc_groups_x, ncc_groups_y);
+        Barrier();
+      }
+    }
+    gl::CheckGlError("sweep NCC");
+    book(&stats.ncc_s);
+
+    // ---- Tile-best over the batch ----
+    BindImageArray(*resources.ncc, 0, GL_READ_ONLY, GL_R32F);
+    BindImageArray(*resources.world, 1, GL_READ_ONLY, GL_RGBA32F);
+    tile_columns.BindStorage(0);
+    tile_rows.BindStorage(1);
+    best_ncc.BindStorage(2);
+    best_info.BindStorage(3);
+    best_position.BindStorage(4);
+    best_matched.BindStorage(5);
+    counters.BindStorage(6);
+    tile_best.Set("u_layers", layers);
+    tile_best.Set("u_first_offset", first_offset);
+    tile_best.Set("u_batch", batch);
+    tile_best.Dispatch(tiles.tiles_x, tiles.tiles_y);
+    Barrier();
+    gl::CheckGlError("sweep tile-best");
+    book(&stats.reduce_s);
+    if (capture_layer >= 0) {
+      capture->ncc.clear();
+      for (int j = 0; j < num_neighbours; ++j) {
+        cv::Mat ncc = DownloadLayer(*resources.ncc, capture_layer * num_neighbours + j);
+        ncc.setTo(std::numeric_limits<float>::quiet_NaN(), ncc < -1.5f);
+        capture->ncc.push_back(ncc);
+      }
+      stage.Restart();
+    }
+  }
+
+  // ---- Read back the tile winners ----
+  const std::vector<float> ncc = best_ncc.DownloadVector<float>(num_tiles);
+  const std::vector<Eigen::Vector4i> winners = best_info.DownloadVector<Eigen::Vector4i>(num_tiles);
+  const std::vector<Eigen::Vector4f> positions =
+      best_position.DownloadVector<Eigen::Vector4f>(num_tiles);
+  const std::vector<uint32_t> matched =
+      best_matched.DownloadVector<uint32_t>(size_t{1} * num_tiles * match_words);
+  const std::vector<uint32_t> counts =
+      counters.DownloadVector<uint32_t>(2 * size_t{1} * num_batches);
+  for (int batch = 0; batch < num_batches; ++batch) {
+    stats.valid_hypotheses += counts[2 * batch];
+    stats.covered_pixels += counts[2 * batch + 1];
+  }
+  for (int t = 0; t < num_tiles; ++t) {
+    const Eigen::Vector4i& w = winners[t];
+    if (w[1] < 0) continue;
+    const int col = w[2] % width, row = w[2] / width;
+    SweepPoint point;
+    point.position = origin + positions[t].head<3>().cast<double>();
+    point.ncc = ncc[t];
+    point.pixel = {static_cast<float>((col + 0.5) / prep.scale_x),
+                   static_cast<float>((row + 0.5) / prep.scale_y)};
+    point.offset = w[0];
+    point.face = w[3];
+    point.cameras.push_back(job.camera.id);
+    point.cameras.push_back(job.neighbours[w[1]].id);
+    for (int other = 0; other < num_neighbours; ++other) {
+      if (matched[size_t{1} * t * match_words + other / 32] & (1u << (other % 32))) {
+        point.cameras.push_back(job.neighbours[other].id);
+      }
+    }
+    result.points.push_back(std::move(point));
+  }
+  book(&stats.reduce_s);
+  stats.total_s = total.Seconds();
+  return result;
+}
+
+}  // namespace ms
