@@ -13,5 +13,6 @@ void RegisterSweepCommand(CLI::App& app);
 void RegisterSynthCommand(CLI::App& app);
 void RegisterEvaluateCommand(CLI::App& app);
 void RegisterConvertCommand(CLI::App& app);
+void RegisterColmapTriangulateCommand(CLI::App& app);
 
 }  // namespace ms::app

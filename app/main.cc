@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   ms::app::RegisterSynthCommand(app);
   ms::app::RegisterEvaluateCommand(app);
   ms::app::RegisterConvertCommand(app);
+  ms::app::RegisterColmapTriangulateCommand(app);
 
   try {
     app.parse(argc, argv);
