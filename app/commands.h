@@ -32,5 +32,6 @@ void RegisterReconstructCommand(CLI::App& app);
 void RegisterCoordinatorCommand(CLI::App& app);
 void RegisterWorkerCommand(CLI::App& app);
 void RegisterKeygenCommand(CLI::App& app);
+void RegisterColmapTriangulateCommand(CLI::App& app);
 
 }  // namespace ms::app

@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
   ms::app::RegisterCoordinatorCommand(app);
   ms::app::RegisterWorkerCommand(app);
   ms::app::RegisterKeygenCommand(app);
+  ms::app::RegisterColmapTriangulateCommand(app);
 
   try {
     app.parse(argc, argv);

@@ -15,7 +15,7 @@ PACKAGES=(
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libeigen3-dev libopencv-dev
   libzmq3-dev cppzmq-dev libprotobuf-dev protobuf-compiler libhdf5-dev hdf5-tools
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
-  libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
+  libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libsqlite3-dev
   # tests, benchmarks, fuzzing
   libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
   # independent tools: mesh reader + Poisson baseline, SfM for camera-only datasets, cluster
