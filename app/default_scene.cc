@@ -8,13 +8,23 @@
 #include "base/file_util.h"
 #include "mesh/mesh_io.h"
 #include "scene/scene_h5.h"
+#include "gl/context.h"
+#include "tools/synth.h"
 #include "worker/sweep_test_scene.h"
 
 namespace ms::app {
 namespace fs = std::filesystem;
 
 std::string MakeDefaultScene(const std::string& directory) {
-  return WritePyramidSceneFiles(directory, PyramidSceneFileOptions{});
+  SynthOptions options;
+  options.scene = "pyramid-down";
+  options.views = 8;
+  options.width = 640;
+  options.height = 480;
+  const gl::GlContext gl;
+  const SynthDataset dataset = MakeSynthDataset(options, &gl);
+  WriteSynthDataset(dataset, directory);
+  return (fs::absolute(directory) / "scene.h5").string();
 }
 
 std::string WritePyramidSceneFiles(const std::string& directory,

@@ -575,14 +575,15 @@ class Coordinator::Impl {
               run_file, i + 1, s.inserted, record_.iterations[i + 1].points_inserted));
         }
       }
-      mesh_ = manifold_->ExtractSurface();
+      Extract();
       if (!fs::exists(Path("initial.ply"))) {
         spdlog::warn("initial.ply is missing; it is not rewritten on resume");
       }
     } else {
       Timer extract;
-      mesh_ = manifold_->ExtractSurface();
+      Extract();
       WriteMesh(mesh_, Path("initial.ply"));
+      WriteMesh(surface_, Path("initial_surface.ply"));
       IterationStats row;
       row.iteration = 0;
       row.points_found = static_cast<int64_t>(scene.points.size());
@@ -621,7 +622,7 @@ class Coordinator::Impl {
     const InsertionStats s = manifold_->Insert(batch);
     const double insert_s = insert.Seconds();
     Timer extract;
-    mesh_ = manifold_->ExtractSurface();
+    Extract();
     if (options_.save_iteration_meshes) {
       WriteMesh(mesh_, Path(fmt::format("iteration_{:02d}.ply", iteration_)));
     }
@@ -707,7 +708,7 @@ class Coordinator::Impl {
       reason = fmt::format("reached --max-iterations {}", options_.max_iterations);
     } else {
       Timer timer;
-      outcome.jobs = BuildIterationJobs(record_.scene, neighbours_, mesh_, *catalog_,
+      outcome.jobs = BuildIterationJobs(record_.scene, neighbours_, surface_, *catalog_,
                                         static_cast<uint32_t>(done + 1), session_, job_options_);
       outcome.seconds_jobs = timer.Seconds();
       for (const std::string& skipped : outcome.jobs.skipped) {
@@ -724,6 +725,7 @@ class Coordinator::Impl {
   void Finish(const std::string& reason) {
     const std::string path = Path("final.ply");
     WriteMesh(mesh_, path);
+    WriteMesh(surface_, Path("final_surface.ply"));
     MeshCheckOptions check;
     check.check_self_intersections = false;  // exact but slow on large meshes
     const MeshReport report = CheckMesh(mesh_, check);
@@ -764,7 +766,15 @@ class Coordinator::Impl {
   std::atomic<bool> catalog_ready_{false};
   std::vector<std::vector<int>> neighbours_;
   std::unique_ptr<DelaunayManifold> manifold_;
+  // The closed manifold, and the surface proper (without the Steiner faces that close it):
+  // what the sweep jobs are built from (docs/manifold.md).
+  void Extract() {
+    SurfaceInfo info;
+    mesh_ = manifold_->ExtractSurface(&info);
+    surface_ = SurfaceWithoutSteinerFaces(mesh_, info);
+  }
   Mesh mesh_;
+  Mesh surface_;
   CoordinatorResult final_;
   std::string final_check_;
 

@@ -265,6 +265,14 @@ class DelaunayManifold::Impl {
   int64_t GrowFromHeaviest();
   // Cells not in O, sharing a face with O, with a vertex marked changed in batch `changed_in`.
   std::vector<Cell_handle> BoundarySeeds(uint32_t changed_in) const;
+  // Free cells that growing left out of O (refused by the manifold test or unreachable).
+  int64_t CountFreeCellsInside() const {
+    int64_t n = 0;
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      n += !c->info().outside && IsFree(c);
+    }
+    return n;
+  }
 
   // --- rays ---
   // Orders rays by camera, then by direction (Morton order of normalised image coordinates):
@@ -893,6 +901,7 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   }
   GrowFromHeaviest();
   stats.outside_cells = outside_count_;
+  stats.free_cells_left_inside = CountFreeCellsInside();
   stats.seconds_growing = timer.Seconds();
   stats.manifold_tests = test_counts_.fast;
   stats.full_manifold_tests = test_counts_.full;
@@ -1008,6 +1017,7 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
       }
     }
     if (d_in_o > 0) {
+      // Discarded (the paper's rule); the cells shrunk for it stay out of O until regrowing.
       ++stats.discarded_conflict;
       hint = located;
       continue;
@@ -1108,6 +1118,7 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   Grow(BoundarySeeds(batch));
   if (outside_count_ == 0) GrowFromHeaviest();
   stats.outside_cells = outside_count_;
+  stats.free_cells_left_inside = CountFreeCellsInside();
   stats.seconds_growing = timer.Seconds();
   spdlog::info(
       "manifold: {} new points: {} inserted, {} discarded (conflict {}, duplicate {}, outside "
@@ -1239,6 +1250,20 @@ std::string DelaunayManifold::Impl::Validate(bool check_weights) const {
 }
 
 // ---------------------------------------------------------------------------------------------
+
+Mesh SurfaceWithoutSteinerFaces(const Mesh& mesh, const SurfaceInfo& info) {
+  MS_CHECK(info.vertex_ids.size() == mesh.vertices.size()) << "SurfaceInfo of another mesh";
+  Mesh surface;
+  surface.vertices = mesh.vertices;
+  surface.vertex_colors = mesh.vertex_colors;
+  for (const auto& f : mesh.faces) {
+    if (info.vertex_ids[f[0]] >= 0 && info.vertex_ids[f[1]] >= 0 && info.vertex_ids[f[2]] >= 0) {
+      surface.faces.push_back(f);
+    }
+  }
+  surface.RemoveUnreferencedVertices();
+  return surface;
+}
 
 DelaunayManifold::DelaunayManifold(std::vector<ManifoldCamera> cameras,
                                    const ManifoldOptions& options)

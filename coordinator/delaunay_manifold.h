@@ -42,6 +42,7 @@ struct BuildStats {
   int64_t vertices = 0, cells = 0;
   int64_t rays = 0, ray_cell_steps = 0;
   int64_t free_cells = 0, outside_cells = 0;
+  int64_t free_cells_left_inside = 0;  // free but not in O: refused by the manifold test
   // Manifold tests while growing: all, those the fast (V,E,F) test could not decide, and the
   // surface edges walked by the full test.
   int64_t manifold_tests = 0, full_manifold_tests = 0, link_steps = 0;
@@ -54,11 +55,12 @@ struct InsertionStats {
   int64_t discarded_conflict = 0;   // D still met O after shrinking (the paper's rule)
   int64_t discarded_duplicate = 0;  // same position as an existing vertex
   int64_t discarded_outside = 0;    // outside the Steiner box
-  int64_t shrunk_cells = 0;         // cells removed from O while shrinking
+  int64_t shrunk_cells = 0;         // cells removed from O while shrinking (for inserted and discarded points)
   int64_t candidate_rays = 0;       // rays found near conflict regions (with repeats)
   int64_t rewalked_rays = 0;        // old rays walked again to count them on new cells
   int64_t new_rays = 0;
   int64_t outside_cells = 0;        // |O| after regrowing
+  int64_t free_cells_left_inside = 0;  // free cells not in O after regrowing
   double seconds_insertion = 0, seconds_growing = 0;
 };
 
@@ -68,6 +70,12 @@ struct SurfaceInfo {
   std::vector<int32_t> vertex_ids;
   int64_t steiner_vertices = 0;  // mesh vertices that are Steiner points
 };
+
+// The reconstructed surface proper: the faces of `mesh` (from ExtractSurface with `info`) none
+// of whose vertices is a Steiner point, unreferenced vertices removed. The Steiner faces close
+// the surface around the free space the cameras saw; they are not an estimate of the scene, so
+// they are neither swept nor evaluated. The result is a manifold with boundary.
+Mesh SurfaceWithoutSteinerFaces(const Mesh& mesh, const SurfaceInfo& info);
 
 class DelaunayManifold {
  public:
