@@ -23,6 +23,7 @@ class CommandExit : public std::exception {
 
 void RegisterInfoCommand(CLI::App& app);
 void RegisterManifoldCommand(CLI::App& app);
+void RegisterRenderCommand(CLI::App& app);
 void RegisterCheckMeshCommand(CLI::App& app);
 void RegisterSweepCommand(CLI::App& app);
 void RegisterSynthCommand(CLI::App& app);

@@ -9,6 +9,38 @@
 #include "base/error.h"
 #include "base/log.h"
 
+namespace {
+
+// CLI11 reads `manifold.w1 = 5` in a [manifold] section as a nested section "manifold" holding
+// "w1". Our option names contain dots (--manifold.w1, --sweep.ncc-threshold), so keep
+// everything after the command's section as the option name: the config file then uses the
+// command line's names.
+class DottedNameConfig : public CLI::ConfigTOML {
+ public:
+  explicit DottedNameConfig(const CLI::App* app) : app_(app) {}
+  std::vector<CLI::ConfigItem> from_config(std::istream& input) const override {
+    std::vector<CLI::ConfigItem> items = CLI::ConfigTOML::from_config(input);
+    for (CLI::ConfigItem& item : items) {
+      if (item.parents.empty() || item.name == "++" || item.name == "--") continue;
+      size_t keep = 0;  // leading parents that name a subcommand
+      for (const CLI::App* sub : app_->get_subcommands({})) {
+        if (sub->get_name() == item.parents[0]) keep = 1;
+      }
+      if (item.parents.size() <= keep) continue;
+      std::string name;
+      for (size_t i = keep; i < item.parents.size(); ++i) name += item.parents[i] + ".";
+      item.name = name + item.name;
+      item.parents.resize(keep);
+    }
+    return items;
+  }
+
+ private:
+  const CLI::App* app_;
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
   ms::InitLogging();
   CLI::App app{
@@ -18,7 +50,10 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   app.fallthrough();  // global options may follow the command name
   app.set_config("--config", "",
-                 "TOML/INI file with options ([command] sections); the command line overrides it");
+                 "TOML file with options ([command] sections, the command line's option names); "
+                 "the command line overrides it");
+  app.config_formatter(std::make_shared<DottedNameConfig>(&app));
+  app.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key is an error
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
       ->capture_default_str();
@@ -34,6 +69,7 @@ int main(int argc, char** argv) {
   ms::app::RegisterSweepCommand(app);
   ms::app::RegisterSynthCommand(app);
   ms::app::RegisterEvaluateCommand(app);
+  ms::app::RegisterRenderCommand(app);
   ms::app::RegisterConvertCommand(app);
   ms::app::RegisterReconstructCommand(app);
   ms::app::RegisterCoordinatorCommand(app);
@@ -53,7 +89,10 @@ int main(int argc, char** argv) {
         }
         std::fputs(sub->help().c_str(), stdout);
       } else {
-        std::fputs(app.help().c_str(), stdout);
+        // App::help() would describe the selected subcommand (`help` itself): format the app.
+        std::fputs(app.get_formatter()->make_help(&app, "manisweep", CLI::AppFormatMode::Normal)
+                       .c_str(),
+                   stdout);
       }
     }
   } catch (const ms::app::CommandExit& e) {

@@ -38,6 +38,11 @@ void RunManifold(const ManifoldCommandOptions& options) {
   const BuildStats stats = manifold.Build(RayPointsFromScene(scene));
   SurfaceInfo info;
   const Mesh mesh = manifold.ExtractSurface(&info);
+  if (mesh.faces.empty()) {
+    throw InputError(options.input + ": the manifold is empty: no cell reached the free-space "
+                     "threshold (--manifold.free-threshold " +
+                     std::to_string(options.manifold.free_threshold) + ") or none could grow");
+  }
   const double total = timer.Seconds();
   MeshWriteOptions write_options;
   write_options.binary = !options.ascii;

@@ -19,6 +19,7 @@
 #include "coordinator/delaunay_manifold.h"
 #include "coordinator/job_builder.h"
 #include "coordinator/run_store.h"
+#include "coordinator/scene_rays.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
 #include "proto/content_hash.h"
@@ -53,33 +54,6 @@ bool InsertionOrder(const FoundPoint& a, const FoundPoint& b) {
                                                         b.position.z(), b.cameras);
 }
 
-std::vector<ManifoldCamera> ManifoldCameras(const Scene& scene) {
-  std::vector<ManifoldCamera> cameras;
-  for (const View& view : scene.views) {
-    const Intrinsics& k = view.intrinsics;
-    ManifoldCamera c;
-    c.center = view.Center();
-    c.R = view.R;
-    c.u_min = -k.cx / k.fx;
-    c.u_max = (k.width - k.cx) / k.fx;
-    c.v_min = -k.cy / k.fy;
-    c.v_max = (k.height - k.cy) / k.fy;
-    cameras.push_back(c);
-  }
-  return cameras;
-}
-
-std::vector<RayPoint> ScenePoints(const Scene& scene) {
-  std::vector<RayPoint> points;
-  points.reserve(scene.points.size());
-  for (const ScenePoint& p : scene.points) {
-    RayPoint r;
-    r.position = p.position;
-    for (const Observation& o : p.observations) r.cameras.push_back(o.view);
-    points.push_back(std::move(r));
-  }
-  return points;
-}
 
 // What the background thread hands back to the network loop.
 struct StepOutcome {
@@ -556,9 +530,10 @@ class Coordinator::Impl {
       neighbours_.push_back(SelectNeighbours(scene, static_cast<int>(c), options_.neighbours));
     }
 
-    manifold_ = std::make_unique<DelaunayManifold>(ManifoldCameras(scene), options_.manifold);
+    manifold_ =
+        std::make_unique<DelaunayManifold>(ManifoldCamerasFromScene(scene), options_.manifold);
     Timer build;
-    const BuildStats stats = manifold_->Build(ScenePoints(scene));
+    const BuildStats stats = manifold_->Build(RayPointsFromScene(scene));
     const double build_s = build.Seconds();
     spdlog::info("initial manifold: {} points ({} Steiner), {} cells, {} outside; {:.2f} s",
                  stats.points, stats.steiner_points, stats.cells, stats.outside_cells, build_s);
@@ -582,6 +557,11 @@ class Coordinator::Impl {
     } else {
       Timer extract;
       Extract();
+      if (mesh_.faces.empty()) {
+        throw InputError(options_.input + ": the initial manifold is empty: no cell reached the "
+                         "free-space threshold (check the points' visibility and "
+                         "--manifold.free-threshold)");
+      }
       WriteMesh(mesh_, Path("initial.ply"));
       WriteMesh(surface_, Path("initial_surface.ply"));
       IterationStats row;

@@ -90,25 +90,6 @@ std::string AnnotateLog(const std::string& log, const ShaderSource& source) {
   return out;
 }
 
-std::string InsertDefines(const std::string& text, const std::vector<std::string>& defines) {
-  if (defines.empty()) return text;
-  size_t pos = 0;
-  int line = 0;
-  while (pos < text.size()) {
-    size_t end = text.find('\n', pos);
-    if (end == std::string::npos) end = text.size();
-    ++line;
-    const std::string_view current(text.data() + pos, end - pos);
-    if (current.find("#version") != std::string_view::npos) {
-      std::string block;
-      for (const std::string& d : defines) block += "#define " + d + "\n";
-      block += "#line " + std::to_string(line + 1) + " 0\n";
-      return text.substr(0, end + 1) + block + text.substr(std::min(end + 1, text.size()));
-    }
-    pos = end + 1;
-  }
-  throw InternalError("shader has no #version line; cannot insert #defines");
-}
 
 GLenum UsageEnum(BufferUsage usage) {
   switch (usage) {
@@ -814,6 +795,27 @@ cv::Mat Framebuffer::Read(int attachment, cv::Rect rect) const {
 cv::Mat Framebuffer::ReadDepth(cv::Rect rect) const {
   MS_CHECK(depth() != nullptr) << "ReadDepth on a framebuffer without depth";
   return ReadPixels(id_, GL_NONE, TextureFormat::kDepth32F, rect, width_, height_);
+}
+
+// `#define`s right after the #version line, then a #line that keeps the file's line numbers.
+std::string InsertDefines(const std::string& text, const std::vector<std::string>& defines) {
+  if (defines.empty()) return text;
+  size_t pos = 0;
+  int line = 0;
+  while (pos < text.size()) {
+    size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    ++line;
+    const std::string_view current(text.data() + pos, end - pos);
+    if (current.find("#version") != std::string_view::npos) {
+      std::string block;
+      for (const std::string& d : defines) block += "#define " + d + "\n";
+      block += "#line " + std::to_string(line + 1) + " 0\n";
+      return text.substr(0, end + 1) + block + text.substr(std::min(end + 1, text.size()));
+    }
+    pos = end + 1;
+  }
+  throw InternalError("shader has no #version line; cannot insert #defines");
 }
 
 }  // namespace ms::gl

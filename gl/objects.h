@@ -309,4 +309,9 @@ class Framebuffer {
   std::vector<Texture2D> depth_;  // zero or one
 };
 
+// Inserts `#define NAME` / `#define NAME VALUE` lines right after a shader's #version line,
+// followed by a #line so compiler messages keep the file's line numbers. Throws InternalError
+// if there is no #version line.
+std::string InsertDefines(const std::string& text, const std::vector<std::string>& defines);
+
 }  // namespace ms::gl

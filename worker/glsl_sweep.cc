@@ -30,25 +30,6 @@ constexpr char kUnrolledMarker[] = "// @MS_UNROLLED_TAPS@";
 
 // ---- Shader sources ----
 
-// `#define`s go right after the #version line, followed by a #line that keeps the compiler's
-// line numbers those of the file (as gl::ShaderProgram::FromEmbedded does).
-std::string InsertDefines(const std::string& text, const std::vector<std::string>& defines) {
-  size_t pos = 0;
-  int line = 0;
-  while (pos < text.size()) {
-    size_t end = text.find('\n', pos);
-    if (end == std::string::npos) end = text.size();
-    ++line;
-    if (text.compare(pos, 8, "#version") == 0) {
-      std::string block;
-      for (const std::string& d : defines) block += "#define " + d + "\n";
-      block += "#line " + std::to_string(line + 1) + " 0\n";
-      return text.substr(0, end + 1) + block + text.substr(std::min(end + 1, text.size()));
-    }
-    pos = end + 1;
-  }
-  throw InternalError("sweep shader without a #version line");
-}
 
 // The tap loop of sweep_blur.glsl fully unrolled, on one line (so line numbers do not move):
 // every sample loaded once, then each output's 2 radius + 1 taps.
@@ -77,7 +58,7 @@ gl::ShaderSource Source(const std::string& name, const std::vector<std::string>&
     MS_CHECK(at != std::string::npos) << name << " has no unrolling marker";
     text.replace(at, sizeof(kUnrolledMarker) - 1, unrolled);
   }
-  source.text = InsertDefines(text, defines);
+  source.text = gl::InsertDefines(text, defines);
   return source;
 }
 
