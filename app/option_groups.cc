@@ -27,6 +27,15 @@ void RegisterManifoldOptions(CLI::App* cmd, ManifoldOptions* o) {
   cmd->add_option("--manifold.steiner-grid", o->steiner_grid,
                   "Steiner points per edge of the box (2 = corners only)")
       ->capture_default_str();
+  cmd->add_flag("--manifold.graded-steiner", o->steiner_graded,
+                "also put graded Steiner points in the empty space: fewer cells per ray on dense "
+                "scenes, but unreached free space closes the mesh in front of the object");
+  cmd->add_option("--manifold.steiner-clearance", o->steiner_clearance,
+                  "graded Steiner points keep this x their size away from every point")
+      ->capture_default_str();
+  cmd->add_option("--manifold.steiner-min-spacing", o->steiner_min_spacing,
+                  "smallest graded Steiner cell, in median point spacings")
+      ->capture_default_str();
   cmd->add_option("--manifold.shrink-neighbourhood", o->shrink_neighbourhood,
                   "cells shrunk before an insertion: 0 = conflict region + face neighbours, "
                   "1 = + every cell sharing a vertex")

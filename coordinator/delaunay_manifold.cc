@@ -808,9 +808,18 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
     hi = hi.cwiseMax(c.center);
   }
   if (!(lo.array() <= hi.array()).all()) throw InputError("no points and no cameras");
-  const std::vector<Eigen::Vector3d> steiner =
-      MakeSteinerPoints(lo, hi, options_.steiner_margin, options_.steiner_grid);
+  std::vector<Eigen::Vector3d> data(points.size());
+  for (size_t i = 0; i < points.size(); ++i) data[i] = points[i].position;
+  SteinerOptions steiner_options;
+  steiner_options.margin = options_.steiner_margin;
+  steiner_options.grid = options_.steiner_grid;
+  steiner_options.graded = options_.steiner_graded;
+  steiner_options.clearance = options_.steiner_clearance;
+  steiner_options.min_spacing_factor = options_.steiner_min_spacing;
+  const SteinerPoints made = MakeSteinerPoints(lo, hi, data, steiner_options);
+  const std::vector<Eigen::Vector3d>& steiner = made.points;
   steiner_count_ = stats.steiner_points = static_cast<int64_t>(steiner.size());
+  stats.graded_steiner_points = made.graded;
   box_min_ = Eigen::Vector3d::Constant(INFINITY);
   box_max_ = -box_min_;
   for (const Eigen::Vector3d& s : steiner) {
@@ -857,8 +866,9 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   stats.vertices = num_vertices();
   stats.cells = num_cells();
   stats.seconds_triangulation = timer.Seconds();
-  spdlog::info("manifold: Delaunay of {} points + {} Steiner points: {} cells in {:.2f} s",
-               points.size(), steiner.size(), stats.cells, stats.seconds_triangulation);
+  spdlog::info(
+      "manifold: Delaunay of {} points + {} Steiner points ({} graded): {} cells in {:.2f} s",
+      points.size(), steiner.size(), made.graded, stats.cells, stats.seconds_triangulation);
 
   // (2) Ray tracing and weighting.
   timer.Restart();
@@ -1292,6 +1302,10 @@ void ManifoldOptions::Check() const {
   require(std::isfinite(free_threshold) && free_threshold > 0, "free-threshold", "must be positive");
   require(std::isfinite(steiner_margin) && steiner_margin > 0, "steiner-margin", "must be positive");
   require(steiner_grid >= 2 && steiner_grid <= 64, "steiner-grid", "must be in [2, 64]");
+  require(std::isfinite(steiner_clearance) && steiner_clearance >= 1, "steiner-clearance",
+          "must be >= 1");
+  require(std::isfinite(steiner_min_spacing) && steiner_min_spacing > 0, "steiner-min-spacing",
+          "must be positive");
   require(w2_rule == W2Rule::kCameraSide || w2_rule == W2Rule::kAllFaces, "w2-rule",
           "must be camera-side or all-faces");
   require(shrink_neighbourhood == 0 || shrink_neighbourhood == 1, "shrink-neighbourhood",
