@@ -1,5 +1,6 @@
 // Throughput of the manifold reconstruction steps (docs/performance.md):
-//   manifold_bench [points ...] [--insert=N] [--export=DIR]   default sizes: 10^4 10^5 10^6
+//   manifold_bench [points ...] [--insert=N] [--export=DIR] [--graded-steiner]
+//   default sizes: 10^4 10^5 10^6
 // For each size: Delaunay insertion, ray tracing (rays/s), growing (cells/s), peak memory per
 // point; then incremental insertion of N (default 10^4) points near the surface (points/s).
 // --export=DIR writes, per size, the input points (PLY, normals = mean unit direction to the
@@ -20,12 +21,15 @@ int main(int argc, char** argv) {
   std::vector<int64_t> sizes;
   int64_t insert_count = 10000;
   std::string export_dir;
+  ms::ManifoldOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg.rfind("--insert=", 0) == 0) {
       insert_count = std::stoll(arg.substr(9));
     } else if (arg.rfind("--export=", 0) == 0) {
       export_dir = arg.substr(9);
+    } else if (arg == "--graded-steiner") {
+      options.steiner_graded = true;
     } else {
       sizes.push_back(std::stoll(arg));
     }
@@ -37,7 +41,7 @@ int main(int argc, char** argv) {
   for (int64_t n : sizes) {
     const ms::bench::ManifoldBenchScene scene = ms::bench::MakeBlobScene(n, 48, 5, 42);
     const int64_t rss_before = ms::bench::PeakRssBytes();
-    ms::DelaunayManifold manifold(scene.cameras, ms::ManifoldOptions{});
+    ms::DelaunayManifold manifold(scene.cameras, options);
     ms::Timer timer;
     const ms::BuildStats stats = manifold.Build(scene.points);
     const double total = timer.Seconds();

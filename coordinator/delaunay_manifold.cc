@@ -1228,7 +1228,6 @@ std::string DelaunayManifold::Impl::Validate(bool check_weights) const {
     auto* self = const_cast<Impl*>(this);
     for (size_t i = 0; i < positions_.size(); ++i) {
       const Vertex_handle target_vertex = vertex_of_point_[i];
-      const Point target = target_vertex->point();
       const auto count = [&](const Cell_handle& c, unsigned mask) {
         auto& entry = recount.try_emplace(&*c, std::array<int32_t, 5>{0, 0, 0, 0, 0}).first->second;
         ++entry[0];
