@@ -8,7 +8,6 @@
 #include <map>
 #include <opencv2/core/utility.hpp>
 
-#include "mesh/visible_mesh.h"
 #include "worker/reference_sweep.h"
 #include "worker/sweep_test_scene.h"
 
@@ -19,17 +18,7 @@ const SweepJob& JobFor(int width) {
   static std::map<int, SweepJob> jobs;
   auto it = jobs.find(width);
   if (it != jobs.end()) return it->second;
-  PyramidSceneOptions options;
-  options.width = width;
-  options.height = width * 3 / 4;
-  options.supersample = 1;  // rendering cost only; the sweep does not care
-  options.noise_stddev = 0.01;
-  const PyramidScene scene = MakePyramidScene(options);
-  SweepJob job;
-  job.camera = scene.cameras[0];
-  job.neighbours = {scene.cameras[1], scene.cameras[2]};
-  job.mesh = ExtractVisibleMesh(MakeFlatSquare(0.15, 1.3, 16), job.camera.view).mesh;
-  return jobs.emplace(width, std::move(job)).first->second;
+  return jobs.emplace(width, MakeBenchmarkSweepJob(width)).first->second;
 }
 
 void BM_ReferenceSweep(benchmark::State& state) {

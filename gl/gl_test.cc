@@ -6,7 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "base/error.h"
-#include "gl/context.h"
+#include "gl/gl_testing.h"
 #include "gl/mesh_renderer.h"
 #include "gl/objects.h"
 #include "gl/projection.h"
@@ -14,16 +14,7 @@
 namespace ms::gl {
 namespace {
 
-class GlTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() { context_ = new GlContext(); }
-  static void TearDownTestSuite() {
-    delete context_;
-    context_ = nullptr;
-  }
-  static GlContext* context_;
-};
-GlContext* GlTest::context_ = nullptr;
+class GlTest : public SharedGlContextTest {};
 
 View TestView(int width = 64, int height = 48) {
   View view;

@@ -11,6 +11,7 @@
 
 #include "base/error.h"
 #include "base/file_util.h"
+#include "base/testing.h"
 
 namespace ms {
 namespace {
@@ -57,13 +58,7 @@ void ExpectSameMesh(const Mesh& a, const Mesh& b, double tolerance = 0) {
 // Expects an InputError whose message names `name` and contains `fragment`.
 template <typename F>
 void ExpectInputError(F&& f, const std::string& name, const std::string& fragment) {
-  try {
-    f();
-    ADD_FAILURE() << "expected InputError containing '" << fragment << "'";
-  } catch (const InputError& e) {
-    EXPECT_THAT(e.what(), HasSubstr(name)) << e.what();
-    EXPECT_THAT(e.what(), HasSubstr(fragment)) << e.what();
-  }
+  testing::ExpectInputError(std::forward<F>(f), {name, fragment});
 }
 
 // --- Byte builders for hand-written binary files. ------------------------------------------

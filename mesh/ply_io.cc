@@ -336,34 +336,21 @@ class BinarySource {
   void EndInstance() {}
 
   double ReadNumber(PlyType t, const PlyProperty& p) {
-    Need(TypeSize(t), p);
-    switch (t) {
-      case PlyType::kInt8:
-        return static_cast<int8_t>(Raw<uint8_t>());
-      case PlyType::kUint8:
-        return Raw<uint8_t>();
-      case PlyType::kInt16:
-        return static_cast<int16_t>(Raw<uint16_t>());
-      case PlyType::kUint16:
-        return Raw<uint16_t>();
-      case PlyType::kInt32:
-        return static_cast<int32_t>(Raw<uint32_t>());
-      case PlyType::kUint32:
-        return Raw<uint32_t>();
-      case PlyType::kFloat32: {
-        const uint32_t u = Raw<uint32_t>();
-        float f;
-        std::memcpy(&f, &u, sizeof(f));
-        return f;
-      }
-      case PlyType::kFloat64: {
-        const uint64_t u = Raw<uint64_t>();
-        double d;
-        std::memcpy(&d, &u, sizeof(d));
-        return d;
-      }
+    if (t == PlyType::kFloat32) {
+      Need(sizeof(float), p);
+      const uint32_t u = Raw<uint32_t>();
+      float f;
+      std::memcpy(&f, &u, sizeof(f));
+      return f;
     }
-    return 0;
+    if (t == PlyType::kFloat64) {
+      Need(sizeof(double), p);
+      const uint64_t u = Raw<uint64_t>();
+      double d;
+      std::memcpy(&d, &u, sizeof(d));
+      return d;
+    }
+    return static_cast<double>(ReadInteger(t, p));
   }
 
   // Integer types only (the header parser and slot assignment guarantee it).

@@ -3,7 +3,6 @@
 #include <H5Cpp.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -16,6 +15,7 @@
 
 #include "base/error.h"
 #include "base/file_util.h"
+#include "base/testing.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
@@ -25,32 +25,12 @@ namespace {
 
 class H5FileTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path(::testing::TempDir()) /
-           ("ms_h5_file_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Path(const std::string& name) const { return dir_ / name; }
 
-  fs::path dir_;
+  testing::TempDir dir_{"h5_file"};
 };
 
-// Expects an InputError whose message contains every fragment.
-template <typename F>
-void ExpectInputError(F&& f, const std::vector<std::string>& fragments) {
-  try {
-    f();
-    ADD_FAILURE() << "no InputError thrown";
-  } catch (const InputError& e) {
-    if (std::getenv("MS_SHOW_ERRORS")) std::cout << "  InputError: " << e.what() << "\n";
-    for (const std::string& fragment : fragments) {
-      EXPECT_THAT(e.what(), HasSubstr(fragment));
-    }
-  }
-}
+using testing::ExpectInputError;
 
 template <typename T>
 bool BitwiseEqual(const std::vector<T>& a, const std::vector<T>& b) {

@@ -2,7 +2,6 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -16,6 +15,7 @@
 
 #include "base/error.h"
 #include "base/file_util.h"
+#include "base/testing.h"
 #include "scene/h5_file.h"
 #include "scene/scene_io.h"
 
@@ -27,29 +27,12 @@ namespace {
 
 class SceneH5Test : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path(::testing::TempDir()) /
-           ("ms_scene_h5_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Path(const std::string& name) const { return dir_ / name; }
 
-  fs::path dir_;
+  testing::TempDir dir_{"scene_h5"};
 };
 
-template <typename F>
-void ExpectInputError(F&& f, const std::vector<std::string>& fragments) {
-  try {
-    f();
-    ADD_FAILURE() << "no InputError thrown";
-  } catch (const InputError& e) {
-    if (std::getenv("MS_SHOW_ERRORS")) std::cout << "  InputError: " << e.what() << "\n";
-    for (const std::string& fragment : fragments) EXPECT_THAT(e.what(), HasSubstr(fragment));
-  }
-}
+using testing::ExpectInputError;
 
 template <typename T>
 bool SameBits(const T& a, const T& b) {

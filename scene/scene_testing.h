@@ -1,5 +1,6 @@
 // Test helpers for scene I/O (header-only, for *_test.cc files): scene comparison with a
-// relative tolerance, fixture paths, and a small synthetic scene every format can hold.
+// relative tolerance, fixture paths, and a small synthetic scene every format can hold
+// (plus base/testing.h's TempDir and ExpectInputError).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -11,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
+#include "base/testing.h"  // TempDir, ExpectInputError
 #include "scene/scene.h"
 
 namespace ms::testing {
@@ -22,27 +24,6 @@ inline std::string SharedData(const std::string& relative) {
   return std::string(MS_SHARED_DATA_DIR) + "/" + relative;
 }
 inline bool HaveSharedData() { return std::filesystem::is_directory(MS_SHARED_DATA_DIR); }
-
-// A fresh, empty temporary directory (removed by the destructor).
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag) {
-    path_ = std::filesystem::temp_directory_path() /
-            ("ms_" + tag + "_" + std::to_string(::getpid()) + "_" +
-             std::to_string(reinterpret_cast<uintptr_t>(this)));
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
 
 inline bool Near(double a, double b, double rel) {
   return std::abs(a - b) <= rel * std::max(1.0, std::max(std::abs(a), std::abs(b)));

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "base/log.h"
+#include "base/testing.h"
 #include "scene/scene_io.h"
 
 namespace fs = std::filesystem;
@@ -21,22 +22,7 @@ namespace fs = std::filesystem;
 namespace ms {
 namespace {
 
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag) {
-    path_ = fs::temp_directory_path() / ("ms_" + tag + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
+using testing::TempDir;
 
 struct RunResult {
   int exit_code = -1;

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "base/error.h"
+#include "base/testing.h"
 #include "scene/colmap_io.h"
 
 namespace fs = std::filesystem;
@@ -26,25 +27,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-class TempDir {
- public:
-  TempDir() {
-    path_ =
-        fs::temp_directory_path() / ("ms_colmap_triangulate_test_" + std::to_string(::getpid()) +
-                                     "_" + std::to_string(counter_++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  static inline int counter_ = 0;
-  fs::path path_;
-};
+using testing::TempDir;
 
 // colmap 3.8's tables (src/base/database.cc), as far as the route reads them.
 constexpr const char* kSchema = R"sql(

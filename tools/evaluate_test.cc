@@ -10,6 +10,7 @@
 
 #include "base/error.h"
 #include "base/file_util.h"
+#include "gl/gl_testing.h"
 #include "tools/plot.h"
 #include "tools/synth.h"
 #include "tools/synth_scenes.h"
@@ -17,16 +18,7 @@
 namespace ms {
 namespace {
 
-class EvaluateTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() { context_ = new gl::GlContext(); }
-  static void TearDownTestSuite() {
-    delete context_;
-    context_ = nullptr;
-  }
-  static gl::GlContext* context_;
-};
-gl::GlContext* EvaluateTest::context_ = nullptr;
+class EvaluateTest : public gl::SharedGlContextTest {};
 
 Scene SceneOf(const SynthGeometry& g) {
   Scene scene;

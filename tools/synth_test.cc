@@ -8,22 +8,14 @@
 
 #include "base/error.h"
 #include "base/log.h"
+#include "gl/gl_testing.h"
 #include "gl/mesh_renderer.h"
 #include "tools/synth_scenes.h"
 
 namespace ms {
 namespace {
 
-class SynthTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() { context_ = new gl::GlContext(); }
-  static void TearDownTestSuite() {
-    delete context_;
-    context_ = nullptr;
-  }
-  static gl::GlContext* context_;
-};
-gl::GlContext* SynthTest::context_ = nullptr;
+class SynthTest : public gl::SharedGlContextTest {};
 
 SynthOptions Small(const std::string& scene, int views = 4) {
   SynthOptions o;

@@ -15,8 +15,8 @@
 #include <opencv2/core.hpp>
 
 #include "base/error.h"
-#include "gl/context.h"
-#include "mesh/visible_mesh.h"
+#include "base/testing.h"
+#include "gl/gl_testing.h"
 #include "worker/reference_sweep.h"
 #include "worker/sweep_kernel_factory.h"
 #include "worker/sweep_test_scene.h"
@@ -25,10 +25,10 @@ namespace ms {
 namespace {
 
 // One context and a kernel per blur variant for the whole suite (contexts are slow to make).
-class GlslSweepTest : public ::testing::Test {
+class GlslSweepTest : public gl::SharedGlContextTest {
  protected:
   static void SetUpTestSuite() {
-    context_ = new gl::GlContext();
+    SharedGlContextTest::SetUpTestSuite();
     GlslSweepKernelOptions loops;
     loops.blur = GlslBlurVariant::kLoops;
     loops_ = new GlslSweepKernel(*context_, loops);
@@ -39,26 +39,21 @@ class GlslSweepTest : public ::testing::Test {
   static void TearDownTestSuite() {
     delete loops_;
     delete unrolled_;
-    delete context_;
+    SharedGlContextTest::TearDownTestSuite();
   }
   static std::vector<GlslSweepKernel*> Kernels() { return {loops_, unrolled_}; }
   static std::string Label(const GlslSweepKernel* k) {
     return k->blur_variant() == GlslBlurVariant::kLoops ? "loops" : "unrolled";
   }
-  static gl::GlContext* context_;
   static GlslSweepKernel* loops_;
   static GlslSweepKernel* unrolled_;
 };
-gl::GlContext* GlslSweepTest::context_ = nullptr;
 GlslSweepKernel* GlslSweepTest::loops_ = nullptr;
 GlslSweepKernel* GlslSweepTest::unrolled_ = nullptr;
 
 // The reference test's job (reference_sweep_test.cc): small window and tiles for 160x120.
 SweepJob MakeJob(const PyramidScene& scene, const Mesh& mesh) {
-  SweepJob job;
-  job.camera = scene.cameras[0];
-  job.neighbours = {scene.cameras[1], scene.cameras[2]};
-  job.mesh = ExtractVisibleMesh(mesh, job.camera.view).mesh;
+  SweepJob job = MakePyramidSweepJob(scene, mesh);
   job.options.gaussian_sigma_px = 4;
   job.options.tile_size_px = 10;
   return job;
@@ -440,12 +435,7 @@ TEST_F(GlslSweepTest, BlankAndFaintTexturesFindNothing) {
 // ---- Errors ----
 
 void ExpectInputError(SweepKernel& kernel, const SweepJob& job, const std::string& fragment) {
-  try {
-    kernel.Run(job);
-    ADD_FAILURE() << "no error; expected one mentioning '" << fragment << "'";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
-  }
+  testing::ExpectInputError([&] { kernel.Run(job); }, {fragment});
 }
 
 TEST_F(GlslSweepTest, BadJobsThrowInputErrorLikeTheReference) {

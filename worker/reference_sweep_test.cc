@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "base/error.h"
-#include "mesh/visible_mesh.h"
+#include "base/testing.h"
 #include "worker/sweep_test_scene.h"
 
 namespace ms {
@@ -221,10 +221,7 @@ struct PyramidFixture {
 // The paper's synthetic experiment in small: the current mesh is the flat square at half the
 // pyramid's height, so it is up to 0.15 away from the true surface.
 SweepJob MakeJob(const PyramidScene& scene, const Mesh& mesh) {
-  SweepJob job;
-  job.camera = scene.cameras[0];
-  job.neighbours = {scene.cameras[1], scene.cameras[2]};
-  job.mesh = ExtractVisibleMesh(mesh, job.camera.view).mesh;
+  SweepJob job = MakePyramidSweepJob(scene, mesh);
   // Small images: smaller window and tiles than the defaults for 1-3 Mpixel images.
   job.options.gaussian_sigma_px = 4;
   job.options.tile_size_px = 10;
@@ -360,12 +357,7 @@ TEST(ReferenceSweep, Deterministic) {
 // ---- Bad jobs ----
 
 void ExpectInputError(const SweepJob& job, const std::string& fragment) {
-  try {
-    ReferenceSweepKernel().Run(job);
-    ADD_FAILURE() << "no error; expected one mentioning '" << fragment << "'";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
-  }
+  testing::ExpectInputError([&] { ReferenceSweepKernel().Run(job); }, {fragment});
 }
 
 TEST(ReferenceSweep, BadJobsThrowInputError) {

@@ -7,6 +7,8 @@
 #include <limits>
 #include <opencv2/core.hpp>
 
+#include "mesh/visible_mesh.h"
+
 namespace ms {
 namespace {
 
@@ -129,6 +131,23 @@ double PyramidScene::Distance(const Eigen::Vector3d& p) const {
     best = std::min(best, (p - q).norm());
   }
   return best;
+}
+
+SweepJob MakePyramidSweepJob(const PyramidScene& scene, const Mesh& mesh) {
+  SweepJob job;
+  job.camera = scene.cameras[0];
+  job.neighbours = {scene.cameras[1], scene.cameras[2]};
+  job.mesh = ExtractVisibleMesh(mesh, job.camera.view).mesh;
+  return job;
+}
+
+SweepJob MakeBenchmarkSweepJob(int width) {
+  PyramidSceneOptions options;
+  options.width = width;
+  options.height = width * 3 / 4;
+  options.supersample = 1;  // rendering cost only; the sweep does not care
+  options.noise_stddev = 0.01;
+  return MakePyramidSweepJob(MakePyramidScene(options), MakeFlatSquare(0.15, 1.3, 16));
 }
 
 Mesh MakeFlatSquare(double z, double half_size, int cells) {
