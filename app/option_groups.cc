@@ -27,9 +27,17 @@ void RegisterManifoldOptions(CLI::App* cmd, ManifoldOptions* o) {
   cmd->add_option("--manifold.steiner-grid", o->steiner_grid,
                   "Steiner points per edge of the box (2 = corners only)")
       ->capture_default_str();
-  cmd->add_flag("--manifold.graded-steiner", o->steiner_graded,
-                "experimental: graded Steiner points in the empty space; 3x fewer cells per ray "
-                "on dense scenes, but some cameras may end up inside matter (docs/performance.md)");
+  static const std::map<std::string, GradedSteiner> kGraded = {
+      {"auto", GradedSteiner::kAuto}, {"on", GradedSteiner::kOn}, {"off", GradedSteiner::kOff}};
+  cmd->add_option("--manifold.graded-steiner", o->steiner_graded,
+                  "graded Steiner points in the empty space, cells of Steiner points only being "
+                  "free: on, off (the paper's box grid only) or auto (on from "
+                  "--manifold.graded-steiner-min-points points; docs/manifold.md)")
+      ->transform(CLI::CheckedTransformer(kGraded, CLI::ignore_case))
+      ->default_str("auto");
+  cmd->add_option("--manifold.graded-steiner-min-points", o->graded_steiner_min_points,
+                  "auto mode: input points from which graded Steiner points are used")
+      ->capture_default_str();
   cmd->add_option("--manifold.steiner-clearance", o->steiner_clearance,
                   "graded Steiner points keep this x their size away from every point")
       ->capture_default_str();

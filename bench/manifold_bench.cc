@@ -1,10 +1,13 @@
 // Throughput of the manifold reconstruction steps (docs/performance.md):
-//   manifold_bench [points ...] [--insert=N] [--export=DIR] [--graded-steiner]
+//   manifold_bench [points ...] [--insert=N] [--export=DIR] [--graded-steiner=on|off]
+//                  [--steiner-grid=N] [--steiner-min-spacing=X] [--steiner-clearance=X]
+//   default Steiner mode: the library's (auto: graded from 5*10^4 points)
 //   default sizes: 10^4 10^5 10^6
 // For each size: Delaunay insertion, ray tracing (rays/s), growing (cells/s), peak memory per
 // point; then incremental insertion of N (default 10^4) points near the surface (points/s).
 // --export=DIR writes, per size, the input points (PLY, normals = mean unit direction to the
 // cameras that see each point, for the Poisson baseline) and the initial manifold.
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -28,8 +31,16 @@ int main(int argc, char** argv) {
       insert_count = std::stoll(arg.substr(9));
     } else if (arg.rfind("--export=", 0) == 0) {
       export_dir = arg.substr(9);
-    } else if (arg == "--graded-steiner") {
-      options.steiner_graded = true;
+    } else if (arg.rfind("--steiner-min-spacing=", 0) == 0) {
+      options.steiner_min_spacing = std::stod(arg.substr(22));
+    } else if (arg.rfind("--steiner-clearance=", 0) == 0) {
+      options.steiner_clearance = std::stod(arg.substr(20));
+    } else if (arg.rfind("--steiner-grid=", 0) == 0) {
+      options.steiner_grid = std::stoi(arg.substr(15));
+    } else if (arg == "--graded-steiner=on") {
+      options.steiner_graded = ms::GradedSteiner::kOn;
+    } else if (arg == "--graded-steiner=off") {
+      options.steiner_graded = ms::GradedSteiner::kOff;
     } else {
       sizes.push_back(std::stoll(arg));
     }
@@ -76,9 +87,11 @@ int main(int argc, char** argv) {
                 static_cast<long long>(stats.full_manifold_tests),
                 static_cast<double>(stats.link_steps) / std::max<int64_t>(stats.full_manifold_tests, 1));
     std::printf("          incremental: %lld inserted, %lld discarded (conflict), %lld shrunk, "
-                "%lld candidate rays, insertion %.2f s + regrowing %.2f s\n",
+                "%lld candidate rays, %lld re-walked (%.1f cells each), insertion %.2f s + regrowing %.2f s\n",
                 static_cast<long long>(ins.inserted), static_cast<long long>(ins.discarded_conflict),
                 static_cast<long long>(ins.shrunk_cells), static_cast<long long>(ins.candidate_rays),
+                static_cast<long long>(ins.rewalked_rays),
+                static_cast<double>(ins.rewalk_steps) / std::max<int64_t>(ins.rewalked_rays, 1),
                 ins.seconds_insertion, ins.seconds_growing);
     std::fflush(stdout);
   }

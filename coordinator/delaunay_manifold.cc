@@ -100,14 +100,22 @@ FaceSides ComputeFaceSides(const Cell_handle& c, const Point& a, const Point& b)
   const Point& p2 = c->vertex(2)->point();
   const Point& p3 = c->vertex(3)->point();
   FaceSides s;
-  s.a[0] = CGAL::orientation(a, p1, p2, p3);
-  s.a[1] = CGAL::orientation(p0, a, p2, p3);
-  s.a[2] = CGAL::orientation(p0, p1, a, p3);
-  s.a[3] = CGAL::orientation(p0, p1, p2, a);
-  s.b[0] = CGAL::orientation(b, p1, p2, p3);
-  s.b[1] = CGAL::orientation(p0, b, p2, p3);
-  s.b[2] = CGAL::orientation(p0, p1, b, p3);
-  s.b[3] = CGAL::orientation(p0, p1, p2, b);
+  // An end point that is a vertex of c lies on the three faces through it and on the cell's
+  // side of the fourth: answered directly (the exact predicate would need multi-precision).
+  const auto sides = [&](const Point& x, int* out) {
+    for (int i = 0; i < 4; ++i) {
+      if (&c->vertex(i)->point() == &x) {
+        for (int j = 0; j < 4; ++j) out[j] = j == i ? 1 : 0;
+        return;
+      }
+    }
+    out[0] = CGAL::orientation(x, p1, p2, p3);
+    out[1] = CGAL::orientation(p0, x, p2, p3);
+    out[2] = CGAL::orientation(p0, p1, x, p3);
+    out[3] = CGAL::orientation(p0, p1, p2, x);
+  };
+  sides(a, s.a);
+  sides(b, s.b);
   return s;
 }
 
@@ -148,6 +156,58 @@ bool SegmentCrossesCell(const Cell_handle& c, const Point& a, const Point& b, co
 
 bool SegmentCrossesCell(const Cell_handle& c, const Point& a, const Point& b) {
   return SegmentCrossesCell(c, a, b, ComputeFaceSides(c, a, b));
+}
+
+// Does the closed segment [a, b] meet the closed box [lo, hi]? (slab clipping)
+// *entry receives the parameter (0 at a, 1 at b) where it enters the box.
+bool SegmentMeetsBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& lo,
+                     const Eigen::Vector3d& hi, double* entry) {
+  double t0 = 0, t1 = 1;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double d = b[axis] - a[axis];
+    if (d == 0) {
+      if (a[axis] < lo[axis] || a[axis] > hi[axis]) return false;
+      continue;
+    }
+    double near = (lo[axis] - a[axis]) / d, far = (hi[axis] - a[axis]) / d;
+    if (near > far) std::swap(near, far);
+    t0 = std::max(t0, near);
+    t1 = std::min(t1, far);
+    if (t0 > t1) return false;
+  }
+  *entry = t0;
+  return true;
+}
+
+// Indices of `points` in Morton (Z-curve) order of their positions: consecutive insertions
+// then locate and conflict in neighbouring cells, which are in cache.
+std::vector<size_t> SpatialOrder(const std::vector<RayPoint>& points) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  for (const RayPoint& p : points) {
+    lo = lo.cwiseMin(p.position);
+    hi = hi.cwiseMax(p.position);
+  }
+  const Eigen::Vector3d scale = ((hi - lo).array().max(1e-300).inverse() * 2097151.0).matrix();
+  const auto spread = [](uint64_t x) {  // 21 bits -> every third bit of 63
+    x &= 0x1FFFFF;
+    x = (x | x << 32) & 0x1F00000000FFFFull;
+    x = (x | x << 16) & 0x1F0000FF0000FFull;
+    x = (x | x << 8) & 0x100F00F00F00F00Full;
+    x = (x | x << 4) & 0x10C30C30C30C30C3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+  };
+  std::vector<std::pair<uint64_t, size_t>> keyed(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d q = (points[i].position - lo).cwiseProduct(scale);
+    keyed[i] = {spread(static_cast<uint64_t>(q.x())) | spread(static_cast<uint64_t>(q.y())) << 1 |
+                    spread(static_cast<uint64_t>(q.z())) << 2,
+                i};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<size_t> order(points.size());
+  for (size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
+  return order;
 }
 
 using CellKey = std::array<int32_t, 4>;
@@ -231,7 +291,15 @@ class DelaunayManifold::Impl {
     for (int i = 0; i < 4; ++i) info.spread[i] += (spread_mask >> i) & 1;
   }
   bool IsFree(const Cell_handle& c) const {
-    return !dt_.is_infinite(c) && Weight(c) >= options_.free_threshold;
+    if (dt_.is_infinite(c)) return false;
+    // With graded Steiner points, a cell of Steiner points only is empty space (no input point
+    // in its circumsphere): free without rays, so the free space stays one region around the
+    // cameras instead of narrow cones that growing cannot carve (docs/manifold.md).
+    if (graded_ && c->vertex(0)->info().id < 0 && c->vertex(1)->info().id < 0 &&
+        c->vertex(2)->info().id < 0 && c->vertex(3)->info().id < 0) {
+      return true;
+    }
+    return Weight(c) >= options_.free_threshold;
   }
   void SetOutside(const Cell_handle& c, bool outside) {
     MS_CHECK(!dt_.is_infinite(c));
@@ -288,6 +356,13 @@ class DelaunayManifold::Impl {
   void WalkFallback(Cell_handle from, const Point& a, const Point& b, uint32_t stamp,
                     Visit& visit) const;
   std::vector<Cell_handle> StartCandidates(const CameraStart& start) const;
+  // Walks the open segment a -> target backwards from the target and calls visit(cell, mask)
+  // (masks as Walk's) for the cells it crosses at parameters >= reach (0 at a, 1 at the
+  // target), stopping at the first cell lying wholly before reach. Returns false, having
+  // visited nothing, where the segment runs along a face or an edge: then walk forwards.
+  template <typename Visit>
+  bool WalkBack(const Point& a, const Vertex_handle& target, double reach, Visit&& visit,
+                int64_t* steps) const;
 
   ManifoldOptions options_;
   std::vector<ManifoldCamera> cameras_;
@@ -304,8 +379,8 @@ class DelaunayManifold::Impl {
   int64_t ray_count_ = 0;
   mutable uint32_t stamp_ = 0;
   uint32_t batch_ = 0;               // insertion batches so far
-  std::vector<uint32_t> point_mark_;  // per point: last batch that marked its rays
   mutable std::vector<Cell_handle> scratch_cells_;  // reused by walks
+  mutable std::vector<std::pair<Cell_handle, unsigned>> scratch_crossed_;  // by WalkBack
   struct TestCounts {
     int64_t fast = 0, full = 0, link_steps = 0;
   };
@@ -315,6 +390,7 @@ class DelaunayManifold::Impl {
   mutable std::vector<std::pair<Vertex_handle, Vertex_handle>> regular_link_;
   mutable std::vector<std::pair<Vertex_handle, int>> regular_degree_;
   bool built_ = false;
+  bool graded_ = false;  // graded Steiner points in use (decided by Build)
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -516,6 +592,71 @@ int64_t DelaunayManifold::Impl::Walk(const CameraStart& start, const Point& a,
     current = next;
   }
   return steps;
+}
+
+template <typename Visit>
+bool DelaunayManifold::Impl::WalkBack(const Point& a, const Vertex_handle& target, double reach,
+                                      Visit&& visit, int64_t* steps) const {
+  const Point& b = target->point();
+  const Eigen::Vector3d origin(a.x(), a.y(), a.z());
+  const Eigen::Vector3d d = Eigen::Vector3d(b.x(), b.y(), b.z()) - origin;
+  // A cell whose vertices all project before `reach` (with slack for rounding) holds no part
+  // of the segment at or beyond it; the cells further towards a do not either.
+  const double limit = (reach - 1e-9) * d.squaredNorm();
+  const auto before_reach = [&](const Cell_handle& c) {
+    for (int i = 0; i < 4; ++i) {
+      const Point& q = c->vertex(i)->point();
+      if ((Eigen::Vector3d(q.x(), q.y(), q.z()) - origin).dot(d) >= limit) return false;
+    }
+    return true;
+  };
+  std::vector<Cell_handle>& around = scratch_cells_;
+  around.clear();
+  dt_.incident_cells(target, std::back_inserter(around));
+  Cell_handle current;
+  for (const Cell_handle& c : around) {
+    if (!dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
+      current = c;
+      break;
+    }
+  }
+  if (current == Cell_handle()) return false;
+  const uint32_t stamp = NextStamp();
+  std::vector<std::pair<Cell_handle, unsigned>>& crossed = scratch_crossed_;
+  crossed.clear();
+  while (!before_reach(current)) {
+    current->info().stamp = stamp;
+    // The segment from the target towards a: s.a holds the target's sides, s.b the camera's.
+    const FaceSides s = ComputeFaceSides(current, b, a);
+    unsigned mask = 0;
+    for (int i = 0; i < 4; ++i) mask |= (s.b[i] < 0 ? 1u : 0u) << i;
+    crossed.push_back({current, mask});
+    // Leave through the face whose bound on the parameter comes first (as in Walk).
+    int exit = -1;
+    bool tie = false;
+    for (int j = 0; j < 4; ++j) {
+      if (!(s.a[j] > 0 && s.b[j] <= 0)) continue;
+      if (exit < 0) {
+        exit = j;
+        continue;
+      }
+      const int order = PluckerSign(current, j, exit, b, a);
+      if (order < 0) {
+        exit = j;
+        tie = false;
+      } else if (order == 0) {
+        tie = true;
+      }
+    }
+    if (exit < 0 || s.b[exit] == 0) break;  // a is in or on this cell
+    if (tie) return false;                   // leaves through an edge or a vertex
+    const Cell_handle next = current->neighbor(exit);
+    if (dt_.is_infinite(next) || next->info().stamp == stamp) return false;
+    current = next;
+  }
+  for (const auto& [cell, cell_mask] : crossed) visit(cell, cell_mask);
+  *steps += static_cast<int64_t>(crossed.size());
+  return true;
 }
 
 // Exhaustive enumeration for degenerate segments: flood over cells whose closure meets the
@@ -813,7 +954,10 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   SteinerOptions steiner_options;
   steiner_options.margin = options_.steiner_margin;
   steiner_options.grid = options_.steiner_grid;
-  steiner_options.graded = options_.steiner_graded;
+  graded_ = options_.steiner_graded == GradedSteiner::kOn ||
+            (options_.steiner_graded == GradedSteiner::kAuto &&
+             static_cast<int64_t>(points.size()) >= options_.graded_steiner_min_points);
+  steiner_options.graded = graded_;
   steiner_options.clearance = options_.steiner_clearance;
   steiner_options.min_spacing_factor = options_.steiner_min_spacing;
   const SteinerPoints made = MakeSteinerPoints(lo, hi, data, steiner_options);
@@ -840,7 +984,6 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   positions_.reserve(points.size());
   point_cameras_.reserve(points.size());
   vertex_of_point_.assign(points.size(), Vertex_handle());
-  point_mark_.assign(points.size(), 0);
   for (auto v = dt_.finite_vertices_begin(); v != dt_.finite_vertices_end(); ++v) {
     if (v->info().id >= 0) vertex_of_point_[v->info().id] = v;
   }
@@ -953,12 +1096,25 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   std::vector<std::pair<CellKey, Cell_handle>> shrink_set;
   std::vector<Facet> boundary;
   std::vector<RayRef> candidates;
-  std::vector<int32_t> affected_points;  // old points whose rays may cross a new cell
-  bool all_affected = false;
+  // Per old ray (ray_offset[point] + index of the camera in the point's list): the smallest
+  // parameter (0 at the camera, 1 at the point) where it may enter a new cell; > 1: none.
+  std::vector<int64_t> ray_offset(first_new_id + 1, 0);
+  for (int32_t id = 0; id < first_new_id; ++id) {
+    ray_offset[id + 1] = ray_offset[id] + static_cast<int64_t>(point_cameras_[id].size());
+  }
+  std::vector<float> ray_reach(ray_offset[first_new_id], 2.0f);
+  bool all_affected = false;  // every old ray from its camera on
+  const auto ray_id = [&](const RayRef& ray) {
+    const std::vector<int32_t>& cams = point_cameras_[ray.point];
+    return ray_offset[ray.point] + (std::lower_bound(cams.begin(), cams.end(), ray.camera) - cams.begin());
+  };
+  // Slack for the segment/box test: rounding in the box and the clipping, scene-relative.
+  const double box_slack = 1e-9 * (box_max_ - box_min_).norm();
+  const std::vector<size_t> order = SpatialOrder(points);
   Cell_handle hint;
   for (size_t n = 0; n < points.size(); ++n) {
     progress.Update(static_cast<int64_t>(n));
-    const RayPoint& rp = points[n];
+    const RayPoint& rp = points[order[n]];
     if (!((rp.position.array() > box_min_.array()).all() &&
           (rp.position.array() < box_max_.array()).all())) {
       ++stats.discarded_outside;
@@ -1048,18 +1204,24 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
         hi = hi.cwiseMax(x);
       }
     }
-    // Once most points are affected, re-walking all rays is cheaper than more queries.
-    if (!all_affected) {
-      candidates.clear();
-      ray_index_->Query(lo, hi, &candidates);
-      stats.candidate_rays += static_cast<int64_t>(candidates.size());
-      for (const RayRef& ray : candidates) {
-        if (point_mark_[ray.point] != batch) {
-          point_mark_[ray.point] = batch;
-          affected_points.push_back(ray.point);
-        }
+    // A candidate costs about what 1/20 of a whole re-walk does: past 20 candidates per ray,
+    // (large conflict regions: the box-only Steiner grid's long cells) every ray is walked.
+    if (!all_affected && stats.candidate_rays > 20 * ray_count_) {
+      all_affected = true;
+      std::fill(ray_reach.begin(), ray_reach.end(), 0.0f);
+    }
+    candidates.clear();
+    if (!all_affected) ray_index_->Query(lo, hi, &candidates);
+    stats.candidate_rays += static_cast<int64_t>(candidates.size());
+    const Eigen::Vector3d slack = Eigen::Vector3d::Constant(box_slack);
+    for (const RayRef& ray : candidates) {
+      double entry;
+      if (SegmentMeetsBox(cameras_[ray.camera].center, positions_[ray.point], lo - slack,
+                          hi + slack, &entry)) {
+        float& reach = ray_reach[ray_id(ray)];
+        // Rounded down (float), so the walk starts no later than the box.
+        reach = std::min(reach, static_cast<float>(entry) - 1e-6f);
       }
-      all_affected = affected_points.size() > static_cast<size_t>(first_new_id) / 3;
     }
 
     for (const Cell_handle& c : conflicts) {
@@ -1083,7 +1245,6 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
     std::sort(cams.begin(), cams.end());
     cams.erase(std::unique(cams.begin(), cams.end()), cams.end());
     point_cameras_.push_back(std::move(cams));
-    point_mark_.push_back(0);
     vertex_of_point_.push_back(v);
     ++stats.inserted;
     hint = v->cell();
@@ -1092,13 +1253,11 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   // Exact ray counts for the cells born in this batch: every old ray that may cross one is
   // walked once and counted on those cells only (the others keep their counts: their geometry
   // did not change); the new points' rays are walked and counted everywhere.
-  if (all_affected) {
-    affected_points.resize(first_new_id);
-    for (int32_t id = 0; id < first_new_id; ++id) affected_points[id] = id;
-  }
   std::vector<RayRef> rays;
-  for (int32_t id : affected_points) {
-    for (int32_t c : point_cameras_[id]) rays.push_back({c, id});
+  for (int32_t id = 0; id < first_new_id; ++id) {
+    for (size_t k = 0; k < point_cameras_[id].size(); ++k) {
+      if (ray_reach[ray_offset[id] + k] <= 1.0f) rays.push_back({point_cameras_[id][k], id});
+    }
   }
   SortRaysForLocality(&rays);
   for (const RayRef& ray : rays) {
@@ -1106,7 +1265,14 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
     const auto count_new_cells = [&](const Cell_handle& c, unsigned mask) {
       if (c->info().born == batch) CountCrossing(c, mask);
     };
-    Walk(StartOf(ray.camera), camera_points_[ray.camera], target, count_new_cells);
+    // Only the part of the ray from its first hole box on can cross a new cell: walk that
+    // part backwards from the point; where that is degenerate, the whole ray forwards.
+    const float reach = ray_reach[ray_id(ray)];
+    if (reach <= 0 || !WalkBack(camera_points_[ray.camera], target, reach, count_new_cells,
+                                &stats.rewalk_steps)) {
+      stats.rewalk_steps +=
+          Walk(StartOf(ray.camera), camera_points_[ray.camera], target, count_new_cells);
+    }
     ++stats.rewalked_rays;
   }
   for (int32_t id = first_new_id; id < static_cast<int32_t>(positions_.size()); ++id) {
@@ -1301,6 +1467,10 @@ void ManifoldOptions::Check() const {
   require(std::isfinite(free_threshold) && free_threshold > 0, "free-threshold", "must be positive");
   require(std::isfinite(steiner_margin) && steiner_margin > 0, "steiner-margin", "must be positive");
   require(steiner_grid >= 2 && steiner_grid <= 64, "steiner-grid", "must be in [2, 64]");
+  require(steiner_graded == GradedSteiner::kAuto || steiner_graded == GradedSteiner::kOn ||
+              steiner_graded == GradedSteiner::kOff,
+          "graded-steiner", "must be auto, on or off");
+  require(graded_steiner_min_points >= 0, "graded-steiner-min-points", "must be >= 0");
   require(std::isfinite(steiner_clearance) && steiner_clearance >= 1, "steiner-clearance",
           "must be >= 1");
   require(std::isfinite(steiner_min_spacing) && steiner_min_spacing > 0, "steiner-min-spacing",

@@ -59,6 +59,7 @@ struct InsertionStats {
   int64_t shrunk_cells = 0;         // cells removed from O while shrinking (for inserted and discarded points)
   int64_t candidate_rays = 0;       // rays found near conflict regions (with repeats)
   int64_t rewalked_rays = 0;        // old rays walked again to count them on new cells
+  int64_t rewalk_steps = 0;         // cells those walks crossed (from their first hole box on)
   int64_t new_rays = 0;
   int64_t outside_cells = 0;        // |O| after regrowing
   int64_t free_cells_left_inside = 0;  // free cells not in O after regrowing
