@@ -6,6 +6,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <tuple>
 
 namespace ms::bench {
 
@@ -51,6 +52,36 @@ ManifoldBenchScene MakeBlobScene(int64_t num_points, int num_cameras, int rays_p
     std::sort(p.cameras.begin(), p.cameras.end());
   }
   return scene;
+}
+
+void SortLikeTheCoordinator(const std::vector<ManifoldCamera>& cameras,
+                            std::vector<RayPoint>* points) {
+  struct Keyed {
+    int32_t camera, row, column;
+    size_t index;
+    bool operator<(const Keyed& o) const {
+      return std::tie(camera, row, column, index) < std::tie(o.camera, o.row, o.column, o.index);
+    }
+  };
+  std::vector<Keyed> keyed;
+  keyed.reserve(points->size());
+  for (size_t i = 0; i < points->size(); ++i) {
+    const RayPoint& p = (*points)[i];
+    Keyed k{-1, 0, 0, i};
+    if (!p.cameras.empty()) {
+      const ManifoldCamera& cam = cameras[p.cameras.front()];
+      const Eigen::Vector3d x = cam.R * (p.position - cam.center);
+      k.camera = p.cameras.front();
+      k.column = static_cast<int32_t>(800 * (x.x() / x.z() - cam.u_min) / (cam.u_max - cam.u_min));
+      k.row = static_cast<int32_t>(600 * (x.y() / x.z() - cam.v_min) / (cam.v_max - cam.v_min));
+    }
+    keyed.push_back(k);
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<RayPoint> sorted;
+  sorted.reserve(points->size());
+  for (const Keyed& k : keyed) sorted.push_back(std::move((*points)[k.index]));
+  *points = std::move(sorted);
 }
 
 int64_t PeakRssBytes() {

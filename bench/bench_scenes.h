@@ -20,6 +20,12 @@ struct ManifoldBenchScene {
 ManifoldBenchScene MakeBlobScene(int64_t num_points, int num_cameras, int rays_per_point,
                                  uint64_t seed, double surface_offset = 0.0);
 
+// Orders new points as the coordinator orders a sweep's results (coordinator.cc,
+// InsertionOrder): by the first camera that sees them, then by pixel row and column in an
+// 800x600 image of the normalised coordinates [u_min, u_max] x [v_min, v_max].
+void SortLikeTheCoordinator(const std::vector<ManifoldCamera>& cameras,
+                            std::vector<RayPoint>* points);
+
 // Peak resident memory of this process so far (VmHWM), in bytes.
 int64_t PeakRssBytes();
 

@@ -4,7 +4,8 @@
 //   default Steiner mode: the library's (auto: graded from 5*10^4 points)
 //   default sizes: 10^4 10^5 10^6
 // For each size: Delaunay insertion, ray tracing (rays/s), growing (cells/s), peak memory per
-// point; then incremental insertion of N (default 10^4) points near the surface (points/s).
+// point; then incremental insertion of N (default 10^4) points near the surface (points/s), in
+// the coordinator's order (by camera, then pixel).
 // --export=DIR writes, per size, the input points (PLY, normals = mean unit direction to the
 // cameras that see each point, for the Poisson baseline) and the initial manifold.
 #include <algorithm>
@@ -70,8 +71,9 @@ int main(int argc, char** argv) {
       ms::WriteMesh(manifold.ExtractSurface(), stem + "_manifold.ply");
     }
     // Incremental: new points near the surface, as sweeping would find them.
-    const ms::bench::ManifoldBenchScene more =
+    ms::bench::ManifoldBenchScene more =
         ms::bench::MakeBlobScene(insert_count, 48, 3, 4242, 0.002);
+    ms::bench::SortLikeTheCoordinator(scene.cameras, &more.points);
     timer.Restart();
     const ms::InsertionStats ins = manifold.Insert(more.points);
     const double insert_total = timer.Seconds();

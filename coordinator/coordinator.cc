@@ -107,8 +107,8 @@ std::string OptionsFingerprint(const CoordinatorOptions& o) {
       "sweep {}",
       m.w1, m.w2, m.free_threshold, m.steiner_margin, m.steiner_grid, m.shrink_neighbourhood,
       m.grow_all_components, static_cast<int>(m.w2_rule), static_cast<int>(m.steiner_graded),
-      m.graded_steiner_min_points, m.steiner_clearance, m.steiner_min_spacing, o.neighbours.max_angle_deg, o.neighbours.count,
-      o.neighbours.same_center_fraction, o.visible.margin_px, o.visible.near,
+      m.graded_steiner_min_points, m.steiner_clearance, m.steiner_min_spacing,
+      o.neighbours.max_angle_deg, o.neighbours.count, o.neighbours.same_center_fraction, o.visible.margin_px, o.visible.near,
       o.visible.keep_back_facing, HashHex(HashBytes(Serialize(o.sweep))));
   return HashHex(HashBytes(text));
 }

@@ -158,6 +158,43 @@ bool SegmentCrossesCell(const Cell_handle& c, const Point& a, const Point& b) {
   return SegmentCrossesCell(c, a, b, ComputeFaceSides(c, a, b));
 }
 
+// The faces of a crossed cell with the camera beyond them (`camera_sides`: the camera's row of
+// FaceSides): a ray from that camera spreads w2 across them (the walks' visit mask).
+unsigned CameraSideMask(const int camera_sides[4]) {
+  unsigned mask = 0;
+  for (int i = 0; i < 4; ++i) mask |= (camera_sides[i] < 0 ? 1u : 0u) << i;
+  return mask;
+}
+
+// The face through which the open segment a -> b leaves the crossed cell c (s: its sides from
+// ComputeFaceSides(c, a, b)): among the faces with a inside and b beyond or on, the one whose
+// bound on the segment's parameter comes first; -1 if none. ties[0, *num_ties) are the faces
+// tying for it: two mean leaving through an edge, three through a vertex.
+int ExitFace(const Cell_handle& c, const Point& a, const Point& b, const FaceSides& s,
+             int ties[3], int* num_ties) {
+  int exit = -1;
+  *num_ties = 0;
+  for (int j = 0; j < 4; ++j) {
+    if (!(s.a[j] > 0 && s.b[j] <= 0)) continue;
+    if (exit < 0) {
+      exit = j;
+      ties[0] = j;
+      *num_ties = 1;
+      continue;
+    }
+    // U_j < U_exit  <=>  K_{j,exit} < 0.
+    const int order = PluckerSign(c, j, exit, a, b);
+    if (order < 0) {
+      exit = j;
+      ties[0] = j;
+      *num_ties = 1;
+    } else if (order == 0) {
+      ties[(*num_ties)++] = j;
+    }
+  }
+  return exit;
+}
+
 // Does the closed segment [a, b] meet the closed box [lo, hi]? (slab clipping)
 // *entry receives the parameter (0 at a, 1 at b) where it enters the box.
 bool SegmentMeetsBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& lo,
@@ -177,37 +214,6 @@ bool SegmentMeetsBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const E
   }
   *entry = t0;
   return true;
-}
-
-// Indices of `points` in Morton (Z-curve) order of their positions: consecutive insertions
-// then locate and conflict in neighbouring cells, which are in cache.
-std::vector<size_t> SpatialOrder(const std::vector<RayPoint>& points) {
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-  for (const RayPoint& p : points) {
-    lo = lo.cwiseMin(p.position);
-    hi = hi.cwiseMax(p.position);
-  }
-  const Eigen::Vector3d scale = ((hi - lo).array().max(1e-300).inverse() * 2097151.0).matrix();
-  const auto spread = [](uint64_t x) {  // 21 bits -> every third bit of 63
-    x &= 0x1FFFFF;
-    x = (x | x << 32) & 0x1F00000000FFFFull;
-    x = (x | x << 16) & 0x1F0000FF0000FFull;
-    x = (x | x << 8) & 0x100F00F00F00F00Full;
-    x = (x | x << 4) & 0x10C30C30C30C30C3ull;
-    x = (x | x << 2) & 0x1249249249249249ull;
-    return x;
-  };
-  std::vector<std::pair<uint64_t, size_t>> keyed(points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d q = (points[i].position - lo).cwiseProduct(scale);
-    keyed[i] = {spread(static_cast<uint64_t>(q.x())) | spread(static_cast<uint64_t>(q.y())) << 1 |
-                    spread(static_cast<uint64_t>(q.z())) << 2,
-                i};
-  }
-  std::sort(keyed.begin(), keyed.end());
-  std::vector<size_t> order(points.size());
-  for (size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
-  return order;
 }
 
 using CellKey = std::array<int32_t, 4>;
@@ -526,29 +532,10 @@ int64_t DelaunayManifold::Impl::Walk(const CameraStart& start, const Point& a,
       // General step, exact in every case: the exit is the face whose bound on the segment's
       // parameter is smallest; ties mean leaving through an edge or a vertex.
       const FaceSides s = ComputeFaceSides(current, a, b);
-      unsigned mask = 0;
-      for (int i = 0; i < 4; ++i) mask |= (s.a[i] < 0 ? 1u : 0u) << i;
-      visit(current, mask);
+      visit(current, CameraSideMask(s.a));
       if (last) break;
       int ties[3], num_ties = 0;
-      for (int j = 0; j < 4; ++j) {
-        if (!(s.a[j] > 0 && s.b[j] <= 0)) continue;
-        if (exit < 0) {
-          exit = j;
-          ties[0] = j;
-          num_ties = 1;
-          continue;
-        }
-        // U_j < U_exit  <=>  K_{j,exit} < 0.
-        const int order = PluckerSign(current, j, exit, a, b);
-        if (order < 0) {
-          exit = j;
-          ties[0] = j;
-          num_ties = 1;
-        } else if (order == 0) {
-          ties[num_ties++] = j;
-        }
-      }
+      exit = ExitFace(current, a, b, s, ties, &num_ties);
       if (exit < 0 || s.b[exit] == 0) break;  // the segment ends in or on this cell
       if (num_ties > 1) {
         // Leaves through an edge (two faces tie) or a vertex (three): the next cell is the
@@ -628,28 +615,11 @@ bool DelaunayManifold::Impl::WalkBack(const Point& a, const Vertex_handle& targe
     current->info().stamp = stamp;
     // The segment from the target towards a: s.a holds the target's sides, s.b the camera's.
     const FaceSides s = ComputeFaceSides(current, b, a);
-    unsigned mask = 0;
-    for (int i = 0; i < 4; ++i) mask |= (s.b[i] < 0 ? 1u : 0u) << i;
-    crossed.push_back({current, mask});
-    // Leave through the face whose bound on the parameter comes first (as in Walk).
-    int exit = -1;
-    bool tie = false;
-    for (int j = 0; j < 4; ++j) {
-      if (!(s.a[j] > 0 && s.b[j] <= 0)) continue;
-      if (exit < 0) {
-        exit = j;
-        continue;
-      }
-      const int order = PluckerSign(current, j, exit, b, a);
-      if (order < 0) {
-        exit = j;
-        tie = false;
-      } else if (order == 0) {
-        tie = true;
-      }
-    }
+    crossed.push_back({current, CameraSideMask(s.b)});
+    int ties[3], num_ties = 0;
+    const int exit = ExitFace(current, b, a, s, ties, &num_ties);
     if (exit < 0 || s.b[exit] == 0) break;  // a is in or on this cell
-    if (tie) return false;                   // leaves through an edge or a vertex
+    if (num_ties > 1) return false;          // leaves through an edge or a vertex
     const Cell_handle next = current->neighbor(exit);
     if (dt_.is_infinite(next) || next->info().stamp == stamp) return false;
     current = next;
@@ -679,9 +649,7 @@ void DelaunayManifold::Impl::WalkFallback(Cell_handle from, const Point& a, cons
     const FaceSides sides = ComputeFaceSides(c, a, b);
     if (c->info().stamp != stamp && SegmentCrossesCell(c, a, b, sides)) {
       c->info().stamp = stamp;
-      unsigned mask = 0;
-      for (int i = 0; i < 4; ++i) mask |= (sides.a[i] < 0 ? 1u : 0u) << i;
-      visit(c, mask);
+      visit(c, CameraSideMask(sides.a));
     }
     for (int i = 0; i < 4; ++i) {
       around.clear();
@@ -1110,11 +1078,10 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   };
   // Slack for the segment/box test: rounding in the box and the clipping, scene-relative.
   const double box_slack = 1e-9 * (box_max_ - box_min_).norm();
-  const std::vector<size_t> order = SpatialOrder(points);
   Cell_handle hint;
   for (size_t n = 0; n < points.size(); ++n) {
     progress.Update(static_cast<int64_t>(n));
-    const RayPoint& rp = points[order[n]];
+    const RayPoint& rp = points[n];
     if (!((rp.position.array() > box_min_.array()).all() &&
           (rp.position.array() < box_max_.array()).all())) {
       ++stats.discarded_outside;

@@ -21,7 +21,7 @@ using format::NextDouble;
 using format::NextInt;
 using format::Quote;
 
-constexpr double kMaxPixel = 1e9;
+using format::kMaxPixel;
 
 // Bundler's camera frame (y up, looking down -z) <-> ours (y down, looking down +z).
 const Eigen::Matrix3d& Flip() {

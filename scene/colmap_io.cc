@@ -23,7 +23,7 @@ namespace {
 using format::Quote;
 
 constexpr int64_t kMaxSide = int64_t{1} << 20;
-constexpr double kMaxPixel = 1e9;  // pixel coordinates beyond this are garbage (and overflow float)
+using format::kMaxPixel;
 
 struct ModelInfo {
   const char* name;

@@ -19,6 +19,9 @@
 
 namespace ms::format {
 
+// Pixel coordinates beyond this are garbage (and overflow float): the importers reject them.
+constexpr double kMaxPixel = 1e9;
+
 // A token or name for an error message: at most 40 characters, non-printable bytes escaped, so
 // the message stays one readable line whatever the input holds.
 std::string Quote(std::string_view text);

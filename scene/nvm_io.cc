@@ -18,7 +18,7 @@ using format::NextDouble;
 using format::NextInt;
 using format::Quote;
 
-constexpr double kMaxPixel = 1e9;
+using format::kMaxPixel;
 // Conversion errors of the radial model above this (pixels) are worth a warning.
 constexpr double kWarnDistortionErrorPx = 0.05;
 

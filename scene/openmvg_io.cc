@@ -20,7 +20,7 @@ namespace {
 using json = nlohmann::json;
 
 constexpr int64_t kMaxSide = int64_t{1} << 20;
-constexpr double kMaxPixel = 1e9;
+using format::kMaxPixel;
 // cereal's markers: the high bit flags the first occurrence of a polymorphic type or shared
 // pointer (which then carries its name or data); this id marks a non-polymorphic object.
 constexpr uint64_t kFirstOccurrence = 0x80000000u;
