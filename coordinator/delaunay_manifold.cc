@@ -364,11 +364,12 @@ class DelaunayManifold::Impl {
   std::vector<Cell_handle> StartCandidates(const CameraStart& start) const;
   // Walks the open segment a -> target backwards from the target and calls visit(cell, mask)
   // (masks as Walk's) for the cells it crosses at parameters >= reach (0 at a, 1 at the
-  // target), stopping at the first cell lying wholly before reach. Returns false, having
-  // visited nothing, where the segment runs along a face or an edge: then walk forwards.
-  template <typename Visit>
-  bool WalkBack(const Point& a, const Vertex_handle& target, double reach, Visit&& visit,
-                int64_t* steps) const;
+  // target) for which wants(cell) holds, stopping at the first cell lying wholly before reach.
+  // Returns false, having visited nothing, where the segment runs along a face or an edge:
+  // then walk forwards.
+  template <typename Wants, typename Visit>
+  bool WalkBack(const Point& a, const Vertex_handle& target, double reach, Wants&& wants,
+                Visit&& visit, int64_t* steps) const;
 
   ManifoldOptions options_;
   std::vector<ManifoldCamera> cameras_;
@@ -581,51 +582,122 @@ int64_t DelaunayManifold::Impl::Walk(const CameraStart& start, const Point& a,
   return steps;
 }
 
-template <typename Visit>
+template <typename Wants, typename Visit>
 bool DelaunayManifold::Impl::WalkBack(const Point& a, const Vertex_handle& target, double reach,
-                                      Visit&& visit, int64_t* steps) const {
+                                      Wants&& wants, Visit&& visit, int64_t* steps) const {
   const Point& b = target->point();
   const Eigen::Vector3d origin(a.x(), a.y(), a.z());
   const Eigen::Vector3d d = Eigen::Vector3d(b.x(), b.y(), b.z()) - origin;
-  // A cell whose vertices all project before `reach` (with slack for rounding) holds no part
-  // of the segment at or beyond it; the cells further towards a do not either.
-  const double limit = (reach - 1e-9) * d.squaredNorm();
-  const auto before_reach = [&](const Cell_handle& c) {
+  const double length2 = d.squaredNorm();
+  // Projections of a cell's vertices on the segment (scaled by |d|^2: 0 at a, length2 at b).
+  // All before `reach` (with slack for rounding): the cell holds no part of the segment at or
+  // beyond it, nor do the cells further towards a. None at or before 0: a is not in the cell.
+  const double limit = (reach - 1e-9) * length2, near_a = 1e-9 * length2;
+  const auto projections = [&](const Cell_handle& c, double* lowest) {
+    double highest = -INFINITY;
+    *lowest = INFINITY;
     for (int i = 0; i < 4; ++i) {
       const Point& q = c->vertex(i)->point();
-      if ((Eigen::Vector3d(q.x(), q.y(), q.z()) - origin).dot(d) >= limit) return false;
+      const double t = (Eigen::Vector3d(q.x(), q.y(), q.z()) - origin).dot(d);
+      highest = std::max(highest, t);
+      *lowest = std::min(*lowest, t);
     }
-    return true;
+    return highest;
   };
-  std::vector<Cell_handle>& around = scratch_cells_;
-  around.clear();
-  dt_.incident_cells(target, std::back_inserter(around));
-  Cell_handle current;
-  for (const Cell_handle& c : around) {
-    if (!dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
-      current = c;
-      break;
+
+  // The first cell: the one around the target whose three faces through the target have a
+  // strictly on their inner side (the segment leaves the target into its interior). Found by
+  // a visibility walk in the target's star; a zero orientation means the segment runs along a
+  // face or an edge there.
+  Cell_handle current = target->cell();
+  uint32_t stamp = NextStamp();
+  for (int star_steps = 0;; ++star_steps) {
+    if (dt_.is_infinite(current) || current->info().stamp == stamp || star_steps > 64) {
+      return false;  // not expected inside the Steiner box; the forward walk is exact
     }
+    current->info().stamp = stamp;
+    const int at = current->index(target);
+    int across = -1;
+    bool on_face = false;
+    for (int j = 0; j < 4 && across < 0; ++j) {
+      if (j == at) continue;
+      const CGAL::Orientation o = FaceSide(current, j, a);
+      if (o == CGAL::NEGATIVE) across = j;
+      on_face |= o == CGAL::COPLANAR;
+    }
+    if (across >= 0) {
+      current = current->neighbor(across);
+      continue;
+    }
+    if (on_face) return false;
+    break;
   }
-  if (current == Cell_handle()) return false;
-  const uint32_t stamp = NextStamp();
+
+  stamp = NextStamp();
   std::vector<std::pair<Cell_handle, unsigned>>& crossed = scratch_crossed_;
   crossed.clear();
-  while (!before_reach(current)) {
+  // The segment from the target towards a enters each cell through face `entry` (-1: the
+  // first cell, left through the face opposite the target unless a is in it).
+  int entry = -1;
+  int64_t walked = 0;
+  for (;;) {
+    double lowest;
+    if (projections(current, &lowest) < limit) break;
     current->info().stamp = stamp;
-    // The segment from the target towards a: s.a holds the target's sides, s.b the camera's.
-    const FaceSides s = ComputeFaceSides(current, b, a);
-    crossed.push_back({current, CameraSideMask(s.b)});
-    int ties[3], num_ties = 0;
-    const int exit = ExitFace(current, b, a, s, ties, &num_ties);
-    if (exit < 0 || s.b[exit] == 0) break;  // a is in or on this cell
-    if (num_ties > 1) return false;          // leaves through an edge or a vertex
+    ++walked;
+    int exit = -1;
+    if (entry < 0) {
+      exit = current->index(target);
+    } else {
+      // Fast step (as Walk's, for the segment b -> a): three orientations decide the exit.
+      const Point& apex = current->vertex(entry)->point();
+      int code = 0;
+      bool degenerate = false;
+      for (int m = 0; m < 4 && !degenerate; ++m) {
+        if (m == entry) continue;
+        const CGAL::Orientation o = CGAL::orientation(apex, current->vertex(m)->point(), b, a);
+        degenerate = o == CGAL::COPLANAR;
+        code = 2 * code + (o == CGAL::POSITIVE);
+      }
+      if (!degenerate) exit = kExitFace[entry][code];
+    }
+    if (exit >= 0) {
+      // a lies in this cell only if it is on the inner side of the exit face.
+      const bool ends_here = lowest <= near_a && FaceSide(current, exit, a) != CGAL::NEGATIVE;
+      if (wants(current)) {
+        // a in the cell is beyond none of its faces. Otherwise, forwards, the ray enters
+        // through our exit face (a beyond it) and leaves through our entry face (a before it);
+        // the other two are tested (in the first cell they pass through the target, with a
+        // strictly inside them).
+        unsigned mask = 0;
+        if (!ends_here) {
+          mask = 1u << exit;
+          for (int i = 0; i < 4 && entry >= 0; ++i) {
+            if (i != exit && i != entry && FaceSide(current, i, a) == CGAL::NEGATIVE) {
+              mask |= 1u << i;
+            }
+          }
+        }
+        crossed.push_back({current, mask});
+      }
+      if (ends_here) break;
+    } else {
+      // General step, exact: the segment from the target towards a: s.a holds the target's
+      // sides, s.b the camera's.
+      const FaceSides s = ComputeFaceSides(current, b, a);
+      if (wants(current)) crossed.push_back({current, CameraSideMask(s.b)});
+      int ties[3], num_ties = 0;
+      exit = ExitFace(current, b, a, s, ties, &num_ties);
+      if (exit < 0 || s.b[exit] == 0) break;  // a is in or on this cell
+      if (num_ties > 1) return false;          // leaves through an edge or a vertex
+    }
     const Cell_handle next = current->neighbor(exit);
     if (dt_.is_infinite(next) || next->info().stamp == stamp) return false;
+    entry = next->index(current);
     current = next;
   }
   for (const auto& [cell, cell_mask] : crossed) visit(cell, cell_mask);
-  *steps += static_cast<int64_t>(crossed.size());
+  *steps += walked;
   return true;
 }
 
@@ -1229,13 +1301,14 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   SortRaysForLocality(&rays);
   for (const RayRef& ray : rays) {
     const Vertex_handle target = vertex_of_point_[ray.point];
+    const auto is_new = [&](const Cell_handle& c) { return c->info().born == batch; };
     const auto count_new_cells = [&](const Cell_handle& c, unsigned mask) {
-      if (c->info().born == batch) CountCrossing(c, mask);
+      if (is_new(c)) CountCrossing(c, mask);
     };
     // Only the part of the ray from its first hole box on can cross a new cell: walk that
     // part backwards from the point; where that is degenerate, the whole ray forwards.
     const float reach = ray_reach[ray_id(ray)];
-    if (reach <= 0 || !WalkBack(camera_points_[ray.camera], target, reach, count_new_cells,
+    if (reach <= 0 || !WalkBack(camera_points_[ray.camera], target, reach, is_new, count_new_cells,
                                 &stats.rewalk_steps)) {
       stats.rewalk_steps +=
           Walk(StartOf(ray.camera), camera_points_[ray.camera], target, count_new_cells);
