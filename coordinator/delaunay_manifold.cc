@@ -503,6 +503,10 @@ int64_t DelaunayManifold::Impl::Walk(const CameraStart& start, const Point& a,
   }
   int entry = -1;  // face through which `current` was entered, if through a face interior
   for (;;) {
+    // The next cell is one of these: start loading them while the orientations are computed.
+    for (int i = 0; i < 4; ++i) {
+      if (i != entry) __builtin_prefetch(&*current->neighbor(i));
+    }
     current->info().stamp = stamp;
     ++steps;
     Cell_handle next;
@@ -591,18 +595,21 @@ bool DelaunayManifold::Impl::WalkBack(const Point& a, const Vertex_handle& targe
   const double length2 = d.squaredNorm();
   // Projections of a cell's vertices on the segment (scaled by |d|^2: 0 at a, length2 at b).
   // All before `reach` (with slack for rounding): the cell holds no part of the segment at or
-  // beyond it, nor do the cells further towards a. None at or before 0: a is not in the cell.
+  // beyond it. All of the exit face's: nor do the cells further towards a. None at or before
+  // 0: a is not in the cell.
   const double limit = (reach - 1e-9) * length2, near_a = 1e-9 * length2;
-  const auto projections = [&](const Cell_handle& c, double* lowest) {
-    double highest = -INFINITY;
-    *lowest = INFINITY;
+  double t[4];
+  const auto project = [&](const Cell_handle& c) {
     for (int i = 0; i < 4; ++i) {
       const Point& q = c->vertex(i)->point();
-      const double t = (Eigen::Vector3d(q.x(), q.y(), q.z()) - origin).dot(d);
-      highest = std::max(highest, t);
-      *lowest = std::min(*lowest, t);
+      t[i] = (Eigen::Vector3d(q.x(), q.y(), q.z()) - origin).dot(d);
     }
-    return highest;
+  };
+  const auto before_reach_except = [&](int skip) {
+    for (int i = 0; i < 4; ++i) {
+      if (i != skip && t[i] >= limit) return false;
+    }
+    return true;
   };
 
   // The first cell: the one around the target whose three faces through the target have a
@@ -641,8 +648,12 @@ bool DelaunayManifold::Impl::WalkBack(const Point& a, const Vertex_handle& targe
   int entry = -1;
   int64_t walked = 0;
   for (;;) {
-    double lowest;
-    if (projections(current, &lowest) < limit) break;
+    for (int i = 0; i < 4; ++i) {
+      if (i != entry) __builtin_prefetch(&*current->neighbor(i));  // as in Walk
+    }
+    project(current);
+    if (before_reach_except(-1)) break;
+    const double lowest = std::min(std::min(t[0], t[1]), std::min(t[2], t[3]));
     current->info().stamp = stamp;
     ++walked;
     int exit = -1;
@@ -691,6 +702,7 @@ bool DelaunayManifold::Impl::WalkBack(const Point& a, const Vertex_handle& targe
       if (exit < 0 || s.b[exit] == 0) break;  // a is in or on this cell
       if (num_ties > 1) return false;          // leaves through an edge or a vertex
     }
+    if (before_reach_except(exit)) break;
     const Cell_handle next = current->neighbor(exit);
     if (dt_.is_infinite(next) || next->info().stamp == stamp) return false;
     entry = next->index(current);
@@ -1072,6 +1084,7 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
       rays.push_back({c, static_cast<int32_t>(i)});
     }
   }
+  ray_index_->Flush();
   SortRaysForLocality(&rays);
   for (const RayRef& ray : rays) {
     const Vertex_handle target_vertex = vertex_of_point_[ray.point];
@@ -1325,6 +1338,7 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
     }
     ray_count_ += static_cast<int64_t>(point_cameras_[id].size());
   }
+  ray_index_->Flush();
   stats.seconds_insertion = timer.Seconds();
 
   // Regrow from the cells on the boundary of O that the batch may have changed: a cell none of

@@ -15,7 +15,7 @@ RayIndex::RayIndex(std::vector<Camera> cameras, int grid) : grid_(std::max(grid,
     MS_CHECK(cb.camera.u_max > cb.camera.u_min && cb.camera.v_max > cb.camera.v_min);
     cb.du = (cb.camera.u_max - cb.camera.u_min) / grid_;
     cb.dv = (cb.camera.v_max - cb.camera.v_min) / grid_;
-    cb.buckets.resize(static_cast<size_t>(grid_) * grid_);
+    cb.start.assign(static_cast<size_t>(grid_) * grid_ + 1, 0);
   }
 }
 
@@ -26,18 +26,41 @@ void RayIndex::Add(int32_t camera, int32_t point, const Eigen::Vector3d& positio
   ++cb.count;
   ++size_;
   if (!(x.z() > 0)) {
-    cb.overflow.push_back({point, static_cast<float>(x.z())});
+    cb.overflow.push_back({point, static_cast<float>(x.z()), 0, 0});
     return;
   }
   const double u = x.x() / x.z(), v = x.y() / x.z();
   const double fu = std::floor((u - cb.camera.u_min) / cb.du);
   const double fv = std::floor((v - cb.camera.v_min) / cb.dv);
+  const Entry entry{point, static_cast<float>(x.z()), static_cast<float>(u), static_cast<float>(v)};
   if (!(fu >= 0 && fu < grid_ && fv >= 0 && fv < grid_)) {
-    cb.overflow.push_back({point, static_cast<float>(x.z())});
+    cb.overflow.push_back(entry);
     return;
   }
-  cb.buckets[static_cast<size_t>(fv) * grid_ + static_cast<size_t>(fu)].push_back(
-      {point, static_cast<float>(x.z())});
+  cb.pending.push_back({static_cast<uint32_t>(fv) * grid_ + static_cast<uint32_t>(fu), entry});
+}
+
+void RayIndex::Flush() {
+  for (CameraBuckets& cb : cameras_) {
+    if (cb.pending.empty()) continue;
+    const size_t buckets = cb.start.size() - 1;
+    MS_CHECK(cb.entries.size() + cb.pending.size() < UINT32_MAX) << "ray index overflow";
+    // Counting sort of the old entries (already in bucket order) and the pending ones.
+    std::vector<uint32_t> start(buckets + 1, 0);
+    for (size_t b = 0; b < buckets; ++b) start[b + 1] = cb.start[b + 1] - cb.start[b];
+    for (const auto& [bucket, e] : cb.pending) ++start[bucket + 1];
+    for (size_t b = 0; b < buckets; ++b) start[b + 1] += start[b];
+    std::vector<Entry> entries(start[buckets]);
+    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    for (size_t b = 0; b < buckets; ++b) {
+      for (uint32_t k = cb.start[b]; k < cb.start[b + 1]; ++k) entries[fill[b]++] = cb.entries[k];
+    }
+    for (const auto& [bucket, e] : cb.pending) entries[fill[bucket]++] = e;
+    cb.entries = std::move(entries);
+    cb.start = std::move(start);
+    cb.pending.clear();
+    cb.pending.shrink_to_fit();
+  }
 }
 
 void RayIndex::Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
@@ -78,9 +101,8 @@ void RayIndex::Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
     const float reach = static_cast<float>(std::max(z_min, 0.0) - depth_slack);
     if (straddles) {
       // The box contains or touches the camera plane: every ray may cross it.
-      for (const auto& bucket : cb.buckets) {
-        for (const Entry& e : bucket) out->push_back({camera, e.point});
-      }
+      for (const Entry& e : cb.entries) out->push_back({camera, e.point});
+      for (const auto& [bucket, e] : cb.pending) out->push_back({camera, e.point});
       for (const Entry& e : cb.overflow) out->push_back({camera, e.point});
       continue;
     }
@@ -88,27 +110,44 @@ void RayIndex::Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
       return static_cast<int>(std::clamp(std::floor((value - lo) / step), -1.0,
                                          static_cast<double>(grid_)));
     };
-    // One bucket of slack on each side for rounding.
+    // The box lies in front of the camera: its projection is the convex hull of its corners'
+    // (a central projection keeps segments straight there), so a ray meeting it leaves the
+    // camera in a direction inside [u_lo, u_hi] x [v_lo, v_hi]. Slack for the float
+    // coordinates and rounding in the projection.
+    const double u_slack = 1e-6 * std::max({1.0, std::abs(u_lo), std::abs(u_hi)});
+    const double v_slack = 1e-6 * std::max({1.0, std::abs(v_lo), std::abs(v_hi)});
+    const float fu_lo = static_cast<float>(u_lo - u_slack), fu_hi = static_cast<float>(u_hi + u_slack);
+    const float fv_lo = static_cast<float>(v_lo - v_slack), fv_hi = static_cast<float>(v_hi + v_slack);
+    const auto inside = [&](const Entry& e) {
+      return e.depth >= reach && e.u >= fu_lo && e.u <= fu_hi && e.v >= fv_lo && e.v <= fv_hi;
+    };
+    // One bucket of slack on each side for rounding in the bucket index.
     const int i0 = std::max(clamp_index(u_lo, cb.camera.u_min, cb.du) - 1, 0);
     const int i1 = std::min(clamp_index(u_hi, cb.camera.u_min, cb.du) + 1, grid_ - 1);
     const int j0 = std::max(clamp_index(v_lo, cb.camera.v_min, cb.dv) - 1, 0);
     const int j1 = std::min(clamp_index(v_hi, cb.camera.v_min, cb.dv) + 1, grid_ - 1);
     for (int j = j0; j <= j1; ++j) {
-      for (int i = i0; i <= i1; ++i) {
-        for (const Entry& e : cb.buckets[static_cast<size_t>(j) * grid_ + i]) {
-          if (e.depth >= reach) out->push_back({camera, e.point});
-        }
+      const size_t row = static_cast<size_t>(j) * grid_;
+      for (uint32_t k = cb.start[row + i0]; k < cb.start[row + i1 + 1]; ++k) {
+        if (inside(cb.entries[k])) out->push_back({camera, cb.entries[k].point});
       }
     }
-    for (const Entry& e : cb.overflow) out->push_back({camera, e.point});
+    for (const auto& [bucket, e] : cb.pending) {
+      if (inside(e)) out->push_back({camera, e.point});
+    }
+    // Overflow: directions outside the grid (tested like the others) and points at or behind
+    // the camera plane (always returned).
+    for (const Entry& e : cb.overflow) {
+      if (!(e.depth > 0) || inside(e)) out->push_back({camera, e.point});
+    }
   }
 }
 
 size_t RayIndex::MemoryBytes() const {
   size_t bytes = 0;
   for (const CameraBuckets& cb : cameras_) {
-    bytes += cb.buckets.capacity() * sizeof(std::vector<Entry>);
-    for (const auto& b : cb.buckets) bytes += b.capacity() * sizeof(Entry);
+    bytes += cb.entries.capacity() * sizeof(Entry) + cb.start.capacity() * sizeof(uint32_t) +
+             cb.pending.capacity() * sizeof(cb.pending[0]);
     bytes += cb.overflow.capacity() * sizeof(Entry);
   }
   return bytes;

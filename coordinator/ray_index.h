@@ -1,9 +1,10 @@
 // Finds the viewing rays (camera -> point segments) that may cross a box, without storing
 // per-cell ray lists: per camera, rays are bucketed by the direction they leave the camera
-// (normalised image coordinates x/z, y/z) and keep the depth of their end point. A query
-// projects the box into each camera and returns the rays of the covered buckets that reach
-// the box's nearest depth. Conservative: it may return rays that miss the box, never omits
-// one that hits it.
+// (normalised image coordinates x/z, y/z) and keep that direction and the depth of their end
+// point. A query projects the box into each camera and returns the rays of the covered
+// buckets whose direction lies in the projection's bounding rectangle and that reach the
+// box's nearest depth. Conservative: it may return rays that miss the box, never omits one
+// that hits it.
 #pragma once
 
 #include <Eigen/Core>
@@ -32,9 +33,12 @@ class RayIndex {
   };
 
   // `grid`: buckets per side of each camera's grid.
-  RayIndex(std::vector<Camera> cameras, int grid = 64);
+  RayIndex(std::vector<Camera> cameras, int grid = 128);
 
+  // Added rays wait in a short list that queries scan whole until Flush files them into
+  // the buckets: add a batch, then flush.
   void Add(int32_t camera, int32_t point, const Eigen::Vector3d& position);
+  void Flush();
   // Appends to `out` every ray that may intersect the closed box [min, max].
   void Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max, std::vector<RayRef>* out) const;
 
@@ -46,12 +50,17 @@ class RayIndex {
   struct Entry {
     int32_t point;
     float depth;  // camera-frame z of the end point
+    float u, v;   // its normalised image coordinates (direction from the camera)
   };
   struct CameraBuckets {
     Camera camera;
     double du = 1, dv = 1;
-    std::vector<std::vector<Entry>> buckets;  // grid x grid
-    std::vector<Entry> overflow;              // outside the grid, or at depth <= 0
+    // Bucket b (row-major, grid x grid) is entries[start[b], start[b + 1]): a query's rows of
+    // buckets are contiguous runs.
+    std::vector<Entry> entries;
+    std::vector<uint32_t> start;
+    std::vector<std::pair<uint32_t, Entry>> pending;  // (bucket, entry) until Flush
+    std::vector<Entry> overflow;                      // outside the grid, or at depth <= 0
     size_t count = 0;
   };
   std::vector<CameraBuckets> cameras_;

@@ -44,6 +44,8 @@ TEST(RayIndex, NeverMissesARayThatCrossesTheBox) {
   std::vector<Eigen::Vector3d> points;
   std::vector<RayRef> all;
   for (int i = 0; i < 600; ++i) {
+    // Half filed in buckets (flushed), half still pending: queries must see both.
+    if (i == 300) index.Flush();
     points.emplace_back(u(rng), u(rng), u(rng));
     for (int c = 0; c < 4; ++c) {
       if ((i + c) % 2 == 0) {
@@ -53,13 +55,18 @@ TEST(RayIndex, NeverMissesARayThatCrossesTheBox) {
     }
   }
   EXPECT_EQ(index.size(), all.size());
+  RayIndex flushed = index;
+  flushed.Flush();
   for (int q = 0; q < 40; ++q) {
     const Eigen::Vector3d center(u(rng), u(rng), u(rng));
     const Eigen::Vector3d half = Eigen::Vector3d::Constant(0.05 + 0.2 * std::abs(u(rng)));
     const Eigen::Vector3d lo = center - half, hi = center + half;
-    std::vector<RayRef> found;
+    std::vector<RayRef> found, found_flushed;
     index.Query(lo, hi, &found);
     std::sort(found.begin(), found.end());
+    flushed.Query(lo, hi, &found_flushed);
+    std::sort(found_flushed.begin(), found_flushed.end());
+    EXPECT_EQ(found, found_flushed) << "pending and filed rays answer differently";
     int hits = 0;
     for (const RayRef& ray : all) {
       if (SegmentHitsBox(cameras[ray.camera].center, points[ray.point], lo, hi)) {
