@@ -17,6 +17,7 @@
 #include <sstream>
 #include <unordered_map>
 #include <unordered_set>
+#include <type_traits>
 #include <utility>
 
 #include "base/check.h"
@@ -351,7 +352,9 @@ class DelaunayManifold::Impl {
   // --- rays ---
   // Orders rays by camera, then by direction (Morton order of normalised image coordinates):
   // consecutive walks then cross mostly the same cells, which stay in cache.
-  void SortRaysForLocality(std::vector<RayRef>* rays) const;
+  // `items` are rays (RayRef) or pairs whose first member is one.
+  template <typename Item>
+  void SortRaysForLocality(std::vector<Item>* items) const;
   uint32_t NextStamp() const;
   const CameraStart& StartOf(int camera);
   // Calls visit(cell) for every cell crossed by the open segment camera -> point.
@@ -403,7 +406,8 @@ class DelaunayManifold::Impl {
 // ---------------------------------------------------------------------------------------------
 // Ray walking
 
-void DelaunayManifold::Impl::SortRaysForLocality(std::vector<RayRef>* rays) const {
+template <typename Item>
+void DelaunayManifold::Impl::SortRaysForLocality(std::vector<Item>* items) const {
   const auto spread = [](uint32_t x) {  // 16 bits -> every other bit of 32
     x &= 0xFFFF;
     x = (x | (x << 8)) & 0x00FF00FF;
@@ -412,9 +416,17 @@ void DelaunayManifold::Impl::SortRaysForLocality(std::vector<RayRef>* rays) cons
     x = (x | (x << 1)) & 0x55555555;
     return x;
   };
-  std::vector<std::pair<uint64_t, RayRef>> keyed;
-  keyed.reserve(rays->size());
-  for (const RayRef& ray : *rays) {
+  const auto ray_of = [](const Item& item) -> const RayRef& {
+    if constexpr (std::is_same_v<Item, RayRef>) {
+      return item;
+    } else {
+      return item.first;
+    }
+  };
+  std::vector<std::pair<uint64_t, Item>> keyed;
+  keyed.reserve(items->size());
+  for (const Item& item : *items) {
+    const RayRef& ray = ray_of(item);
     const ManifoldCamera& cam = cameras_[ray.camera];
     const Eigen::Vector3d x = cam.R * (positions_[ray.point] - cam.center);
     uint32_t morton = 0;
@@ -426,12 +438,13 @@ void DelaunayManifold::Impl::SortRaysForLocality(std::vector<RayRef>* rays) cons
       morton = spread(quantize(x.x() / x.z(), cam.u_min, cam.u_max)) |
                (spread(quantize(x.y() / x.z(), cam.v_min, cam.v_max)) << 1);
     }
-    keyed.push_back({(static_cast<uint64_t>(ray.camera) << 32) | morton, ray});
+    keyed.push_back({(static_cast<uint64_t>(ray.camera) << 32) | morton, item});
   }
-  std::sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) {
-    return a.first != b.first ? a.first < b.first : a.second.point < b.second.point;
+  std::sort(keyed.begin(), keyed.end(), [&](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first < b.first
+                              : ray_of(a.second).point < ray_of(b.second).point;
   });
-  for (size_t i = 0; i < keyed.size(); ++i) (*rays)[i] = keyed[i].second;
+  for (size_t i = 0; i < keyed.size(); ++i) (*items)[i] = keyed[i].second;
 }
 
 uint32_t DelaunayManifold::Impl::NextStamp() const {
@@ -1305,14 +1318,15 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   // Exact ray counts for the cells born in this batch: every old ray that may cross one is
   // walked once and counted on those cells only (the others keep their counts: their geometry
   // did not change); the new points' rays are walked and counted everywhere.
-  std::vector<RayRef> rays;
+  std::vector<std::pair<RayRef, float>> rays;  // with their reach
   for (int32_t id = 0; id < first_new_id; ++id) {
     for (size_t k = 0; k < point_cameras_[id].size(); ++k) {
-      if (ray_reach[ray_offset[id] + k] <= 1.0f) rays.push_back({point_cameras_[id][k], id});
+      const float reach = ray_reach[ray_offset[id] + k];
+      if (reach <= 1.0f) rays.push_back({{point_cameras_[id][k], id}, reach});
     }
   }
   SortRaysForLocality(&rays);
-  for (const RayRef& ray : rays) {
+  for (const auto& [ray, reach] : rays) {
     const Vertex_handle target = vertex_of_point_[ray.point];
     const auto is_new = [&](const Cell_handle& c) { return c->info().born == batch; };
     const auto count_new_cells = [&](const Cell_handle& c, unsigned mask) {
@@ -1320,7 +1334,6 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
     };
     // Only the part of the ray from its first hole box on can cross a new cell: walk that
     // part backwards from the point; where that is degenerate, the whole ray forwards.
-    const float reach = ray_reach[ray_id(ray)];
     if (reach <= 0 || !WalkBack(camera_points_[ray.camera], target, reach, is_new, count_new_cells,
                                 &stats.rewalk_steps)) {
       stats.rewalk_steps +=
