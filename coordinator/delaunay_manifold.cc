@@ -80,6 +80,13 @@ constexpr int kExitFace[4][8] = {{-1, 1, 3, 3, 2, 1, 2, -1},
                                  {-1, 0, 3, 3, 1, 0, 1, -1},
                                  {-1, 1, 0, 1, 2, 2, 0, -1}};
 
+// Asks for the cache lines of a cell (vertices, neighbours and info span two).
+void PrefetchCell(const Cell_handle& c) {
+  const char* bytes = reinterpret_cast<const char*>(&*c);
+  __builtin_prefetch(bytes);
+  __builtin_prefetch(bytes + 64);
+}
+
 void OtherTwo(int i, int j, int* k, int* l) {
   int found[2], n = 0;
   for (int m = 0; m < 4; ++m) {
@@ -341,6 +348,7 @@ class DelaunayManifold::Impl {
   // Cells not in O, sharing a face with O, with a vertex marked changed in batch `changed_in`.
   std::vector<Cell_handle> BoundarySeeds(uint32_t changed_in) const;
   // Free cells that growing left out of O (refused by the manifold test or unreachable).
+ public:
   int64_t CountFreeCellsInside() const {
     int64_t n = 0;
     for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
@@ -349,6 +357,7 @@ class DelaunayManifold::Impl {
     return n;
   }
 
+ private:
   // --- rays ---
   // Orders rays by camera, then by direction (Morton order of normalised image coordinates):
   // consecutive walks then cross mostly the same cells, which stay in cache.
@@ -516,9 +525,10 @@ int64_t DelaunayManifold::Impl::Walk(const CameraStart& start, const Point& a,
   }
   int entry = -1;  // face through which `current` was entered, if through a face interior
   for (;;) {
-    // The next cell is one of these: start loading them while the orientations are computed.
+    // The next cell is one of these: start loading them (both cache lines a cell spans) while
+    // the orientations are computed.
     for (int i = 0; i < 4; ++i) {
-      if (i != entry) __builtin_prefetch(&*current->neighbor(i));
+      if (i != entry) PrefetchCell(current->neighbor(i));
     }
     current->info().stamp = stamp;
     ++steps;
@@ -662,7 +672,7 @@ bool DelaunayManifold::Impl::WalkBack(const Point& a, const Vertex_handle& targe
   int64_t walked = 0;
   for (;;) {
     for (int i = 0; i < 4; ++i) {
-      if (i != entry) __builtin_prefetch(&*current->neighbor(i));  // as in Walk
+      if (i != entry) PrefetchCell(current->neighbor(i));  // as in Walk
     }
     project(current);
     if (before_reach_except(-1)) break;
@@ -1361,7 +1371,6 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   Grow(BoundarySeeds(batch));
   if (outside_count_ == 0) GrowFromHeaviest();
   stats.outside_cells = outside_count_;
-  stats.free_cells_left_inside = CountFreeCellsInside();
   stats.seconds_growing = timer.Seconds();
   spdlog::info(
       "manifold: {} new points: {} inserted, {} discarded (conflict {}, duplicate {}, outside "
@@ -1523,6 +1532,7 @@ int64_t DelaunayManifold::num_points() const { return impl_->num_points(); }
 int64_t DelaunayManifold::num_vertices() const { return impl_->num_vertices(); }
 int64_t DelaunayManifold::num_cells() const { return impl_->num_cells(); }
 int64_t DelaunayManifold::num_outside_cells() const { return impl_->num_outside_cells(); }
+int64_t DelaunayManifold::num_free_cells_inside() const { return impl_->CountFreeCellsInside(); }
 size_t DelaunayManifold::MemoryBytes() const { return impl_->MemoryBytes(); }
 
 void ManifoldOptions::Check() const {

@@ -62,7 +62,6 @@ struct InsertionStats {
   int64_t rewalk_steps = 0;         // cells those walks crossed (from their first hole box on)
   int64_t new_rays = 0;
   int64_t outside_cells = 0;        // |O| after regrowing
-  int64_t free_cells_left_inside = 0;  // free cells not in O after regrowing
   double seconds_insertion = 0, seconds_growing = 0;
 };
 
@@ -111,6 +110,9 @@ class DelaunayManifold {
   int64_t num_vertices() const;     // finite vertices incl. Steiner
   int64_t num_cells() const;        // finite cells
   int64_t num_outside_cells() const;
+  // Free cells not in O (refused by the manifold test or unreachable). Scans every cell, so
+  // Insert, whose cost should follow the batch, does not report it; Build does.
+  int64_t num_free_cells_inside() const;
   size_t MemoryBytes() const;       // estimate of the triangulation + ray data
 
  private:
