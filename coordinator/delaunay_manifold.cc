@@ -17,7 +17,6 @@
 #include <sstream>
 #include <unordered_map>
 #include <unordered_set>
-#include <type_traits>
 #include <utility>
 
 #include "base/check.h"
@@ -359,11 +358,6 @@ class DelaunayManifold::Impl {
 
  private:
   // --- rays ---
-  // Orders rays by camera, then by direction (Morton order of normalised image coordinates):
-  // consecutive walks then cross mostly the same cells, which stay in cache.
-  // `items` are rays (RayRef) or pairs whose first member is one.
-  template <typename Item>
-  void SortRaysForLocality(std::vector<Item>* items) const;
   uint32_t NextStamp() const;
   const CameraStart& StartOf(int camera);
   // Calls visit(cell) for every cell crossed by the open segment camera -> point.
@@ -414,47 +408,6 @@ class DelaunayManifold::Impl {
 
 // ---------------------------------------------------------------------------------------------
 // Ray walking
-
-template <typename Item>
-void DelaunayManifold::Impl::SortRaysForLocality(std::vector<Item>* items) const {
-  const auto spread = [](uint32_t x) {  // 16 bits -> every other bit of 32
-    x &= 0xFFFF;
-    x = (x | (x << 8)) & 0x00FF00FF;
-    x = (x | (x << 4)) & 0x0F0F0F0F;
-    x = (x | (x << 2)) & 0x33333333;
-    x = (x | (x << 1)) & 0x55555555;
-    return x;
-  };
-  const auto ray_of = [](const Item& item) -> const RayRef& {
-    if constexpr (std::is_same_v<Item, RayRef>) {
-      return item;
-    } else {
-      return item.first;
-    }
-  };
-  std::vector<std::pair<uint64_t, Item>> keyed;
-  keyed.reserve(items->size());
-  for (const Item& item : *items) {
-    const RayRef& ray = ray_of(item);
-    const ManifoldCamera& cam = cameras_[ray.camera];
-    const Eigen::Vector3d x = cam.R * (positions_[ray.point] - cam.center);
-    uint32_t morton = 0;
-    if (x.z() > 0) {
-      const auto quantize = [](double value, double lo, double hi) {
-        const double t = std::clamp((value - lo) / (hi - lo), 0.0, 1.0);
-        return static_cast<uint32_t>(t * 65535.0);
-      };
-      morton = spread(quantize(x.x() / x.z(), cam.u_min, cam.u_max)) |
-               (spread(quantize(x.y() / x.z(), cam.v_min, cam.v_max)) << 1);
-    }
-    keyed.push_back({(static_cast<uint64_t>(ray.camera) << 32) | morton, item});
-  }
-  std::sort(keyed.begin(), keyed.end(), [&](const auto& a, const auto& b) {
-    return a.first != b.first ? a.first < b.first
-                              : ray_of(a.second).point < ray_of(b.second).point;
-  });
-  for (size_t i = 0; i < keyed.size(); ++i) (*items)[i] = keyed[i].second;
-}
 
 uint32_t DelaunayManifold::Impl::NextStamp() const {
   if (++stamp_ == 0) {
@@ -1099,16 +1052,13 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   int64_t total_rays = 0;
   for (const auto& cams : point_cameras_) total_rays += static_cast<int64_t>(cams.size());
   Progress progress("manifold: ray tracing", total_rays);
-  std::vector<RayRef> rays;
-  rays.reserve(total_rays);
   for (size_t i = 0; i < points.size(); ++i) {
-    for (int32_t c : point_cameras_[i]) {
-      ray_index_->Add(c, static_cast<int32_t>(i), positions_[i]);
-      rays.push_back({c, static_cast<int32_t>(i)});
-    }
+    for (int32_t c : point_cameras_[i]) ray_index_->Add(c, static_cast<int32_t>(i), positions_[i]);
   }
   ray_index_->Flush();
-  SortRaysForLocality(&rays);
+  std::vector<RayRef> rays;
+  rays.reserve(total_rays);
+  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) { rays.push_back(ray); });
   for (const RayRef& ray : rays) {
     const Vertex_handle target_vertex = vertex_of_point_[ray.point];
     const auto count = [&](const Cell_handle& c, unsigned mask) { CountCrossing(c, mask); };
@@ -1172,18 +1122,10 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   std::vector<std::pair<CellKey, Cell_handle>> shrink_set;
   std::vector<Facet> boundary;
   std::vector<RayRef> candidates;
-  // Per old ray (ray_offset[point] + index of the camera in the point's list): the smallest
-  // parameter (0 at the camera, 1 at the point) where it may enter a new cell; > 1: none.
-  std::vector<int64_t> ray_offset(first_new_id + 1, 0);
-  for (int32_t id = 0; id < first_new_id; ++id) {
-    ray_offset[id + 1] = ray_offset[id] + static_cast<int64_t>(point_cameras_[id].size());
-  }
-  std::vector<float> ray_reach(ray_offset[first_new_id], 2.0f);
+  // Per old ray (by its id in the ray index): the smallest parameter (0 at the camera, 1 at
+  // the point) where it may enter a new cell; > 1: none.
+  std::vector<float> ray_reach(ray_index_->size(), 2.0f);
   bool all_affected = false;  // every old ray from its camera on
-  const auto ray_id = [&](const RayRef& ray) {
-    const std::vector<int32_t>& cams = point_cameras_[ray.point];
-    return ray_offset[ray.point] + (std::lower_bound(cams.begin(), cams.end(), ray.camera) - cams.begin());
-  };
   // Slack for the segment/box test: rounding in the box and the clipping, scene-relative.
   const double box_slack = 1e-9 * (box_max_ - box_min_).norm();
   Cell_handle hint;
@@ -1293,7 +1235,7 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
       double entry;
       if (SegmentMeetsBox(cameras_[ray.camera].center, positions_[ray.point], lo - slack,
                           hi + slack, &entry)) {
-        float& reach = ray_reach[ray_id(ray)];
+        float& reach = ray_reach[ray.id];
         // Rounded down (float), so the walk starts no later than the box.
         reach = std::min(reach, static_cast<float>(entry) - 1e-6f);
       }
@@ -1328,14 +1270,12 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   // Exact ray counts for the cells born in this batch: every old ray that may cross one is
   // walked once and counted on those cells only (the others keep their counts: their geometry
   // did not change); the new points' rays are walked and counted everywhere.
-  std::vector<std::pair<RayRef, float>> rays;  // with their reach
-  for (int32_t id = 0; id < first_new_id; ++id) {
-    for (size_t k = 0; k < point_cameras_[id].size(); ++k) {
-      const float reach = ray_reach[ray_offset[id] + k];
-      if (reach <= 1.0f) rays.push_back({{point_cameras_[id][k], id}, reach});
+  std::vector<std::pair<RayRef, float>> rays;  // with their reach, in the index's order
+  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
+    if (ray_reach[ray.id] <= 1.0f) {
+      rays.push_back({ray, ray_reach[ray.id]});
     }
-  }
-  SortRaysForLocality(&rays);
+  });
   for (const auto& [ray, reach] : rays) {
     const Vertex_handle target = vertex_of_point_[ray.point];
     const auto is_new = [&](const Cell_handle& c) { return c->info().born == batch; };

@@ -1,6 +1,7 @@
 #include "coordinator/ray_index.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 
 #include "base/check.h"
@@ -17,27 +18,44 @@ RayIndex::RayIndex(std::vector<Camera> cameras, int grid) : grid_(std::max(grid,
     cb.dv = (cb.camera.v_max - cb.camera.v_min) / grid_;
     cb.start.assign(static_cast<size_t>(grid_) * grid_ + 1, 0);
   }
+  std::vector<std::pair<uint64_t, uint32_t>> keyed;
+  for (uint32_t j = 0; j < static_cast<uint32_t>(grid_); ++j) {
+    for (uint32_t i = 0; i < static_cast<uint32_t>(grid_); ++i) {
+      uint64_t key = 0;
+      for (int bit = 0; bit < 16; ++bit) {
+        key |= static_cast<uint64_t>((i >> bit) & 1) << (2 * bit);
+        key |= static_cast<uint64_t>((j >> bit) & 1) << (2 * bit + 1);
+      }
+      keyed.push_back({key, j * grid_ + i});
+    }
+  }
+  std::sort(keyed.begin(), keyed.end());
+  for (const auto& [key, bucket] : keyed) morton_buckets_.push_back(bucket);
 }
 
-void RayIndex::Add(int32_t camera, int32_t point, const Eigen::Vector3d& position) {
+int32_t RayIndex::Add(int32_t camera, int32_t point, const Eigen::Vector3d& position) {
   MS_CHECK(camera >= 0 && camera < num_cameras()) << camera;
+  MS_CHECK(size_ < static_cast<size_t>(INT32_MAX)) << "ray index full";
   CameraBuckets& cb = cameras_[camera];
   const Eigen::Vector3d x = cb.camera.R * (position - cb.camera.center);
+  const int32_t id = static_cast<int32_t>(size_);
   ++cb.count;
   ++size_;
   if (!(x.z() > 0)) {
-    cb.overflow.push_back({point, static_cast<float>(x.z()), 0, 0});
-    return;
+    cb.overflow.push_back({point, id, static_cast<float>(x.z()), 0, 0});
+    return id;
   }
   const double u = x.x() / x.z(), v = x.y() / x.z();
   const double fu = std::floor((u - cb.camera.u_min) / cb.du);
   const double fv = std::floor((v - cb.camera.v_min) / cb.dv);
-  const Entry entry{point, static_cast<float>(x.z()), static_cast<float>(u), static_cast<float>(v)};
+  const Entry entry{point, id, static_cast<float>(x.z()), static_cast<float>(u),
+                    static_cast<float>(v)};
   if (!(fu >= 0 && fu < grid_ && fv >= 0 && fv < grid_)) {
     cb.overflow.push_back(entry);
-    return;
+  } else {
+    cb.pending.push_back({static_cast<uint32_t>(fv) * grid_ + static_cast<uint32_t>(fu), entry});
   }
-  cb.pending.push_back({static_cast<uint32_t>(fv) * grid_ + static_cast<uint32_t>(fu), entry});
+  return id;
 }
 
 void RayIndex::Flush() {
@@ -92,7 +110,7 @@ void RayIndex::Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
     // box entirely behind the camera meets none of them.
     if (z_max < 0) {
       for (const Entry& e : cb.overflow) {
-        if (e.depth <= 0) out->push_back({camera, e.point});
+        if (e.depth <= 0) out->push_back({camera, e.point, e.id});
       }
       continue;
     }
@@ -101,9 +119,9 @@ void RayIndex::Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
     const float reach = static_cast<float>(std::max(z_min, 0.0) - depth_slack);
     if (straddles) {
       // The box contains or touches the camera plane: every ray may cross it.
-      for (const Entry& e : cb.entries) out->push_back({camera, e.point});
-      for (const auto& [bucket, e] : cb.pending) out->push_back({camera, e.point});
-      for (const Entry& e : cb.overflow) out->push_back({camera, e.point});
+      for (const Entry& e : cb.entries) out->push_back({camera, e.point, e.id});
+      for (const auto& [bucket, e] : cb.pending) out->push_back({camera, e.point, e.id});
+      for (const Entry& e : cb.overflow) out->push_back({camera, e.point, e.id});
       continue;
     }
     const auto clamp_index = [&](double value, double lo, double step) {
@@ -129,16 +147,16 @@ void RayIndex::Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
     for (int j = j0; j <= j1; ++j) {
       const size_t row = static_cast<size_t>(j) * grid_;
       for (uint32_t k = cb.start[row + i0]; k < cb.start[row + i1 + 1]; ++k) {
-        if (inside(cb.entries[k])) out->push_back({camera, cb.entries[k].point});
+        if (inside(cb.entries[k])) out->push_back({camera, cb.entries[k].point, cb.entries[k].id});
       }
     }
     for (const auto& [bucket, e] : cb.pending) {
-      if (inside(e)) out->push_back({camera, e.point});
+      if (inside(e)) out->push_back({camera, e.point, e.id});
     }
     // Overflow: directions outside the grid (tested like the others) and points at or behind
     // the camera plane (always returned).
     for (const Entry& e : cb.overflow) {
-      if (!(e.depth > 0) || inside(e)) out->push_back({camera, e.point});
+      if (!(e.depth > 0) || inside(e)) out->push_back({camera, e.point, e.id});
     }
   }
 }

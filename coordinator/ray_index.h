@@ -16,6 +16,7 @@ namespace ms {
 struct RayRef {
   int32_t camera;
   int32_t point;
+  int32_t id = -1;  // the index's number for the ray (Add's answer); not part of comparisons
   bool operator<(const RayRef& o) const {
     return camera != o.camera ? camera < o.camera : point < o.point;
   }
@@ -35,12 +36,18 @@ class RayIndex {
   // `grid`: buckets per side of each camera's grid.
   RayIndex(std::vector<Camera> cameras, int grid = 128);
 
-  // Added rays wait in a short list that queries scan whole until Flush files them into
-  // the buckets: add a batch, then flush.
-  void Add(int32_t camera, int32_t point, const Eigen::Vector3d& position);
+  // Returns the ray's id: rays are numbered 0, 1, ... in the order they are added. Added rays
+  // wait in a short list that queries scan whole until Flush files them into the buckets:
+  // add a batch, then flush.
+  int32_t Add(int32_t camera, int32_t point, const Eigen::Vector3d& position);
   void Flush();
   // Appends to `out` every ray that may intersect the closed box [min, max].
   void Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max, std::vector<RayRef>* out) const;
+  // Calls visit(ray) for every ray, camera by camera and, within a camera, by direction
+  // (buckets in Morton order): consecutive rays leave the same camera side by side, so walks
+  // along them in this order cross mostly the same cells, which stay in cache.
+  template <typename Visit>
+  void ForEachInDirectionOrder(Visit&& visit) const;
 
   size_t size() const { return size_; }
   size_t MemoryBytes() const;
@@ -49,6 +56,7 @@ class RayIndex {
  private:
   struct Entry {
     int32_t point;
+    int32_t id;
     float depth;  // camera-frame z of the end point
     float u, v;   // its normalised image coordinates (direction from the camera)
   };
@@ -65,7 +73,23 @@ class RayIndex {
   };
   std::vector<CameraBuckets> cameras_;
   int grid_;
+  std::vector<uint32_t> morton_buckets_;  // bucket indices in Morton order
   size_t size_ = 0;
 };
+
+template <typename Visit>
+void RayIndex::ForEachInDirectionOrder(Visit&& visit) const {
+  for (size_t c = 0; c < cameras_.size(); ++c) {
+    const CameraBuckets& cb = cameras_[c];
+    const int32_t camera = static_cast<int32_t>(c);
+    for (uint32_t bucket : morton_buckets_) {
+      for (uint32_t k = cb.start[bucket]; k < cb.start[bucket + 1]; ++k) {
+        visit(RayRef{camera, cb.entries[k].point, cb.entries[k].id});
+      }
+    }
+    for (const auto& [bucket, e] : cb.pending) visit(RayRef{camera, e.point, e.id});
+    for (const Entry& e : cb.overflow) visit(RayRef{camera, e.point, e.id});
+  }
+}
 
 }  // namespace ms

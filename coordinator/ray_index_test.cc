@@ -49,8 +49,9 @@ TEST(RayIndex, NeverMissesARayThatCrossesTheBox) {
     points.emplace_back(u(rng), u(rng), u(rng));
     for (int c = 0; c < 4; ++c) {
       if ((i + c) % 2 == 0) {
-        index.Add(c, i, points.back());
-        all.push_back({c, i});
+        const int32_t id = index.Add(c, i, points.back());
+        EXPECT_EQ(id, static_cast<int32_t>(all.size())) << "ids number rays in order";
+        all.push_back({c, i, id});
       }
     }
   }
@@ -68,6 +69,11 @@ TEST(RayIndex, NeverMissesARayThatCrossesTheBox) {
     std::sort(found_flushed.begin(), found_flushed.end());
     EXPECT_EQ(found, found_flushed) << "pending and filed rays answer differently";
     int hits = 0;
+    for (const RayRef& ray : found) {
+      ASSERT_GE(ray.id, 0);
+      ASSERT_LT(ray.id, static_cast<int32_t>(all.size()));
+      EXPECT_TRUE(all[ray.id] == ray) << "a query answers a ray with another ray's id";
+    }
     for (const RayRef& ray : all) {
       if (SegmentHitsBox(cameras[ray.camera].center, points[ray.point], lo, hi)) {
         ++hits;
@@ -79,6 +85,36 @@ TEST(RayIndex, NeverMissesARayThatCrossesTheBox) {
     EXPECT_LT(found.size(), all.size());
     EXPECT_GE(static_cast<int>(found.size()), hits);
   }
+}
+
+TEST(RayIndex, VisitsEveryRayOnceCameraByCameraInDirectionOrder) {
+  RayIndex::Camera cam;
+  cam.R.setIdentity();
+  cam.center.setZero();
+  RayIndex index({cam, cam}, 8);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-2, 2);
+  std::vector<RayRef> added;
+  for (int i = 0; i < 400; ++i) {
+    if (i == 250) index.Flush();  // some filed, some pending
+    // Some behind the camera or outside the grid: the overflow list.
+    const Eigen::Vector3d x(u(rng), u(rng), i % 7 == 0 ? -1.0 : 1.0 + std::abs(u(rng)));
+    const int32_t camera = i % 2;
+    added.push_back({camera, i, index.Add(camera, i, x)});
+  }
+  std::vector<RayRef> visited;
+  index.ForEachInDirectionOrder([&](const RayRef& ray) { visited.push_back(ray); });
+  ASSERT_EQ(visited.size(), added.size());
+  std::vector<int> seen(added.size(), 0);
+  for (size_t k = 0; k < visited.size(); ++k) {
+    const RayRef& ray = visited[k];
+    ASSERT_GE(ray.id, 0);
+    ASSERT_LT(ray.id, static_cast<int32_t>(added.size()));
+    EXPECT_TRUE(added[ray.id] == ray);
+    ++seen[ray.id];
+    if (k > 0) EXPECT_LE(visited[k - 1].camera, ray.camera) << "cameras one after another";
+  }
+  for (int count : seen) EXPECT_EQ(count, 1);
 }
 
 }  // namespace
