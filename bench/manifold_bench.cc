@@ -7,7 +7,8 @@
 // point; then incremental insertion of N (default 10^4) points near the surface (points/s), in
 // the coordinator's order (by camera, then pixel).
 // --export=DIR writes, per size, the input points (PLY, normals = mean unit direction to the
-// cameras that see each point, for the Poisson baseline) and the initial manifold.
+// cameras that see each point, for the Poisson baseline), the initial manifold and the
+// manifold after the incremental insertion.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -77,6 +78,10 @@ int main(int argc, char** argv) {
     timer.Restart();
     const ms::InsertionStats ins = manifold.Insert(more.points);
     const double insert_total = timer.Seconds();
+    if (!export_dir.empty()) {
+      ms::WriteMesh(manifold.ExtractSurface(),
+                    export_dir + "/blob_" + std::to_string(n) + "_inserted.ply");
+    }
     std::printf("%9lld %8lld %9lld %8.2f %9.2f %11.0f %8.2f %11.0f %9.2f %8.0f %10.0f %11.2f\n",
                 static_cast<long long>(n), static_cast<long long>(stats.rays),
                 static_cast<long long>(stats.cells), stats.seconds_triangulation,
