@@ -95,6 +95,21 @@ void OtherTwo(int i, int j, int* k, int* l) {
   *l = found[1];
 }
 
+// Fast walk step: the face through which the segment a -> b leaves cell c, having entered it
+// through face `entry`, from three orientations (kExitFace); -1 where one is zero (a
+// degenerate step, for the general rule).
+int FastExitFace(const Cell_handle& c, int entry, const Point& a, const Point& b) {
+  const Point& apex = c->vertex(entry)->point();
+  int code = 0;
+  for (int m = 0; m < 4; ++m) {
+    if (m == entry) continue;
+    const CGAL::Orientation o = CGAL::orientation(apex, c->vertex(m)->point(), a, b);
+    if (o == CGAL::COPLANAR) return -1;
+    code = 2 * code + (o == CGAL::POSITIVE);
+  }
+  return kExitFace[entry][code];
+}
+
 // Orientations of the segment end points against the four faces of a finite cell.
 struct FaceSides {
   int a[4];  // sign of orientation with vertex i replaced by a (> 0: a on the inner side)
@@ -490,17 +505,7 @@ int64_t DelaunayManifold::Impl::Walk(const CameraStart& start, const Point& a,
     // A crossed cell incident to the end point is the last one (convexity).
     const bool last = current->has_vertex(target);
     if (entry >= 0 && !last) {
-      // Fast step: three orientations decide the exit face (kExitFace).
-      const Point& apex = current->vertex(entry)->point();
-      int code = 0;
-      bool degenerate = false;
-      for (int m = 0; m < 4 && !degenerate; ++m) {
-        if (m == entry) continue;
-        const CGAL::Orientation o = CGAL::orientation(apex, current->vertex(m)->point(), a, b);
-        degenerate = o == CGAL::COPLANAR;
-        code = 2 * code + (o == CGAL::POSITIVE);
-      }
-      if (!degenerate) exit = kExitFace[entry][code];
+      exit = FastExitFace(current, entry, a, b);
     }
     if (exit >= 0) {
       // The camera is beyond the entry face and before the exit face; test the other two.
@@ -636,17 +641,7 @@ bool DelaunayManifold::Impl::WalkBack(const Point& a, const Vertex_handle& targe
     if (entry < 0) {
       exit = current->index(target);
     } else {
-      // Fast step (as Walk's, for the segment b -> a): three orientations decide the exit.
-      const Point& apex = current->vertex(entry)->point();
-      int code = 0;
-      bool degenerate = false;
-      for (int m = 0; m < 4 && !degenerate; ++m) {
-        if (m == entry) continue;
-        const CGAL::Orientation o = CGAL::orientation(apex, current->vertex(m)->point(), b, a);
-        degenerate = o == CGAL::COPLANAR;
-        code = 2 * code + (o == CGAL::POSITIVE);
-      }
-      if (!degenerate) exit = kExitFace[entry][code];
+      exit = FastExitFace(current, entry, b, a);  // the segment b -> a
     }
     if (exit >= 0) {
       // a lies in this cell only if it is on the inner side of the exit face.
@@ -1308,8 +1303,10 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   // whose vertices touches a new or shrunk cell has the weight and neighbourhood it had when
   // the last growing refused it.
   timer.Restart();
-  Grow(BoundarySeeds(batch));
-  if (outside_count_ == 0) GrowFromHeaviest();
+  if (stats.inserted > 0 || stats.shrunk_cells > 0) {  // otherwise nothing changed
+    Grow(BoundarySeeds(batch));
+    if (outside_count_ == 0) GrowFromHeaviest();
+  }
   stats.outside_cells = outside_count_;
   stats.seconds_growing = timer.Seconds();
   spdlog::info(
