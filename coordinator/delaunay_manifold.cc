@@ -283,11 +283,20 @@ class DelaunayManifold::Impl {
   int64_t num_vertices() const { return static_cast<int64_t>(dt_.number_of_vertices()); }
   int64_t num_cells() const { return static_cast<int64_t>(dt_.number_of_finite_cells()); }
   int64_t num_outside_cells() const { return outside_count_; }
+  // Free cells that growing left out of O (refused by the manifold test or unreachable).
+  int64_t CountFreeCellsInside() const {
+    int64_t n = 0;
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      n += !c->info().outside && IsFree(c);
+    }
+    return n;
+  }
   size_t MemoryBytes() const {
     return dt_.number_of_cells() * sizeof(Delaunay::Cell) +
            dt_.number_of_vertices() * sizeof(Delaunay::Vertex) +
            positions_.capacity() * sizeof(Eigen::Vector3d) +
-           point_cameras_.capacity() * sizeof(std::vector<int32_t>) + ray_count_ * sizeof(int32_t) +
+           point_cameras_.capacity() * sizeof(std::vector<int32_t>) +
+           ray_index_->size() * sizeof(int32_t) +
            vertex_of_point_.capacity() * sizeof(Vertex_handle) + ray_index_->MemoryBytes();
   }
 
@@ -361,17 +370,6 @@ class DelaunayManifold::Impl {
   int64_t GrowFromHeaviest();
   // Cells not in O, sharing a face with O, with a vertex marked changed in batch `changed_in`.
   std::vector<Cell_handle> BoundarySeeds(uint32_t changed_in) const;
-  // Free cells that growing left out of O (refused by the manifold test or unreachable).
- public:
-  int64_t CountFreeCellsInside() const {
-    int64_t n = 0;
-    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
-      n += !c->info().outside && IsFree(c);
-    }
-    return n;
-  }
-
- private:
   // --- rays ---
   uint32_t NextStamp() const;
   const CameraStart& StartOf(int camera);
@@ -404,7 +402,6 @@ class DelaunayManifold::Impl {
   Eigen::Vector3d box_min_, box_max_;  // Steiner box: points outside are discarded
   int64_t steiner_count_ = 0;
   int64_t outside_count_ = 0;
-  int64_t ray_count_ = 0;
   mutable uint32_t stamp_ = 0;
   uint32_t batch_ = 0;               // insertion batches so far
   mutable std::vector<Cell_handle> scratch_cells_;  // reused by walks
@@ -633,7 +630,9 @@ bool DelaunayManifold::Impl::WalkBack(const Point& a, const Vertex_handle& targe
       if (i != entry) PrefetchCell(current->neighbor(i));  // as in Walk
     }
     project(current);
-    if (before_reach_except(-1)) break;
+    // Only the first cell can lie wholly before reach: every later one shares the previous
+    // cell's exit face, which has a vertex at or past it (checked below).
+    if (entry < 0 && before_reach_except(-1)) break;
     const double lowest = std::min(std::min(t[0], t[1]), std::min(t[2], t[3]));
     current->info().stamp = stamp;
     ++walked;
@@ -1044,25 +1043,19 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
     camera_cells_[c].valid = false;
     StartOf(static_cast<int>(c));
   }
-  int64_t total_rays = 0;
-  for (const auto& cams : point_cameras_) total_rays += static_cast<int64_t>(cams.size());
-  Progress progress("manifold: ray tracing", total_rays);
   for (size_t i = 0; i < points.size(); ++i) {
     for (int32_t c : point_cameras_[i]) ray_index_->Add(c, static_cast<int32_t>(i), positions_[i]);
   }
   ray_index_->Flush();
-  std::vector<RayRef> rays;
-  rays.reserve(total_rays);
-  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) { rays.push_back(ray); });
-  for (const RayRef& ray : rays) {
-    const Vertex_handle target_vertex = vertex_of_point_[ray.point];
-    const auto count = [&](const Cell_handle& c, unsigned mask) { CountCrossing(c, mask); };
+  Progress progress("manifold: ray tracing", static_cast<int64_t>(ray_index_->size()));
+  const auto count = [&](const Cell_handle& c, unsigned mask) { CountCrossing(c, mask); };
+  // Walked straight from the index, in its order (no list of every ray: 12 bytes a ray).
+  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
     stats.ray_cell_steps +=
-        Walk(StartOf(ray.camera), camera_points_[ray.camera], target_vertex, count);
+        Walk(StartOf(ray.camera), camera_points_[ray.camera], vertex_of_point_[ray.point], count);
     ++stats.rays;
     progress.Update(stats.rays);
-  }
-  ray_count_ = stats.rays;
+  });
   stats.seconds_ray_tracing = timer.Seconds();
   spdlog::info("manifold: traced {} rays ({} cell steps) in {:.2f} s ({:.0f} rays/s)", stats.rays,
                stats.ray_cell_steps, stats.seconds_ray_tracing,
@@ -1218,7 +1211,8 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
     }
     // A candidate costs about what 1/20 of a whole re-walk does: past 20 candidates per ray,
     // (large conflict regions: the box-only Steiner grid's long cells) every ray is walked.
-    if (!all_affected && stats.candidate_rays > 20 * ray_count_) {
+    if (!all_affected &&
+        stats.candidate_rays > 20 * static_cast<int64_t>(ray_index_->size())) {
       all_affected = true;
       std::fill(ray_reach.begin(), ray_reach.end(), 0.0f);
     }
@@ -1265,18 +1259,16 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   // Exact ray counts for the cells born in this batch: every old ray that may cross one is
   // walked once and counted on those cells only (the others keep their counts: their geometry
   // did not change); the new points' rays are walked and counted everywhere.
-  std::vector<std::pair<RayRef, float>> rays;  // with their reach, in the index's order
+  // The rays are walked in the index's order (which keeps cells in cache); the new points'
+  // rays join the index only afterwards.
+  const auto is_new = [&](const Cell_handle& c) { return c->info().born == batch; };
+  const auto count_new_cells = [&](const Cell_handle& c, unsigned mask) {
+    if (is_new(c)) CountCrossing(c, mask);
+  };
   ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
-    if (ray_reach[ray.id] <= 1.0f) {
-      rays.push_back({ray, ray_reach[ray.id]});
-    }
-  });
-  for (const auto& [ray, reach] : rays) {
+    const float reach = ray_reach[ray.id];
+    if (reach > 1.0f) return;
     const Vertex_handle target = vertex_of_point_[ray.point];
-    const auto is_new = [&](const Cell_handle& c) { return c->info().born == batch; };
-    const auto count_new_cells = [&](const Cell_handle& c, unsigned mask) {
-      if (is_new(c)) CountCrossing(c, mask);
-    };
     // Only the part of the ray from its first hole box on can cross a new cell: walk that
     // part backwards from the point; where that is degenerate, the whole ray forwards.
     if (reach <= 0 || !WalkBack(camera_points_[ray.camera], target, reach, is_new, count_new_cells,
@@ -1285,7 +1277,7 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
           Walk(StartOf(ray.camera), camera_points_[ray.camera], target, count_new_cells);
     }
     ++stats.rewalked_rays;
-  }
+  });
   for (int32_t id = first_new_id; id < static_cast<int32_t>(positions_.size()); ++id) {
     const Vertex_handle target = vertex_of_point_[id];
     const auto count = [&](const Cell_handle& c, unsigned mask) { CountCrossing(c, mask); };
@@ -1294,7 +1286,6 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
       ray_index_->Add(c, id, positions_[id]);
       ++stats.new_rays;
     }
-    ray_count_ += static_cast<int64_t>(point_cameras_[id].size());
   }
   ray_index_->Flush();
   stats.seconds_insertion = timer.Seconds();

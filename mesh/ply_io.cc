@@ -336,20 +336,8 @@ class BinarySource {
   void EndInstance() {}
 
   double ReadNumber(PlyType t, const PlyProperty& p) {
-    if (t == PlyType::kFloat32) {
-      Need(sizeof(float), p);
-      const uint32_t u = Raw<uint32_t>();
-      float f;
-      std::memcpy(&f, &u, sizeof(f));
-      return f;
-    }
-    if (t == PlyType::kFloat64) {
-      Need(sizeof(double), p);
-      const uint64_t u = Raw<uint64_t>();
-      double d;
-      std::memcpy(&d, &u, sizeof(d));
-      return d;
-    }
+    if (t == PlyType::kFloat32) return ReadFloat<float, uint32_t>(p);
+    if (t == PlyType::kFloat64) return ReadFloat<double, uint64_t>(p);
     return static_cast<double>(ReadInteger(t, p));
   }
 
@@ -418,6 +406,16 @@ class BinarySource {
   U Raw() {
     U u = reader_.Read<U>("value");
     return swap_ ? ByteSwap(u) : u;
+  }
+  // A float read as its bit pattern `Bits` (byte order fixed like an integer's).
+  template <typename Float, typename Bits>
+  Float ReadFloat(const PlyProperty& p) {
+    static_assert(sizeof(Float) == sizeof(Bits));
+    Need(sizeof(Float), p);
+    const Bits bits = Raw<Bits>();
+    Float value;
+    std::memcpy(&value, &bits, sizeof(value));
+    return value;
   }
   void Need(size_t bytes, const PlyProperty& p) const {
     if (reader_.remaining() < bytes) {
