@@ -10,7 +10,7 @@
 #include "scene/scene_h5.h"
 #include "gl/context.h"
 #include "tools/synth.h"
-#include "worker/sweep_test_scene.h"
+#include "sweep/sweep_test_scene.h"
 
 namespace ms::app {
 namespace fs = std::filesystem;

@@ -6,11 +6,11 @@
 #include <CLI/CLI.hpp>
 
 #include "coordinator/coordinator.h"
-#include "worker/sweep_kernel.h"
+#include "sweep/sweep_kernel.h"
 
 namespace ms::app {
 
-// --sweep.* (SweepOptions, worker/sweep_kernel.h).
+// --sweep.* (SweepOptions, sweep/sweep_kernel.h).
 void AddSweepOptions(CLI::App* cmd, SweepOptions* sweep);
 
 // Everything of a coordinator run except --input/--output/--bind: --resume,

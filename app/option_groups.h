@@ -4,7 +4,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "coordinator/manifold_options.h"
+#include "manifold/manifold_options.h"
 
 namespace ms::app {
 

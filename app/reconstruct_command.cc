@@ -23,7 +23,7 @@
 #include "scene/scene_io.h"
 #include "tools/evaluate.h"
 #include "proto/zmq_transport.h"
-#include "worker/sweep_kernel_factory.h"
+#include "sweep/sweep_kernel_factory.h"
 
 namespace ms::app {
 namespace {

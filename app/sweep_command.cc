@@ -14,8 +14,8 @@
 #include "mesh/visible_mesh.h"
 #include "scene/scene_io.h"
 #include "scene/view_selection.h"
-#include "worker/sweep_images.h"
-#include "worker/sweep_kernel_factory.h"
+#include "sweep/sweep_images.h"
+#include "sweep/sweep_kernel_factory.h"
 
 namespace ms::app {
 namespace {

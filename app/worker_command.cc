@@ -14,7 +14,7 @@
 #include "base/error.h"
 #include "base/log.h"
 #include "proto/zmq_transport.h"
-#include "worker/sweep_kernel_factory.h"
+#include "sweep/sweep_kernel_factory.h"
 #include "worker/worker_process.h"
 
 namespace ms::app {

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "coordinator/delaunay_manifold.h"
+#include "manifold/delaunay_manifold.h"
 
 namespace ms::bench {
 

@@ -17,7 +17,7 @@
 
 #include "base/log.h"
 #include "bench/bench_scenes.h"
-#include "coordinator/delaunay_manifold.h"
+#include "manifold/delaunay_manifold.h"
 #include "mesh/mesh_io.h"
 
 int main(int argc, char** argv) {

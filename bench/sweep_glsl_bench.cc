@@ -1,6 +1,6 @@
 // Pixel-hypotheses per second (pixels x offsets x neighbours) of the GLSL sweep kernel, against
 // the C++ reference on the same jobs and in the same process: the synthetic pyramid
-// (worker/sweep_test_scene.h) at 640x480 and 1280x960, default options (N = 20, sigma = 8 px,
+// (sweep/sweep_test_scene.h) at 640x480 and 1280x960, default options (N = 20, sigma = 8 px,
 // 100 px tiles, full resolution). Whatever GlContext picks runs it: llvmpipe on a CPU machine,
 // the GPU where there is one. Counters: hypotheses per second of wall time and per second of
 // process CPU time (all threads: llvmpipe's workers, OpenCV pinned to one thread), per-stage
@@ -13,9 +13,9 @@
 #include <opencv2/core/utility.hpp>
 
 #include "base/log.h"
-#include "worker/glsl_sweep.h"
-#include "worker/reference_sweep.h"
-#include "worker/sweep_test_scene.h"
+#include "sweep/glsl_sweep.h"
+#include "sweep/reference_sweep.h"
+#include "sweep/sweep_test_scene.h"
 
 namespace ms {
 namespace {

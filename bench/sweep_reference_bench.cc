@@ -1,5 +1,5 @@
 // Pixel-hypotheses per second (pixels x offsets x neighbours) of the C++ reference sweep on the
-// synthetic pyramid (worker/sweep_test_scene.h) at 640x480 and 1280x960, default options
+// synthetic pyramid (sweep/sweep_test_scene.h) at 640x480 and 1280x960, default options
 // (N = 20, sigma = 8 px, 100 px tiles, full resolution), on one thread (OpenCV's filters would
 // otherwise use every core, which makes numbers on a shared machine meaningless). The rate is per
 // CPU second of that thread. Numbers: docs/sweep.md.
@@ -8,8 +8,8 @@
 #include <map>
 #include <opencv2/core/utility.hpp>
 
-#include "worker/reference_sweep.h"
-#include "worker/sweep_test_scene.h"
+#include "sweep/reference_sweep.h"
+#include "sweep/sweep_test_scene.h"
 
 namespace ms {
 namespace {

@@ -16,10 +16,10 @@
 
 #include "base/error.h"
 #include "base/log.h"
-#include "coordinator/delaunay_manifold.h"
+#include "manifold/delaunay_manifold.h"
 #include "coordinator/job_builder.h"
 #include "coordinator/run_store.h"
-#include "coordinator/scene_rays.h"
+#include "manifold/scene_rays.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
 #include "proto/content_hash.h"

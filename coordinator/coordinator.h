@@ -15,7 +15,7 @@
 #include <string>
 
 #include "coordinator/job_scheduler.h"
-#include "coordinator/manifold_options.h"
+#include "manifold/manifold_options.h"
 #include "mesh/visible_mesh.h"
 #include "proto/manisweep.pb.h"
 #include "proto/transport.h"

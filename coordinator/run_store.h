@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "coordinator/delaunay_manifold.h"
+#include "manifold/delaunay_manifold.h"
 #include "scene/scene.h"
 
 namespace ms {

@@ -2,8 +2,8 @@
 // by the independent mesh checker and measured by depth-map evaluation (llvmpipe in CI).
 #include <gtest/gtest.h>
 
-#include "coordinator/delaunay_manifold.h"
-#include "coordinator/scene_rays.h"
+#include "manifold/delaunay_manifold.h"
+#include "manifold/scene_rays.h"
 #include "gl/context.h"
 #include "mesh/mesh_checker.h"
 #include "tools/evaluate.h"

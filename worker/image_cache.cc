@@ -11,7 +11,7 @@
 #include "base/error.h"
 #include "base/file_util.h"
 #include "proto/content_hash.h"
-#include "worker/sweep_images.h"
+#include "sweep/sweep_images.h"
 
 namespace ms {
 namespace fs = std::filesystem;

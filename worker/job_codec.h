@@ -1,10 +1,10 @@
 // Conversions between the wire messages (proto/manisweep.proto) and the sweep kernel's types
-// (worker/sweep_kernel.h). The coordinator never sees the kernel's types: the app converts the
+// (sweep/sweep_kernel.h). The coordinator never sees the kernel's types: the app converts the
 // user's SweepOptions here once, and the worker converts jobs and results.
 #pragma once
 
 #include "proto/manisweep.pb.h"
-#include "worker/sweep_kernel.h"
+#include "sweep/sweep_kernel.h"
 
 namespace ms {
 

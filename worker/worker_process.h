@@ -13,7 +13,7 @@
 #include "proto/transport.h"
 #include "proto/wire.h"
 #include "worker/image_cache.h"
-#include "worker/sweep_kernel.h"
+#include "sweep/sweep_kernel.h"
 
 namespace ms {
 

@@ -17,7 +17,7 @@
 #include "proto/wire.h"
 #include "worker/image_cache.h"
 #include "worker/job_codec.h"
-#include "worker/sweep_kernel_factory.h"
+#include "sweep/sweep_kernel_factory.h"
 
 namespace ms {
 namespace {

@@ -15,7 +15,7 @@
 #include "mesh/mesh_io.h"
 #include "proto/transport.h"
 #include "worker/job_codec.h"
-#include "worker/sweep_kernel_factory.h"
+#include "sweep/sweep_kernel_factory.h"
 #include "worker/worker_process.h"
 
 namespace ms {

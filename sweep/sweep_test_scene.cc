@@ -1,4 +1,4 @@
-#include "worker/sweep_test_scene.h"
+#include "sweep/sweep_test_scene.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

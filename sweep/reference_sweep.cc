@@ -1,4 +1,4 @@
-#include "worker/reference_sweep.h"
+#include "sweep/reference_sweep.h"
 
 #include <algorithm>
 #include <cmath>

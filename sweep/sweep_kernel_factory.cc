@@ -1,8 +1,8 @@
-#include "worker/sweep_kernel_factory.h"
+#include "sweep/sweep_kernel_factory.h"
 
 #include "base/error.h"
 #include "base/log.h"
-#include "worker/reference_sweep.h"
+#include "sweep/reference_sweep.h"
 
 namespace ms {
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "mesh/mesh.h"
-#include "worker/sweep_kernel.h"
+#include "sweep/sweep_kernel.h"
 
 namespace ms {
 

@@ -1,4 +1,4 @@
-#include "coordinator/delaunay_manifold.h"
+#include "manifold/delaunay_manifold.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <set>
 
 #include "base/error.h"
-#include "coordinator/manifold_internal.h"
+#include "manifold/manifold_internal.h"
 #include "mesh/mesh_checker.h"
 
 namespace ms {

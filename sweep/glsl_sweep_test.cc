@@ -1,7 +1,7 @@
 // The GLSL sweep kernel against the C++ reference (docs/sweep.md "The GLSL kernel"): per stage
 // (swept mesh seen from C, shadow maps, reprojection, NCC) and end to end, for both blur
 // variants, on llvmpipe in CI (on a GPU where there is one). Tolerances are those of the docs.
-#include "worker/glsl_sweep.h"
+#include "sweep/glsl_sweep.h"
 
 #include <gtest/gtest.h>
 
@@ -17,9 +17,9 @@
 #include "base/error.h"
 #include "base/testing.h"
 #include "gl/gl_testing.h"
-#include "worker/reference_sweep.h"
-#include "worker/sweep_kernel_factory.h"
-#include "worker/sweep_test_scene.h"
+#include "sweep/reference_sweep.h"
+#include "sweep/sweep_kernel_factory.h"
+#include "sweep/sweep_test_scene.h"
 
 namespace ms {
 namespace {

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "worker/software_raster.h"
-#include "worker/sweep_kernel.h"
+#include "sweep/software_raster.h"
+#include "sweep/sweep_kernel.h"
 
 namespace ms {
 

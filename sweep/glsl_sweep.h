@@ -1,5 +1,5 @@
 // The GLSL mesh-sweeping kernel (paper section 2.2; docs/sweep.md "The GLSL kernel"): the same
-// hypotheses, conventions and tie-breaking as the C++ reference (worker/reference_sweep.h), on
+// hypotheses, conventions and tie-breaking as the C++ reference (sweep/reference_sweep.h), on
 // the GPU through a headless EGL context (NVIDIA's driver, or Mesa's llvmpipe without a GPU).
 //
 // Per batch of offsets k (texture arrays, one layer per offset): one instanced draw whose
@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "gl/context.h"
-#include "worker/sweep_kernel.h"
+#include "sweep/sweep_kernel.h"
 
 namespace ms {
 

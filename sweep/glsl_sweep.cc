@@ -1,4 +1,4 @@
-#include "worker/glsl_sweep.h"
+#include "sweep/glsl_sweep.h"
 
 #include <fmt/format.h>
 

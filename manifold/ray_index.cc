@@ -1,4 +1,4 @@
-#include "coordinator/ray_index.h"
+#include "manifold/ray_index.h"
 
 #include <algorithm>
 #include <climits>

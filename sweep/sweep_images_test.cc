@@ -1,4 +1,4 @@
-#include "worker/sweep_images.h"
+#include "sweep/sweep_images.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "coordinator/manifold_options.h"
+#include "manifold/manifold_options.h"
 #include "mesh/mesh.h"
 
 namespace ms {

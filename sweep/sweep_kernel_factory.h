@@ -5,14 +5,14 @@
 #include <string>
 #include <vector>
 
-#include "worker/glsl_sweep.h"
-#include "worker/sweep_kernel.h"
+#include "sweep/glsl_sweep.h"
+#include "sweep/sweep_kernel.h"
 
 namespace ms {
 
-// "glsl": the GLSL kernel (worker/glsl_sweep.h) on its own GL context, current on the calling
+// "glsl": the GLSL kernel (sweep/glsl_sweep.h) on its own GL context, current on the calling
 // thread; throws InternalError if no GL 4.3 context can be created or its shaders do not
-// compile. "reference": the C++ reference (worker/reference_sweep.h). "auto": glsl if that works,
+// compile. "reference": the C++ reference (sweep/reference_sweep.h). "auto": glsl if that works,
 // else the reference with a warning in the log. Anything else throws InputError.
 std::unique_ptr<SweepKernel> MakeSweepKernel(const std::string& name,
                                              const GlslSweepKernelOptions& glsl = {});

@@ -1,4 +1,4 @@
-#include "worker/software_raster.h"
+#include "sweep/software_raster.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // The only translation unit that sees CGAL's Delaunay triangulation (compile time, see
 // docs/manifold.md for the algorithm and its invariants).
-#include "coordinator/delaunay_manifold.h"
+#include "manifold/delaunay_manifold.h"
 
 #include <CGAL/Delaunay_triangulation_3.h>
 #include <CGAL/Delaunay_triangulation_cell_base_3.h>
@@ -22,9 +22,9 @@
 #include "base/check.h"
 #include "base/error.h"
 #include "base/log.h"
-#include "coordinator/manifold_internal.h"
-#include "coordinator/ray_index.h"
-#include "coordinator/steiner_points.h"
+#include "manifold/manifold_internal.h"
+#include "manifold/ray_index.h"
+#include "manifold/steiner_points.h"
 
 namespace ms {
 namespace {
@@ -1463,33 +1463,10 @@ int64_t DelaunayManifold::num_outside_cells() const { return impl_->num_outside_
 int64_t DelaunayManifold::num_free_cells_inside() const { return impl_->CountFreeCellsInside(); }
 size_t DelaunayManifold::MemoryBytes() const { return impl_->MemoryBytes(); }
 
-void ManifoldOptions::Check() const {
-  const auto require = [](bool ok, const char* field, const char* rule) {
-    if (!ok) throw InputError(std::string("manifold option ") + field + ": " + rule);
-  };
-  require(std::isfinite(w1) && w1 > 0, "w1", "must be positive");
-  require(std::isfinite(w2) && w2 >= 0, "w2", "must be >= 0");
-  require(std::isfinite(free_threshold) && free_threshold > 0, "free-threshold", "must be positive");
-  require(std::isfinite(steiner_margin) && steiner_margin > 0, "steiner-margin", "must be positive");
-  require(steiner_grid >= 2 && steiner_grid <= 64, "steiner-grid", "must be in [2, 64]");
-  require(steiner_graded == GradedSteiner::kAuto || steiner_graded == GradedSteiner::kOn ||
-              steiner_graded == GradedSteiner::kOff,
-          "graded-steiner", "must be auto, on or off");
-  require(graded_steiner_min_points >= 0, "graded-steiner-min-points", "must be >= 0");
-  require(std::isfinite(steiner_clearance) && steiner_clearance >= 1, "steiner-clearance",
-          "must be >= 1");
-  require(std::isfinite(steiner_min_spacing) && steiner_min_spacing > 0, "steiner-min-spacing",
-          "must be positive");
-  require(w2_rule == W2Rule::kCameraSide || w2_rule == W2Rule::kAllFaces, "w2-rule",
-          "must be camera-side or all-faces");
-  require(shrink_neighbourhood == 0 || shrink_neighbourhood == 1, "shrink-neighbourhood",
-          "must be 0 (face neighbours) or 1 (vertex neighbours)");
-}
-
 }  // namespace ms
 
 // ---------------------------------------------------------------------------------------------
-// Test hooks (coordinator/manifold_internal.h)
+// Test hooks (manifold/manifold_internal.h)
 
 namespace ms::manifold_internal {
 namespace {

@@ -1,4 +1,4 @@
-#include "coordinator/steiner_points.h"
+#include "manifold/steiner_points.h"
 
 #include <algorithm>
 #include <cmath>

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "scene/camera.h"
-#include "worker/sweep_kernel.h"
+#include "sweep/sweep_kernel.h"
 
 namespace ms {
 

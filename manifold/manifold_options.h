@@ -25,7 +25,7 @@ struct ManifoldOptions {
   double free_threshold = 4.0;  // paper: t_w = 4.0
   W2Rule w2_rule = W2Rule::kCameraSide;
 
-  // Steiner points (coordinator/steiner_points.h): a grid on the faces of the bounding box of
+  // Steiner points (manifold/steiner_points.h): a grid on the faces of the bounding box of
   // points and cameras, enlarged by steiner_margin x its diagonal, so flat or tiny inputs still
   // triangulate in 3D and every camera lies inside; steiner_grid points per box edge (>= 2).
   double steiner_margin = 0.5;

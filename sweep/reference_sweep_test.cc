@@ -1,4 +1,4 @@
-#include "worker/reference_sweep.h"
+#include "sweep/reference_sweep.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 
 #include "base/error.h"
 #include "base/testing.h"
-#include "worker/sweep_test_scene.h"
+#include "sweep/sweep_test_scene.h"
 
 namespace ms {
 namespace {

@@ -1,4 +1,4 @@
-#include "coordinator/scene_rays.h"
+#include "manifold/scene_rays.h"
 
 namespace ms {
 

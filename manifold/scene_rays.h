@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "coordinator/delaunay_manifold.h"
+#include "manifold/delaunay_manifold.h"
 #include "scene/scene.h"
 
 namespace ms {
