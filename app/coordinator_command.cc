@@ -17,21 +17,18 @@ namespace {
 
 struct CoordinatorCommandOptions {
   CoordinatorOptions run;
-  SweepOptions sweep;
-  double max_message_mb = 64;
   std::string bind = "tcp://*:5555";
   std::string curve_secret_key;
   std::string curve_public_keys;
 };
 
 void RunCoordinator(CoordinatorCommandOptions& options) {
-  FinishRunOptions(options.sweep, options.max_message_mb, &options.run);
   options.run.Check();
   InitLogging("coordinator");
   InstallStopSignals();
   ZmqServerOptions server;
   server.bind = options.bind;
-  server.max_message_bytes = options.run.limits.max_message_bytes;
+  server.max_message_bytes = options.run.Limits().max_message_bytes;
   server.curve_secret_key_file = options.curve_secret_key;
   server.curve_public_keys_dir = options.curve_public_keys;
   std::unique_ptr<ServerTransport> transport = MakeZmqServer(server);
@@ -62,7 +59,7 @@ void RegisterCoordinatorCommand(CLI::App& app) {
   cmd->add_option("--curve-public-keys", options->curve_public_keys,
                   "CURVE: directory of the allowed workers' public keys (*.key); others are "
                   "refused");
-  AddRunOptions(cmd, &options->run, &options->sweep, &options->max_message_mb);
+  AddRunOptions(cmd, &options->run);
   cmd->callback([options] { RunCoordinator(*options); });
 }
 

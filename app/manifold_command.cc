@@ -4,7 +4,7 @@
 #include <memory>
 
 #include "app/commands.h"
-#include "app/option_groups.h"
+#include "app/option_registration.h"
 #include "base/error.h"
 #include "base/log.h"
 #include "manifold/delaunay_manifold.h"
@@ -91,7 +91,7 @@ void RegisterManifoldCommand(CLI::App& app) {
   cmd->add_flag("--ascii", options->ascii, "write ASCII PLY instead of binary");
   cmd->add_flag("!--no-check", options->check,
                 "skip the independent manifold check of the result");
-  RegisterManifoldOptions(cmd, &options->manifold);
+  AddOptionGroup(cmd, &options->manifold);
   cmd->callback([options] { RunManifold(*options); });
 }
 

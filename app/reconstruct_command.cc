@@ -50,9 +50,7 @@ void ReportDefaultSceneAccuracy(const std::string& output_dir, const std::string
 
 
 struct ReconstructCommandOptions {
-  CoordinatorOptions run;
-  SweepOptions sweep;
-  double max_message_mb = 64;
+  CoordinatorOptions coordinator;
   int workers = 0;
   int worker_threads = 0;
   std::string kernel = "auto";
@@ -110,7 +108,6 @@ class WorkerPool {
 };
 
 void RunReconstruct(ReconstructCommandOptions& options) {
-  FinishRunOptions(options.sweep, options.max_message_mb, &options.run);
   if (options.workers < 0 || options.workers > 1024) {
     throw InputError("--workers: must be in [0, 1024]");
   }
@@ -120,28 +117,29 @@ void RunReconstruct(ReconstructCommandOptions& options) {
     throw InputError("--kernel: '" + options.kernel + "' is not one of: auto, glsl, reference");
   }
   InitLogging("reconstruct");
-  CoordinatorOptions& run = options.run;
-  if (run.output_dir.empty()) throw InputError("--output: required");
-  const bool have_checkpoint = fs::exists(fs::path(run.output_dir) / "run.h5");
-  const std::string default_dir = (fs::path(run.output_dir) / "default_scene").string();
-  const bool default_scene = run.input.empty();
-  if (run.input.empty() && run.resume && have_checkpoint) {
-    run.input = (fs::path(default_dir) / "scene.h5").string();
+  CoordinatorOptions& setup = options.coordinator;
+  setup.CheckGroups();
+  if (setup.output_dir.empty()) throw InputError("--output: required");
+  const bool have_checkpoint = fs::exists(fs::path(setup.output_dir) / "run.h5");
+  const std::string default_dir = (fs::path(setup.output_dir) / "default_scene").string();
+  const bool default_scene = setup.input.empty();
+  if (setup.input.empty() && setup.run.resume && have_checkpoint) {
+    setup.input = (fs::path(default_dir) / "scene.h5").string();
   }
-  if (run.input.empty()) {
+  if (setup.input.empty()) {
     const std::string& dir = default_dir;
-    run.input = MakeDefaultScene(dir);
+    setup.input = MakeDefaultScene(dir);
     spdlog::info(
         "no --input: reconstructing the embedded default scene (a synthetic textured "
         "pyramid) written to {}",
         dir);
   }
-  run.Check();
+  setup.Check();
   InstallStopSignals();
 
   ZmqServerOptions server;
   server.bind = "tcp://127.0.0.1:*";
-  server.max_message_bytes = run.limits.max_message_bytes;
+  server.max_message_bytes = setup.Limits().max_message_bytes;
   std::unique_ptr<ServerTransport> transport = MakeZmqServer(server);
 
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -152,7 +150,7 @@ void RunReconstruct(ReconstructCommandOptions& options) {
   const std::string worker_level = level <= spdlog::level::debug
                                        ? std::string(spdlog::level::to_string_view(level).data())
                                        : "warn";
-  const SchedulerOptions& s = run.scheduler;
+  const SchedulerOptions& s = setup.scheduler;
   const double give_up = std::max(30.0, 10 * s.liveness * s.heartbeat_interval_s);
   // Option/value pairs; the workers use the coordinator's heartbeat settings and message limit.
   const std::vector<std::pair<std::string, std::string>> worker_options = {
@@ -162,7 +160,7 @@ void RunReconstruct(ReconstructCommandOptions& options) {
       {"--heartbeat-interval", std::to_string(s.heartbeat_interval_s)},
       {"--liveness", std::to_string(s.liveness)},
       {"--give-up-after", std::to_string(give_up)},
-      {"--max-message-mb", std::to_string(options.max_message_mb)}};
+      {"--max-message-mb", std::to_string(setup.run.max_message_mb)}};
   std::vector<std::string> worker_args = {"--log-level", worker_level, "worker"};
   for (const auto& [option, value] : worker_options) {
     worker_args.push_back(option);
@@ -176,7 +174,7 @@ void RunReconstruct(ReconstructCommandOptions& options) {
   bool no_workers = false;
   CoordinatorResult result;
   {
-    Coordinator coordinator(run, transport.get());
+    Coordinator coordinator(setup, transport.get());
     try {
       result = coordinator.Run([&] {
         if (StopRequested()) return true;
@@ -205,23 +203,23 @@ void RunReconstruct(ReconstructCommandOptions& options) {
       "and {}/summary.json",
       result.final_mesh, result.vertices, result.faces,
       result.final_is_closed_manifold ? "closed 2-manifold" : "NOT a closed manifold",
-      result.iterations, run.output_dir, run.output_dir);
-  if (default_scene) ReportDefaultSceneAccuracy(run.output_dir, default_dir);
+      result.iterations, setup.output_dir, setup.output_dir);
+  if (default_scene) ReportDefaultSceneAccuracy(setup.output_dir, default_dir);
 }
 
 }  // namespace
 
 void RegisterReconstructCommand(CLI::App& app) {
   auto options = std::make_shared<ReconstructCommandOptions>();
-  options->run.output_dir = "manisweep_output";
-  options->run.progress_interval_s = 2;
+  options->coordinator.output_dir = "manisweep_output";
+  options->coordinator.run.progress_interval_s = 2;
   CLI::App* cmd = app.add_subcommand(
       "reconstruct",
       "All-in-one local run: a coordinator and N sweep workers on this machine (no --input: "
       "the embedded default scene)");
-  cmd->add_option("-i,--input", options->run.input,
+  cmd->add_option("-i,--input", options->coordinator.input,
                   "scene (any supported format); omitted: a synthetic pyramid made on the fly");
-  cmd->add_option("-o,--output", options->run.output_dir,
+  cmd->add_option("-o,--output", options->coordinator.output_dir,
                   "output directory: initial.ply, final.ply, run.h5, summary.json")
       ->capture_default_str();
   cmd->add_option("-w,--workers", options->workers, "worker processes (0 = one per core)")
@@ -235,7 +233,7 @@ void RegisterReconstructCommand(CLI::App& app) {
   cmd->add_option("--max-restarts", options->max_restarts,
                   "restarts of workers that die (-1 = twice the number of workers)")
       ->capture_default_str();
-  AddRunOptions(cmd, &options->run, &options->sweep, &options->max_message_mb);
+  AddRunOptions(cmd, &options->coordinator);
   cmd->callback([options] { RunReconstruct(*options); });
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "app/commands.h"
+#include "app/option_registration.h"
 #include "base/error.h"
 #include "base/log.h"
 #include "gl/context.h"
@@ -104,45 +105,8 @@ void RegisterSweepCommand(CLI::App& app) {
                   "OpenGL through EGL: auto (GPU device, else Mesa surfaceless), device or "
                   "surfaceless")
       ->capture_default_str();
-  NeighbourOptions& n = options->neighbours;
-  cmd->add_option("--neighbours.count", n.count, "neighbour cameras to match against")
-      ->capture_default_str();
-  cmd->add_option("--neighbours.max-angle-deg", n.max_angle_deg,
-                  "neighbours' viewing directions differ from C's by less than this")
-      ->capture_default_str();
-  SweepOptions& s = options->sweep;
-  cmd->add_option("--sweep.num-offsets", s.num_offsets, "N: sweep offsets k with -N/2 < k < N/2")
-      ->capture_default_str();
-  cmd->add_option("--sweep.alpha", s.alpha,
-                  "sweep step in scene units; 0 = auto from the parallax (0.03 = the paper's 3 cm "
-                  "in a metric scene)")
-      ->capture_default_str();
-  cmd->add_option("--sweep.alpha-parallax-px", s.alpha_parallax_px,
-                  "auto alpha: pixels of parallax in the neighbours per step at the median depth")
-      ->capture_default_str();
-  cmd->add_option("--sweep.ncc-threshold", s.ncc_threshold, "t_NCC: keep tile winners above this")
-      ->capture_default_str();
-  cmd->add_option("--sweep.gaussian-sigma-px", s.gaussian_sigma_px,
-                  "sigma of the NCC's Gaussian window (swept-resolution pixels)")
-      ->capture_default_str();
-  cmd->add_option("--sweep.tile-size-px", s.tile_size_px,
-                  "tile size (swept-resolution pixels); one point per tile at most")
-      ->capture_default_str();
-  cmd->add_option("--sweep.min-texture-variance", s.min_texture_variance,
-                  "textureless below this weighted variance (gray in [0, 1])")
-      ->capture_default_str();
-  cmd->add_option("--sweep.min-window-weight", s.min_window_weight,
-                  "fraction of the Gaussian window that must be valid")
-      ->capture_default_str();
-  cmd->add_option("--sweep.occlusion-tolerance", s.occlusion_tolerance,
-                  "relative depth tolerance of the neighbours' shadow maps")
-      ->capture_default_str();
-  cmd->add_option("--sweep.max-image-dimension", s.max_image_dimension,
-                  "halve images until their longest side fits (0 = full size)")
-      ->capture_default_str();
-  cmd->add_option("--sweep.pyramid-level", s.pyramid_level,
-                  "sweep at this pyramid level (-1 = from max-image-dimension, 0 = full size)")
-      ->capture_default_str();
+  AddOptionGroup(cmd, &options->neighbours);
+  AddOptionGroup(cmd, &options->sweep);
   cmd->callback([options] { RunSweep(*options); });
 }
 

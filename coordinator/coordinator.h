@@ -15,29 +15,46 @@
 #include <string>
 
 #include "coordinator/job_scheduler.h"
+#include "base/options.h"
 #include "manifold/manifold_options.h"
 #include "mesh/visible_mesh.h"
-#include "proto/manisweep.pb.h"
 #include "proto/transport.h"
-#include "proto/wire.h"
+#include "proto/wire_limits.h"
 #include "scene/view_selection.h"
+#include "sweep/sweep_options.h"
 
 namespace ms {
 
+// The run's own options (--max-iterations, --resume, ...).
+struct RunOptions {
+  static constexpr const char* kOptionGroup = "";
+#define MS_OPTION MS_OPTION_FIELD
+#include "coordinator/run_options_def.h"
+#undef MS_OPTION
+
+  // visit(value, spec) for every option, in declaration order.
+  template <typename Self, typename Visitor>
+  static void ForEachOption(Self&& self, Visitor&& visit) {
+#define MS_OPTION MS_OPTION_VISIT
+#include "coordinator/run_options_def.h"
+#undef MS_OPTION
+  }
+  void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
+};
+
+// Everything a coordinator run takes: plain option groups, each declared once.
 struct CoordinatorOptions {
-  std::string input;        // the scene (any format ReadScene reads); optional with resume
-  std::string output_dir;   // initial.ply, final.ply, run.h5, summary.json (run_store.h)
-  bool resume = false;      // continue from output_dir/run.h5 (start afresh if there is none)
-  int max_iterations = 15;  // it_max of the paper
-  bool save_iteration_meshes = false;  // iteration_NN.ply after every iteration
+  std::string input;       // the scene (any format ReadScene reads); optional with resume
+  std::string output_dir;  // initial.ply, final.ply, run.h5, summary.json (run_store.h)
+  RunOptions run;
   ManifoldOptions manifold;
   NeighbourOptions neighbours;
   VisibleMeshOptions visible;
-  wire::SweepOptions sweep;  // sent with every job (the app converts the kernel's options)
+  SweepOptions sweep;  // sent with every job
   SchedulerOptions scheduler;
-  WireLimits limits;
-  double progress_interval_s = 5;  // progress lines while sweeping
-  void Check() const;              // throws InputError naming the field
+  void Check() const;  // throws InputError naming the flag
+  void CheckGroups() const;  // Check() without --input and --output
+  WireLimits Limits() const { return WireLimitsFromMiB(run.max_message_mb); }
 };
 
 struct CoordinatorResult {

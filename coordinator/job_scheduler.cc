@@ -8,19 +8,6 @@
 
 namespace ms {
 
-void SchedulerOptions::Check() const {
-  if (!(lease_s > 0) || !std::isfinite(lease_s)) {
-    throw InputError("lease_s: must be a positive number of seconds");
-  }
-  if (!(heartbeat_interval_s >= 0.01 && heartbeat_interval_s <= 3600)) {
-    throw InputError("heartbeat_interval_s: must be in [0.01, 3600] seconds");
-  }
-  if (liveness < 2 || liveness > 1000) throw InputError("liveness: must be in [2, 1000]");
-  if (max_attempts < 1 || max_attempts > 1000) {
-    throw InputError("max_attempts: must be in [1, 1000]");
-  }
-}
-
 JobScheduler::JobScheduler(const SchedulerOptions& options) : options_(options) {
   options_.Check();
 }

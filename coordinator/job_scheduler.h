@@ -20,20 +20,24 @@
 #include <string>
 #include <vector>
 
+#include "base/options.h"
+
 namespace ms {
 
 struct SchedulerOptions {
-  // A job whose result has not arrived this long after it was handed out is given to another
-  // worker. Longer than the slowest job you expect (a reference-kernel job at 1536 px takes a
-  // few seconds of one core).
-  double lease_s = 600;
-  // Both sides send a heartbeat this often (seconds).
-  double heartbeat_interval_s = 1.0;
-  // A peer that has sent nothing for liveness x heartbeat_interval_s is dead.
-  int liveness = 5;
-  // A job handed out this many times without a result fails the run.
-  int max_attempts = 5;
-  void Check() const;  // throws InputError naming the field
+  static constexpr const char* kOptionGroup = "";
+#define MS_OPTION MS_OPTION_FIELD
+#include "coordinator/scheduler_options_def.h"
+#undef MS_OPTION
+
+  // visit(value, spec) for every option, in declaration order.
+  template <typename Self, typename Visitor>
+  static void ForEachOption(Self&& self, Visitor&& visit) {
+#define MS_OPTION MS_OPTION_VISIT
+#include "coordinator/scheduler_options_def.h"
+#undef MS_OPTION
+  }
+  void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
 };
 
 class JobScheduler {

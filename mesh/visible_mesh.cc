@@ -9,16 +9,6 @@
 
 namespace ms {
 
-void VisibleMeshOptions::Check() const {
-  if (!(std::isfinite(margin_px) && margin_px >= 0)) {
-    throw InputError("visible_mesh.margin_px must be finite and >= 0, got " +
-                     std::to_string(margin_px));
-  }
-  if (!(std::isfinite(near) && near >= 0)) {
-    throw InputError("visible_mesh.near must be finite and >= 0, got " + std::to_string(near));
-  }
-}
-
 bool TriangleInFrustum(const View& view, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                        const Eigen::Vector3d& c, double margin_px, double near) {
   const Intrinsics& k = view.intrinsics;

@@ -7,21 +7,26 @@
 #include <cstdint>
 #include <vector>
 
+#include "base/options.h"
 #include "mesh/mesh.h"
 #include "scene/camera.h"
 
 namespace ms {
 
 struct VisibleMeshOptions {
-  // Widens the image rectangle of the frustum test by this many pixels on every side (lens
-  // distortion is ignored by the test, so a margin keeps faces at the border).
-  double margin_px = 0;
-  // Faces whose vertices all lie closer than this (camera z, scene units) are outside. 0 keeps
-  // everything in front of the camera centre.
-  double near = 0;
-  // Keep faces that turn their back to the camera (for meshes of unknown orientation).
-  bool keep_back_facing = false;
-  void Check() const;  // throws InputError naming the field
+  static constexpr const char* kOptionGroup = "visible";
+#define MS_OPTION MS_OPTION_FIELD
+#include "mesh/visible_mesh_options_def.h"
+#undef MS_OPTION
+
+  // visit(value, spec) for every option, in declaration order.
+  template <typename Self, typename Visitor>
+  static void ForEachOption(Self&& self, Visitor&& visit) {
+#define MS_OPTION MS_OPTION_VISIT
+#include "mesh/visible_mesh_options_def.h"
+#undef MS_OPTION
+  }
+  void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
 };
 
 struct VisibleMesh {

@@ -1,5 +1,6 @@
 #include "proto/wire.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -46,6 +47,14 @@ void WireLimits::Check() const {
     throw InputError("image_chunk_bytes: must be in [1 KiB, max_message_bytes - 4 KiB], got " +
                      std::to_string(image_chunk_bytes));
   }
+}
+
+WireLimits WireLimitsFromMiB(double max_message_mb) {
+  WireLimits limits;
+  limits.max_message_bytes = static_cast<uint64_t>(std::llround(max_message_mb * 1048576));
+  limits.image_chunk_bytes = std::min<uint64_t>(limits.image_chunk_bytes,
+                                                limits.max_message_bytes / 2);
+  return limits;
 }
 
 const char* DecodeStatusName(DecodeStatus status) {

@@ -8,21 +8,13 @@
 
 #include "mesh/mesh.h"
 #include "proto/manisweep.pb.h"
+#include "proto/wire_limits.h"
 #include "scene/camera.h"
 
 namespace ms {
 
 // The version both sides put in every envelope and require in every envelope they read.
 constexpr uint32_t kProtocolVersion = 1;
-
-struct WireLimits {
-  // Largest message accepted or sent, in bytes. A job carries the mesh the camera sees (24 bytes
-  // per vertex, 12 per face: a 1M-face visible mesh is ~18 MiB); a result is small.
-  uint64_t max_message_bytes = uint64_t{64} << 20;
-  // Image files travel in pieces of at most this many bytes (ImageRequest/ImageResponse).
-  uint64_t image_chunk_bytes = uint64_t{4} << 20;
-  void Check() const;  // throws InputError naming the field
-};
 
 enum class DecodeStatus {
   kOk,

@@ -9,18 +9,6 @@
 
 namespace ms {
 
-void NeighbourOptions::Check() const {
-  if (!(max_angle_deg > 0 && max_angle_deg <= 180)) {
-    throw InputError("neighbours.max_angle_deg must be in (0, 180], got " +
-                     std::to_string(max_angle_deg));
-  }
-  if (count < 0) throw InputError("neighbours.count must be >= 0, got " + std::to_string(count));
-  if (!(same_center_fraction >= 0 && same_center_fraction < 1)) {
-    throw InputError("neighbours.same_center_fraction must be in [0, 1), got " +
-                     std::to_string(same_center_fraction));
-  }
-}
-
 std::vector<int> SelectNeighbours(const Scene& scene, int camera, const NeighbourOptions& options) {
   options.Check();
   const int num_views = static_cast<int>(scene.views.size());

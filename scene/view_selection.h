@@ -5,19 +5,25 @@
 
 #include <vector>
 
+#include "base/options.h"
 #include "scene/scene.h"
 
 namespace ms {
 
 struct NeighbourOptions {
-  // Keep only cameras whose optical axes differ from the camera's by strictly less than this.
-  double max_angle_deg = 60;
-  // How many neighbours to return (fewer when fewer qualify).
-  int count = 2;
-  // Cameras closer than this fraction of the camera-centre bounding-box diagonal count as "at
-  // the same centre" (no parallax, useless for stereo) and are skipped.
-  double same_center_fraction = 1e-6;
-  void Check() const;  // throws InputError naming the field
+  static constexpr const char* kOptionGroup = "neighbours";
+#define MS_OPTION MS_OPTION_FIELD
+#include "scene/neighbour_options_def.h"
+#undef MS_OPTION
+
+  // visit(value, spec) for every option, in declaration order.
+  template <typename Self, typename Visitor>
+  static void ForEachOption(Self&& self, Visitor&& visit) {
+#define MS_OPTION MS_OPTION_VISIT
+#include "scene/neighbour_options_def.h"
+#undef MS_OPTION
+  }
+  void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
 };
 
 // Indices of up to `options.count` neighbours of view `camera`, nearest centre first. Ties in

@@ -481,7 +481,7 @@ TEST_F(GlslSweepTest, BadJobsThrowInputErrorLikeTheReference) {
   ExpectInputError(kernel, job, "distortion");
   job = good;
   job.options.ncc_threshold = 2;
-  ExpectInputError(kernel, job, "sweep.ncc_threshold");
+  ExpectInputError(kernel, job, "--sweep.ncc-threshold");
   // Beyond the driver's texture size.
   job = good;
   const int huge = kernel.gl_info().max_texture_size + 1;

@@ -413,13 +413,13 @@ TEST(ReferenceSweep, BadJobsThrowInputError) {
   ExpectInputError(job, "focal length");
   job = good;
   job.options.num_offsets = 0;
-  ExpectInputError(job, "sweep.num_offsets");
+  ExpectInputError(job, "--sweep.num-offsets");
   job = good;
   job.options.ncc_threshold = 2;
-  ExpectInputError(job, "sweep.ncc_threshold");
+  ExpectInputError(job, "--sweep.ncc-threshold");
   job = good;
   job.options.alpha = -1;
-  ExpectInputError(job, "sweep.alpha");
+  ExpectInputError(job, "--sweep.alpha");
 }
 
 }  // namespace

@@ -2,36 +2,6 @@
 
 namespace ms {
 
-void SweepOptionsToWire(const SweepOptions& o, wire::SweepOptions* out) {
-  out->set_num_offsets(o.num_offsets);
-  out->set_alpha(o.alpha);
-  out->set_alpha_parallax_px(o.alpha_parallax_px);
-  out->set_ncc_threshold(o.ncc_threshold);
-  out->set_gaussian_sigma_px(o.gaussian_sigma_px);
-  out->set_tile_size_px(o.tile_size_px);
-  out->set_min_texture_variance(o.min_texture_variance);
-  out->set_min_window_weight(o.min_window_weight);
-  out->set_occlusion_tolerance(o.occlusion_tolerance);
-  out->set_max_image_dimension(o.max_image_dimension);
-  out->set_pyramid_level(o.pyramid_level);
-}
-
-SweepOptions SweepOptionsFromWire(const wire::SweepOptions& w) {
-  SweepOptions o;
-  o.num_offsets = w.num_offsets();
-  o.alpha = w.alpha();
-  o.alpha_parallax_px = w.alpha_parallax_px();
-  o.ncc_threshold = w.ncc_threshold();
-  o.gaussian_sigma_px = w.gaussian_sigma_px();
-  o.tile_size_px = w.tile_size_px();
-  o.min_texture_variance = w.min_texture_variance();
-  o.min_window_weight = w.min_window_weight();
-  o.occlusion_tolerance = w.occlusion_tolerance();
-  o.max_image_dimension = w.max_image_dimension();
-  o.pyramid_level = w.pyramid_level();
-  return o;
-}
-
 void SweepResultToWire(const SweepResult& result, wire::Result* out) {
   out->clear_points();
   for (const SweepPoint& p : result.points) {

@@ -15,6 +15,7 @@
 #include "base/error.h"
 #include "base/log.h"
 #include "proto/content_hash.h"
+#include "proto/options_codec.h"
 #include "worker/job_codec.h"
 
 namespace ms {
@@ -275,7 +276,7 @@ class Worker::Impl {
         c.refs.push_back(RefFromWire(n.image()));
       }
       c.sweep.mesh = UnpackMesh(c.job.mesh(), what);
-      c.sweep.options = SweepOptionsFromWire(c.job.options());
+      c.sweep.options = OptionsFromWire<SweepOptions>(c.job.options());
       c.sweep.options.Check();
     } catch (const InputError& e) {
       FailCurrent(wire::Error::BAD_JOB, e.what());

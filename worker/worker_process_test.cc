@@ -16,6 +16,7 @@
 #include "proto/content_hash.h"
 #include "proto/wire.h"
 #include "worker/image_cache.h"
+#include "proto/options_codec.h"
 #include "worker/job_codec.h"
 #include "sweep/sweep_kernel_factory.h"
 
@@ -147,7 +148,7 @@ class WorkerProcessTest : public ::testing::Test {
     mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
     mesh.faces = {{0, 1, 2}};
     PackMesh(mesh, job.mutable_mesh());
-    SweepOptionsToWire(SweepOptions{}, job.mutable_options());
+    OptionsToWire(SweepOptions{}, job.mutable_options());
     return job;
   }
 

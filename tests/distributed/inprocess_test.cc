@@ -45,13 +45,13 @@ class InProcessRun : public ::testing::Test {
     CoordinatorOptions options;
     options.input = scene_;
     options.output_dir = (root_ / name).string();
-    options.max_iterations = 2;
+    options.run.max_iterations = 2;
     options.scheduler.heartbeat_interval_s = 0.05;
     options.scheduler.liveness = 4;
     SweepOptions sweep;
     sweep.tile_size_px = 10;
     sweep.gaussian_sigma_px = 4;
-    SweepOptionsToWire(sweep, &options.sweep);
+    options.sweep = sweep;
     auto rogue = network->Connect();
     for (const std::string& message : junk) rogue->Send(message);
     // Workers end with the coordinator's Shutdown; the flag only unblocks a broken test.
@@ -113,7 +113,7 @@ TEST_F(InProcessRun, ChangedOptionsCannotResumeARun) {
   auto server = network->Bind();
   CoordinatorOptions options;
   options.output_dir = (root_ / "first").string();
-  options.resume = true;
+  options.run.resume = true;
   options.manifold.w1 = 3.0;  // differs from the checkpoint
   Coordinator coordinator(options, server.get());
   try {

@@ -1,0 +1,289 @@
+#include "coordinator/run_lifecycle.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+
+#include "base/error.h"
+#include "manifold/scene_rays.h"
+#include "mesh/mesh_checker.h"
+#include "mesh/mesh_io.h"
+#include "scene/scene_io.h"
+#include "scene/view_selection.h"
+
+namespace ms {
+namespace fs = std::filesystem;
+
+RunLifecycle::RunLifecycle(const CoordinatorOptions& options, uint64_t session_id)
+    : options_(options), session_id_(session_id) {
+  job_options_.visible = options_.visible;
+  job_options_.sweep = options_.sweep;
+  job_options_.lease_s = options_.scheduler.lease_s;
+  job_options_.limits = options_.Limits();
+}
+
+std::string RunLifecycle::Path(const std::string& name) const {
+  return (fs::path(options_.output_dir) / name).string();
+}
+
+StepOutcome RunLifecycle::Prepare() {
+  fs::create_directories(options_.output_dir);
+  const std::string run_file = Path("run.h5");
+  const std::string fingerprint = OptionsFingerprint(options_);
+  bool resuming = false;
+  if (fs::exists(run_file)) {
+    if (!options_.run.resume) {
+      throw InputError(options_.output_dir +
+                       " holds a run already (run.h5): pass --resume to continue it, or "
+                       "choose another --output");
+    }
+    resuming = true;
+  } else if (options_.run.resume) {
+    spdlog::warn("--resume: no {} yet; starting a new run", run_file);
+    if (options_.input.empty()) throw InputError("--resume without a run.h5 needs --input");
+  }
+  resumed_ = resuming;
+  Scene input;
+  if (!options_.input.empty()) {
+    input = ReadScene(options_.input);
+    input.Validate();
+  }
+  if (resuming) {
+    record_ = ReadRunFile(run_file);
+    if (record_.options_fingerprint != fingerprint) {
+      throw InputError(run_file +
+                       ": the run was made with other options (manifold, sweep, "
+                       "neighbour or visible-mesh options differ); resume with the same ones");
+    }
+    if (!options_.input.empty() && SceneFingerprint(input) != record_.scene_fingerprint) {
+      throw InputError(options_.input + ": not the scene of the run in " + run_file);
+    }
+    spdlog::info("resuming {}: {} iterations done", run_file, record_.completed_iterations());
+  } else {
+    record_ = RunRecord();
+    record_.scene = std::move(input);
+    record_.scene_fingerprint = SceneFingerprint(record_.scene);
+    record_.options_fingerprint = fingerprint;
+  }
+  record_loaded_ = true;
+  const Scene& scene = record_.scene;
+  spdlog::info("scene: {}", scene.Summary());
+  Timer hashing;
+  catalog_ = std::make_unique<ImageCatalog>(scene);
+  catalog_ready_ = true;
+  spdlog::info("hashed {} image files ({:.1f} MiB) in {:.2f} s", catalog_->size(),
+               catalog_->total_bytes() / 1048576.0, hashing.Seconds());
+  neighbours_.clear();
+  for (size_t c = 0; c < scene.views.size(); ++c) {
+    neighbours_.push_back(SelectNeighbours(scene, static_cast<int>(c), options_.neighbours));
+  }
+  BuildOrReplay(resuming, run_file);
+  return NextOrStop();
+}
+
+// The initial manifold; on resume, the checkpointed batches inserted again, each of which must
+// insert exactly what it did in the run.
+void RunLifecycle::BuildOrReplay(bool resuming, const std::string& run_file) {
+  const Scene& scene = record_.scene;
+  manifold_ =
+      std::make_unique<DelaunayManifold>(ManifoldCamerasFromScene(scene), options_.manifold);
+  Timer build;
+  const BuildStats stats = manifold_->Build(RayPointsFromScene(scene));
+  const double build_s = build.Seconds();
+  spdlog::info("initial manifold: {} points ({} Steiner), {} cells, {} outside; {:.2f} s",
+               stats.points, stats.steiner_points, stats.cells, stats.outside_cells, build_s);
+  if (!resuming) {
+    WriteInitial(stats, build_s);
+    return;
+  }
+  for (int i = 0; i < record_.completed_iterations(); ++i) {
+    Timer replay;
+    const InsertionStats s = manifold_->Insert(record_.batches[i]);
+    spdlog::info("replayed iteration {}: {} of {} points inserted, {:.2f} s", i + 1, s.inserted,
+                 s.requested, replay.Seconds());
+    if (s.inserted != record_.iterations[i + 1].points_inserted) {
+      throw InputError(fmt::format(
+          "{}: replaying iteration {} inserted {} points where the run inserted {}: the "
+          "manifold code differs from the one that made the checkpoint",
+          run_file, i + 1, s.inserted, record_.iterations[i + 1].points_inserted));
+    }
+  }
+  Extract();
+  if (!fs::exists(Path("initial.ply"))) {
+    spdlog::warn("initial.ply is missing; it is not rewritten on resume");
+  }
+}
+
+// initial.ply, initial_surface.ply, iteration 0's statistics and the first checkpoint.
+void RunLifecycle::WriteInitial(const BuildStats& stats, double build_s) {
+  const Scene& scene = record_.scene;
+  Timer extract;
+  Extract();
+  if (mesh_.faces.empty()) {
+    throw InputError(options_.input +
+                     ": the initial manifold is empty: no cell reached the "
+                     "free-space threshold (check the points' visibility and "
+                     "--manifold.free-threshold)");
+  }
+  WriteMesh(mesh_, Path("initial.ply"));
+  WriteMesh(surface_, Path("initial_surface.ply"));
+  IterationStats row;
+  row.iteration = 0;
+  row.points_found = static_cast<int64_t>(scene.points.size());
+  row.points_inserted = stats.points - stats.merged_duplicates;
+  row.discarded_duplicate = stats.merged_duplicates;
+  row.vertices = static_cast<int64_t>(mesh_.NumVertices());
+  row.faces = static_cast<int64_t>(mesh_.NumFaces());
+  row.outside_cells = stats.outside_cells;
+  row.seconds_insert = build_s;
+  row.seconds_extract = extract.Seconds();
+  row.seconds_total = build_s + row.seconds_extract;
+  record_.iterations.push_back(row);
+  Checkpoint();
+  spdlog::info("initial mesh: {} vertices, {} faces -> {}", mesh_.NumVertices(), mesh_.NumFaces(),
+               Path("initial.ply"));
+}
+
+StepOutcome RunLifecycle::Integrate(const InsertionBatch& found, const SweepRound& round) {
+  const int iteration = record_.completed_iterations() + 1;
+  std::vector<RayPoint> batch = found.Sorted();
+  Timer insert;
+  const InsertionStats s = manifold_->Insert(batch);
+  const double insert_s = insert.Seconds();
+  Timer extract;
+  Extract();
+  if (options_.run.save_iteration_meshes) {
+    WriteMesh(mesh_, Path(fmt::format("iteration_{:02d}.ply", iteration)));
+  }
+  IterationStats row;
+  row.iteration = static_cast<int32_t>(iteration);
+  row.jobs = round.jobs;
+  row.jobs_bad = round.jobs_bad;
+  row.jobs_requeued = round.jobs_requeued;
+  row.cameras_skipped = round.cameras_skipped;
+  row.points_found = static_cast<int64_t>(batch.size());
+  row.points_inserted = s.inserted;
+  row.discarded_conflict = s.discarded_conflict;
+  row.discarded_duplicate = s.discarded_duplicate;
+  row.discarded_outside = s.discarded_outside;
+  row.vertices = static_cast<int64_t>(mesh_.NumVertices());
+  row.faces = static_cast<int64_t>(mesh_.NumFaces());
+  row.outside_cells = s.outside_cells;
+  row.seconds_jobs = round.seconds_jobs;
+  row.seconds_sweep = round.seconds_sweep;
+  row.seconds_insert = insert_s;
+  row.seconds_extract = extract.Seconds();
+  row.workers = static_cast<int32_t>(round.jobs_by_worker.size());
+  for (const auto& [name, jobs] : round.jobs_by_worker) {
+    WorkerIterationStats w;
+    w.iteration = row.iteration;
+    w.worker = name.substr(0, 255);
+    w.jobs = jobs;
+    w.points = round.points_by_worker.count(name) ? round.points_by_worker.at(name) : 0;
+    w.seconds_kernel =
+        round.kernel_seconds_by_worker.count(name) ? round.kernel_seconds_by_worker.at(name) : 0;
+    row.seconds_kernel += w.seconds_kernel;
+    record_.workers.push_back(w);
+  }
+  row.seconds_total =
+      row.seconds_jobs + row.seconds_sweep + row.seconds_insert + row.seconds_extract;
+  record_.batches.push_back(std::move(batch));
+  record_.iterations.push_back(row);
+  Checkpoint();
+  const IterationStats& done = record_.iterations.back();
+  spdlog::info(
+      "iteration {} done: {} points found, {} inserted, {} discarded; mesh {} vertices, {} "
+      "faces; jobs {:.2f} s, sweep {:.2f} s, insert {:.2f} s, extract {:.2f} s, checkpoint "
+      "{:.2f} s",
+      iteration, done.points_found, done.points_inserted,
+      done.discarded_conflict + done.discarded_duplicate + done.discarded_outside, done.vertices,
+      done.faces, done.seconds_jobs, done.seconds_sweep, done.seconds_insert, done.seconds_extract,
+      done.seconds_checkpoint);
+  return NextOrStop();
+}
+
+void RunLifecycle::Extract() {
+  SurfaceInfo info;
+  mesh_ = manifold_->ExtractSurface(&info);
+  surface_ = SurfaceWithoutSteinerFaces(mesh_, info);
+}
+
+// Writes run.h5 and summary.json; the time it took goes into the last row (and reaches the file
+// with the next checkpoint).
+void RunLifecycle::Checkpoint() {
+  Timer timer;
+  WriteRunFile(record_, Path("run.h5"));
+  record_.iterations.back().seconds_checkpoint = timer.Seconds();
+  record_.iterations.back().seconds_total += timer.Seconds();
+  WriteSummaryJson(record_, SummaryInfo(record_.stop_reason.empty() ? "running" : "finished"),
+                   Path("summary.json"));
+}
+
+RunSummaryInfo RunLifecycle::SummaryInfo(const std::string& status) const {
+  RunSummaryInfo info;
+  info.status = status;
+  info.input = options_.input;
+  info.seconds = process_timer_.Seconds();
+  info.resumed = resumed_;
+  if (status == "finished") {
+    info.final_mesh = final_.final_mesh;
+    info.final_is_closed_manifold = final_.final_is_closed_manifold;
+    info.mesh_check = final_check_;
+  }
+  return info;
+}
+
+void RunLifecycle::WriteInterruptedSummary() const {
+  if (record_loaded_) WriteSummaryJson(record_, SummaryInfo("interrupted"), Path("summary.json"));
+}
+
+StepOutcome RunLifecycle::NextOrStop() {
+  StepOutcome outcome;
+  const int done = record_.completed_iterations();
+  std::string reason;
+  if (done >= 1 && record_.iterations.back().points_inserted == 0) {
+    reason = "converged: no new point was inserted";
+  } else if (done >= options_.run.max_iterations) {
+    reason = fmt::format("reached --max-iterations {}", options_.run.max_iterations);
+  } else {
+    Timer timer;
+    outcome.jobs = BuildIterationJobs(record_.scene, neighbours_, surface_, *catalog_,
+                                      static_cast<uint32_t>(done + 1), session_id_, job_options_);
+    outcome.seconds_jobs = timer.Seconds();
+    for (const std::string& skipped : outcome.jobs.skipped) {
+      spdlog::info("iteration {}: no job for {}", done + 1, skipped);
+    }
+    if (outcome.jobs.jobs.empty()) reason = "no camera has a job (no neighbours or no face)";
+  }
+  if (reason.empty()) return outcome;
+  Finish(reason);
+  outcome.stop = true;
+  return outcome;
+}
+
+void RunLifecycle::Finish(const std::string& reason) {
+  const std::string path = Path("final.ply");
+  WriteMesh(mesh_, path);
+  WriteMesh(surface_, Path("final_surface.ply"));
+  MeshCheckOptions check;
+  check.check_self_intersections = false;  // exact but slow on large meshes
+  const MeshReport report = CheckMesh(mesh_, check);
+  const std::vector<std::string> problems = report.Problems();
+  final_check_ = report.is_closed_manifold
+                     ? "closed, oriented 2-manifold (self-intersections not checked)"
+                     : "not a closed 2-manifold: " + (problems.empty() ? "" : problems[0]);
+  final_.status = "finished";
+  final_.stop_reason = reason;
+  final_.final_mesh = path;
+  final_.vertices = static_cast<int64_t>(mesh_.NumVertices());
+  final_.faces = static_cast<int64_t>(mesh_.NumFaces());
+  final_.final_is_closed_manifold = report.is_closed_manifold;
+  record_.stop_reason = reason;
+  Checkpoint();
+  spdlog::info("finished after {} iterations ({}): {} vertices, {} faces -> {}; {}",
+               record_.completed_iterations(), reason, final_.vertices, final_.faces, path,
+               final_check_);
+}
+
+}  // namespace ms

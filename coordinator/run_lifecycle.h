@@ -1,0 +1,102 @@
+// The life of a coordinator run without the network: prepare (build the initial manifold, or
+// resume by replaying the checkpointed batches), integrate each iteration's batch (insert,
+// extract, statistics, checkpoint), and finish (final meshes, summary). The coordinator's
+// network loop runs these steps on a background thread, one at a time; tests run them directly.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "base/log.h"
+#include "coordinator/coordinator.h"
+#include "coordinator/image_catalog.h"
+#include "coordinator/insertion_batch.h"
+#include "coordinator/job_builder.h"
+#include "coordinator/run_store.h"
+#include "manifold/delaunay_manifold.h"
+#include "mesh/mesh.h"
+
+namespace ms {
+
+// What the network loop measured while an iteration's jobs were out.
+struct SweepRound {
+  int32_t jobs = 0;
+  int32_t jobs_bad = 0;       // refused by the kernel (no points from that camera)
+  int32_t jobs_requeued = 0;  // handed out again (lease expired, worker died or failed)
+  int32_t cameras_skipped = 0;
+  double seconds_jobs = 0;   // building the jobs
+  double seconds_sweep = 0;  // first job out -> last result in
+  std::map<std::string, int64_t> jobs_by_worker;
+  std::map<std::string, int64_t> points_by_worker;
+  std::map<std::string, double> kernel_seconds_by_worker;
+};
+
+// What a step hands back: the next iteration's jobs, or the end of the run.
+struct StepOutcome {
+  bool stop = false;
+  IterationJobs jobs;  // unless stop
+  double seconds_jobs = 0;
+};
+
+class RunLifecycle {
+ public:
+  // options.Check() must have passed; session_id goes into every job.
+  RunLifecycle(const CoordinatorOptions& options, uint64_t session_id);
+  RunLifecycle(const RunLifecycle&) = delete;
+  RunLifecycle& operator=(const RunLifecycle&) = delete;
+
+  // Builds the initial manifold and writes initial.ply, or resumes from output_dir/run.h5 by
+  // replaying its batches (checking each inserts what it did); then the first jobs, or the end
+  // (the run is then finished). Throws InputError for bad input or a checkpoint of another run.
+  StepOutcome Prepare();
+  // An iteration's sweep is over: inserts `batch`, extracts the surface, records the
+  // statistics, checkpoints; then the next jobs, or the end.
+  StepOutcome Integrate(const InsertionBatch& batch, const SweepRound& round);
+
+  // Safe to call while a step runs: the image catalog once Prepare has hashed the images (it
+  // does not change afterwards), else null.
+  const ImageCatalog* catalog() const { return catalog_ready_ ? catalog_.get() : nullptr; }
+
+  // Between steps only.
+  int completed_iterations() const { return record_.completed_iterations(); }
+  int num_views() const { return static_cast<int>(record_.scene.views.size()); }
+  const CoordinatorResult& final_result() const { return final_; }
+  const Mesh& mesh() const { return mesh_; }  // the closed manifold
+  // Writes summary.json for a run stopped early (if the run's record got as far as loading).
+  void WriteInterruptedSummary() const;
+
+ private:
+  std::string Path(const std::string& name) const;
+  void BuildOrReplay(bool resuming, const std::string& run_file);
+  void WriteInitial(const BuildStats& stats, double build_s);
+  void Extract();
+  void Checkpoint();
+  StepOutcome NextOrStop();
+  void Finish(const std::string& reason);
+  RunSummaryInfo SummaryInfo(const std::string& status) const;
+
+  CoordinatorOptions options_;
+  uint64_t session_id_;
+  JobBuildOptions job_options_;
+  Timer process_timer_;
+
+  RunRecord record_;
+  std::atomic<bool> record_loaded_{false};
+  bool resumed_ = false;
+  std::unique_ptr<ImageCatalog> catalog_;
+  std::atomic<bool> catalog_ready_{false};
+  std::vector<std::vector<int>> neighbours_;
+  std::unique_ptr<DelaunayManifold> manifold_;
+  // The closed manifold, and the surface proper (without the Steiner faces that close it): what
+  // the sweep jobs are built from (docs/manifold.md).
+  Mesh mesh_;
+  Mesh surface_;
+  CoordinatorResult final_;
+  std::string final_check_;
+};
+
+}  // namespace ms

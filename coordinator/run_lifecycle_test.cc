@@ -1,0 +1,161 @@
+// The run's steps without a transport: prepare, integrate, checkpoint, resume by replay, finish.
+#include "coordinator/run_lifecycle.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "mesh/mesh_checker.h"
+#include "mesh/mesh_io.h"
+#include "scene/scene_io.h"
+#include "scene/scene_testing.h"
+
+namespace ms {
+namespace {
+
+using testing::ExpectInputError;
+using testing::TempDir;
+
+// A point on a sphere of radius 0.4 around the origin, direction (theta, phi).
+Eigen::Vector3d OnSphere(double theta, double phi) {
+  return 0.4 * Eigen::Vector3d(std::cos(theta) * std::cos(phi), std::sin(theta) * std::cos(phi),
+                               std::sin(phi));
+}
+
+// The cameras that see p: in front, projecting inside the image, facing the sphere's outside.
+std::vector<int32_t> CamerasSeeing(const Scene& scene, const Eigen::Vector3d& p) {
+  std::vector<int32_t> cameras;
+  for (size_t v = 0; v < scene.views.size(); ++v) {
+    Eigen::Vector2d px;
+    const Eigen::Vector3d to_camera = scene.views[v].Center() - p;
+    if (scene.views[v].Project(p, &px) && p.dot(to_camera) > 0) {
+      cameras.push_back(static_cast<int32_t>(v));
+    }
+  }
+  return cameras;
+}
+
+// The three views of MakeSyntheticScene looking at the side of a sphere that faces them.
+std::string WriteSphereScene(const TempDir& dir) {
+  Scene scene = testing::MakeSyntheticScene(dir.path().string());
+  scene.points.clear();
+  for (int i = 0; i < 12; ++i) {
+    for (int j = 0; j < 8; ++j) {
+      const Eigen::Vector3d p = OnSphere(-0.6 + 0.2 * i, -0.7 + 0.2 * j);
+      ScenePoint point;
+      point.position = p;
+      for (int32_t v : CamerasSeeing(scene, p)) {
+        Eigen::Vector2d px;
+        scene.views[v].Project(p, &px);
+        point.observations.push_back({v, static_cast<float>(px.x()), static_cast<float>(px.y())});
+      }
+      if (point.observations.size() >= 2) scene.points.push_back(point);
+    }
+  }
+  const std::string path = dir / "scene.h5";
+  WriteScene(scene, path, SceneFormat::kAuto);
+  return path;
+}
+
+// New points between the scene's, as a worker of camera `camera` would return them.
+InsertionBatch Batch(const std::string& scene_path, double shift) {
+  const Scene scene = ReadScene(scene_path);
+  InsertionBatch batch;
+  for (int camera = 0; camera < 3; ++camera) {
+    std::vector<FoundPoint> points;
+    for (int i = 0; i < 5; ++i) {
+      FoundPoint f;
+      f.camera = camera;
+      f.position = OnSphere(-0.5 + 0.2 * i + 0.07 * camera + shift, -0.4 + 0.3 * shift);
+      f.pixel_x = static_cast<float>(i);
+      for (int32_t c : CamerasSeeing(scene, f.position)) {
+        if (c != camera) f.cameras.push_back(c);
+      }
+      f.cameras.insert(f.cameras.begin(), camera);
+      points.push_back(f);
+    }
+    batch.Add(uint64_t{1} << 32 | static_cast<uint64_t>(camera), points);
+  }
+  return batch;
+}
+
+CoordinatorOptions Options(const std::string& scene, const std::string& output) {
+  CoordinatorOptions options;
+  options.input = scene;
+  options.output_dir = output;
+  options.run.max_iterations = 2;
+  return options;
+}
+
+TEST(RunLifecycle, ResumingReplaysTheCheckpointToTheSameMesh) {
+  const TempDir dir("lifecycle");
+  const std::string scene = WriteSphereScene(dir);
+  const CoordinatorOptions options = Options(scene, dir / "run");
+
+  RunLifecycle run(options, 42);
+  const StepOutcome first = run.Prepare();
+  ASSERT_FALSE(first.stop);
+  EXPECT_FALSE(first.jobs.jobs.empty());
+  EXPECT_EQ(first.jobs.jobs.front().session_id(), 42u);
+  EXPECT_EQ(run.completed_iterations(), 0);
+  EXPECT_TRUE(std::filesystem::exists(dir / "run/initial.ply"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "run/run.h5"));
+  const size_t initial_vertices = run.mesh().NumVertices();
+
+  SweepRound round;
+  round.jobs = static_cast<int32_t>(first.jobs.jobs.size());
+  round.jobs_by_worker["w1"] = round.jobs;
+  const StepOutcome second = run.Integrate(Batch(scene, 0.0), round);
+  ASSERT_FALSE(second.stop);
+  EXPECT_EQ(run.completed_iterations(), 1);
+  EXPECT_GT(run.mesh().NumVertices(), initial_vertices) << "no point of the batch was inserted";
+  const Mesh after_one = run.mesh();
+
+  // A coordinator restarted after iteration 1 rebuilds exactly that mesh.
+  CoordinatorOptions resume = options;
+  resume.run.resume = true;
+  RunLifecycle resumed(resume, 43);
+  const StepOutcome again = resumed.Prepare();
+  ASSERT_FALSE(again.stop);
+  EXPECT_EQ(resumed.completed_iterations(), 1);
+  EXPECT_EQ(resumed.mesh().vertices, after_one.vertices);
+  EXPECT_EQ(resumed.mesh().faces, after_one.faces);
+  EXPECT_EQ(again.jobs.jobs.front().session_id(), 43u);
+  EXPECT_EQ(again.jobs.jobs.front().iteration(), 2u);
+
+  // Iteration 2 reaches --max-iterations: the run finishes with a closed manifold.
+  const StepOutcome last = resumed.Integrate(Batch(scene, 0.1), round);
+  EXPECT_TRUE(last.stop);
+  EXPECT_EQ(resumed.final_result().stop_reason, "reached --max-iterations 2");
+  EXPECT_TRUE(resumed.final_result().final_is_closed_manifold);
+  const MeshReport report = CheckMesh(ReadMesh(dir / "run/final.ply"));
+  EXPECT_TRUE(report.is_closed_manifold);
+}
+
+TEST(RunLifecycle, AnExistingRunIsNeverOverwrittenOrResumedWithOtherOptions) {
+  const TempDir dir("lifecycle");
+  const std::string scene = WriteSphereScene(dir);
+  const CoordinatorOptions options = Options(scene, dir / "run");
+  RunLifecycle(options, 1).Prepare();
+
+  ExpectInputError([&] { RunLifecycle(options, 2).Prepare(); }, {"holds a run already", "--resume"});
+  CoordinatorOptions other = options;
+  other.run.resume = true;
+  other.manifold.w1 = 5;
+  ExpectInputError([&] { RunLifecycle(other, 3).Prepare(); }, {"run.h5", "other options"});
+}
+
+TEST(RunLifecycle, ABatchWithNothingNewEndsTheRun) {
+  const TempDir dir("lifecycle");
+  const std::string scene = WriteSphereScene(dir);
+  RunLifecycle run(Options(scene, dir / "run"), 1);
+  ASSERT_FALSE(run.Prepare().stop);
+  const StepOutcome outcome = run.Integrate(InsertionBatch(), SweepRound());
+  EXPECT_TRUE(outcome.stop);
+  EXPECT_EQ(run.final_result().stop_reason, "converged: no new point was inserted");
+  EXPECT_TRUE(std::filesystem::exists(dir / "run/final.ply"));
+}
+
+}  // namespace
+}  // namespace ms

@@ -1,0 +1,20 @@
+// The options of a coordinator run itself (iterations, outputs, progress, message size), one line
+// each: MS_OPTION(type, name, default, flag, help, bound). Top-level flags (--max-iterations).
+// Included by coordinator/coordinator.h only.
+
+MS_OPTION(bool, resume, false, "resume",
+          "continue the run in --output from its last checkpoint (run.h5); starts afresh if "
+          "there is none",
+          AnyValue())
+MS_OPTION(int, max_iterations, 15, "max-iterations",
+          "it_max: stop after this many sweep + insertion iterations", InRange(0, 1000))
+MS_OPTION(bool, save_iteration_meshes, false, "save-iterations",
+          "also write iteration_NN.ply after every iteration", AnyValue())
+MS_OPTION(double, progress_interval_s, 5, "progress-interval",
+          "seconds between progress lines while sweeping", Above(0))
+// A job carries the mesh the camera sees (24 bytes per vertex, 12 per face: a 1M-face visible
+// mesh is ~18 MiB); protobuf's own limit is 2 GiB.
+MS_OPTION(double, max_message_mb, 64, "max-message-mb",
+          "largest protocol message in MiB (jobs carry the visible mesh); larger ones are logged "
+          "and dropped",
+          InRange(0.0625, 2048))

@@ -1,0 +1,44 @@
+// The options of the mesh sweep (paper section 2.2, docs/sweep.md), one line each:
+//   MS_OPTION(type, name, default, flag, help, bound)
+// Included by sweep/sweep_options.h only (no include guard on purpose); the wire message
+// ms.wire.SweepOptions in proto/manisweep.proto has one field of the same name per line.
+
+// N: sweep positions k with -N/2 < k < N/2 (N = 20 gives k = -9..9, 19 swept meshes).
+MS_OPTION(int, num_offsets, 20, "num-offsets", "N: sweep offsets k with -N/2 < k < N/2",
+          InRange(1, 1000))
+// alpha: facet vertex v moves by alpha*k*|cos(theta)| along C's ray. The paper's 3 cm is 0.03
+// for a scene in metres; 0 derives it from the job (alpha_parallax_px).
+MS_OPTION(double, alpha, 0, "alpha",
+          "sweep step in scene units; 0 = auto from the parallax (0.03 = the paper's 3 cm in a "
+          "metric scene)",
+          AtLeast(0))
+// One automatic step moves a point at the job's median depth by this many pixels of parallax in
+// the neighbour images (pixels of the swept resolution).
+MS_OPTION(double, alpha_parallax_px, 1.0, "alpha-parallax-px",
+          "auto alpha: pixels of parallax in the neighbours per step at the median depth",
+          Above(0))
+// t_NCC: a tile's best pixel becomes a point only if its NCC is strictly above this.
+MS_OPTION(double, ncc_threshold, 0.98, "ncc-threshold", "t_NCC: keep tile winners above this",
+          InRange(-1, 1))
+MS_OPTION(double, gaussian_sigma_px, 8, "gaussian-sigma-px",
+          "sigma of the NCC's Gaussian window (swept-resolution pixels)", InRange(0.5, 100))
+// The image is split into round(W/size) x round(H/size) tiles (at least 1 x 1).
+MS_OPTION(int, tile_size_px, 100, "tile-size-px",
+          "tile size (swept-resolution pixels); one point per tile at most", AtLeast(1))
+// Images are gray in [0, 1]; 1e-4 is a standard deviation of 2.55/255.
+MS_OPTION(double, min_texture_variance, 1e-4, "min-texture-variance",
+          "textureless below this weighted variance (gray in [0, 1])", AtLeast(0))
+// The window is cut by the mesh's silhouette, the images' borders and occlusion.
+MS_OPTION(double, min_window_weight, 0.5, "min-window-weight",
+          "fraction of the Gaussian window that must be valid", InRangeOpenLow(0, 1))
+// A point is visible in a neighbour if its depth is at most the shadow map's times (1 + this).
+MS_OPTION(double, occlusion_tolerance, 0.01, "occlusion-tolerance",
+          "relative depth tolerance of the neighbours' shadow maps", AtLeast(0))
+// Images larger than this (longest side) are swept at a pyramid level, halving until they fit
+// (3072x2048 -> 1536x1024).
+MS_OPTION(int, max_image_dimension, 1600, "max-image-dimension",
+          "halve images until their longest side fits (0 = full size)", AtLeast(0))
+// -1 = choose from max_image_dimension; L = images and intrinsics scaled by 2^-L.
+MS_OPTION(int, pyramid_level, -1, "pyramid-level",
+          "sweep at this pyramid level (-1 = from max-image-dimension, 0 = full size)",
+          InRange(-1, 12))

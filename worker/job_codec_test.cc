@@ -1,0 +1,47 @@
+// The sweep options travel field by field: the struct (sweep/sweep_options_def.h) and the wire
+// message (proto/manisweep.proto) must agree, and a job's options arrive as they were sent.
+#include <gtest/gtest.h>
+
+#include "proto/manisweep.pb.h"
+#include "proto/options_codec.h"
+#include "sweep/sweep_options.h"
+
+namespace ms {
+namespace {
+
+TEST(JobCodec, SweepOptionsAndTheirWireMessageAgreeFieldByField) {
+  const std::vector<std::string> problems = OptionGroupMismatches<SweepOptions>(wire::SweepOptions());
+  EXPECT_TRUE(problems.empty()) << problems.front();
+}
+
+TEST(JobCodec, AMessageOfAnotherGroupIsReportedAsDisagreeing) {
+  // The check itself can fail.
+  const std::vector<std::string> problems = OptionGroupMismatches<SweepOptions>(wire::Intrinsics());
+  ASSERT_FALSE(problems.empty());
+  EXPECT_EQ(problems.front(), "ms.wire.Intrinsics has no field num_offsets");
+  EXPECT_EQ(problems.back(), "ms.wire.Intrinsics.k3 is no option of the group");
+}
+
+TEST(JobCodec, SweepOptionsRoundTripThroughTheWire) {
+  SweepOptions sent;
+  sent.num_offsets = 7;
+  sent.alpha = 0.25;
+  sent.alpha_parallax_px = 1.5;
+  sent.ncc_threshold = 0.9;
+  sent.gaussian_sigma_px = 3;
+  sent.tile_size_px = 17;
+  sent.min_texture_variance = 2e-4;
+  sent.min_window_weight = 0.75;
+  sent.occlusion_tolerance = 0.02;
+  sent.max_image_dimension = 800;
+  sent.pyramid_level = 2;
+  wire::SweepOptions message;
+  OptionsToWire(sent, &message);
+  EXPECT_EQ(message.num_offsets(), 7);
+  EXPECT_EQ(message.pyramid_level(), 2);
+  const SweepOptions received = OptionsFromWire<SweepOptions>(message);
+  EXPECT_EQ(OptionGroupText(received), OptionGroupText(sent));
+}
+
+}  // namespace
+}  // namespace ms
