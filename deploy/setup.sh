@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 
 PACKAGES=(
   # toolchain
-  build-essential cmake ninja-build ccache pkg-config git
+  build-essential cmake ninja-build ccache pkg-config git clang-format
   # libraries
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libeigen3-dev libopencv-dev
   libzmq3-dev cppzmq-dev libprotobuf-dev protobuf-compiler libhdf5-dev hdf5-tools
