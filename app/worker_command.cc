@@ -10,6 +10,7 @@
 #include <string>
 
 #include "app/commands.h"
+#include "app/option_registration.h"
 #include "app/process_control.h"
 #include "base/error.h"
 #include "base/log.h"
@@ -33,15 +34,17 @@ struct WorkerCommandOptions {
 
 void RunWorker(WorkerCommandOptions& options) {
   if (!(options.max_message_mb >= 0.0625 && options.max_message_mb <= 2048)) {
-    throw InputError("--max-message-mb: must be in [1/16, 2048]");
+    throw InputError(fmt::format("--max-message-mb must be in [0.0625, 2048], got {}",
+                                 options.max_message_mb));
   }
-  if (!(options.image_cache_mb >= 0)) throw InputError("--image-cache-mb: must be >= 0");
-  if (options.threads < 0) throw InputError("--threads: must be >= 0");
+  if (!(options.image_cache_mb >= 0)) {
+    throw InputError(fmt::format("--image-cache-mb must be >= 0, got {}", options.image_cache_mb));
+  }
+  if (options.threads < 0) {
+    throw InputError(fmt::format("--threads must be >= 0, got {}", options.threads));
+  }
   WorkerOptions& w = options.worker;
-  w.limits.max_message_bytes =
-      static_cast<uint64_t>(std::llround(options.max_message_mb * 1048576));
-  w.limits.image_chunk_bytes =
-      std::min<uint64_t>(w.limits.image_chunk_bytes, w.limits.max_message_bytes / 2);
+  w.limits = WireLimitsFromMiB(options.max_message_mb);
   w.cache.memory_bytes = static_cast<uint64_t>(options.image_cache_mb * 1048576);
   w.Check();
   if (options.threads > 0) cv::setNumThreads(options.threads);
@@ -81,24 +84,7 @@ void RegisterWorkerCommand(CLI::App& app) {
                   fmt::format("sweep kernel: {} (auto = the best available)",
                               fmt::join(SweepKernelNames(), ", ")))
       ->capture_default_str();
-  cmd->add_option("--id", options->worker.id,
-                  "name in the coordinator's logs and statistics (default host:pid)");
   cmd->add_option("--threads", options->threads, "threads for the kernel (0 = all cores)")
-      ->capture_default_str();
-  cmd->add_option("--heartbeat-interval", options->worker.heartbeat_interval_s,
-                  "seconds between heartbeats (use the coordinator's value)")
-      ->capture_default_str();
-  cmd->add_option("--liveness", options->worker.liveness,
-                  "the coordinator is presumed gone after this many silent heartbeat intervals")
-      ->capture_default_str();
-  cmd->add_option("--reconnect-initial", options->worker.reconnect_initial_s,
-                  "first back-off before reconnecting (seconds); doubles each time")
-      ->capture_default_str();
-  cmd->add_option("--reconnect-max", options->worker.reconnect_max_s,
-                  "longest back-off between reconnections (seconds)")
-      ->capture_default_str();
-  cmd->add_option("--give-up-after", options->worker.give_up_after_s,
-                  "exit with an error after this many seconds without a coordinator")
       ->capture_default_str();
   cmd->add_option("--cache-dir", options->worker.cache.directory,
                   "where images fetched from the coordinator are cached (default "
@@ -114,9 +100,7 @@ void RegisterWorkerCommand(CLI::App& app) {
   cmd->add_option("--curve-secret-key", options->curve_secret_key,
                   "CURVE: this worker's key pair (NAME.key_secret); its NAME.key must be in the "
                   "coordinator's --curve-public-keys");
-  cmd->add_option("--debug.delay-s", options->worker.debug_delay_s,
-                  "testing: sleep this long before each sweep")
-      ->capture_default_str();
+  AddOptionGroup(cmd, &options->worker);
   cmd->callback([options] { RunWorker(*options); });
 }
 

@@ -15,6 +15,7 @@
 #include "mesh/visible_mesh.h"
 #include "scene/view_selection.h"
 #include "sweep/sweep_options.h"
+#include "worker/worker_process.h"
 
 namespace ms {
 namespace {
@@ -83,6 +84,10 @@ TEST(CommandOptions, ManifoldTakesEveryManifoldOption) {
 
 TEST(CommandOptions, SweepTakesEverySweepAndNeighbourOption) {
   ExpectHelpListsEveryFlag("sweep", FlagsOf<NeighbourOptions, SweepOptions>());
+}
+
+TEST(CommandOptions, WorkerTakesEveryWorkerOption) {
+  ExpectHelpListsEveryFlag("worker", FlagsOf<WorkerOptions>());
 }
 
 TEST(CommandOptions, ReconstructAcceptsTheGradedSteinerOptionDocsManifoldMdDocuments) {

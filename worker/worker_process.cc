@@ -38,16 +38,10 @@ ImageRef RefFromWire(const wire::ImageRef& w) {
 }  // namespace
 
 void WorkerOptions::Check() const {
-  if (!(heartbeat_interval_s >= 0.01 && heartbeat_interval_s <= 3600)) {
-    throw InputError("heartbeat_interval_s: must be in [0.01, 3600] seconds");
-  }
-  if (liveness < 2 || liveness > 1000) throw InputError("liveness: must be in [2, 1000]");
-  if (!(reconnect_initial_s > 0) || !(reconnect_max_s >= reconnect_initial_s)) {
-    throw InputError("reconnect_initial_s / reconnect_max_s: need 0 < initial <= max");
-  }
-  if (!(give_up_after_s > 0)) throw InputError("give_up_after_s: must be positive");
-  if (!(debug_delay_s >= 0 && debug_delay_s <= 3600)) {
-    throw InputError("debug_delay_s: must be in [0, 3600] seconds");
+  CheckOptionGroup(*this);
+  if (reconnect_max_s < reconnect_initial_s) {
+    throw InputError(fmt::format("--reconnect-max must be >= --reconnect-initial ({}), got {}",
+                                 reconnect_initial_s, reconnect_max_s));
   }
   cache.Check();
   limits.Check();

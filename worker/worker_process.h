@@ -12,27 +12,29 @@
 
 #include "proto/transport.h"
 #include "proto/wire.h"
+#include "base/options.h"
 #include "worker/image_cache.h"
 #include "sweep/sweep_kernel.h"
 
 namespace ms {
 
 struct WorkerOptions {
-  std::string id;  // the worker's name in the coordinator's logs and statistics ("" = host:pid)
-  // Heartbeat interval and liveness (the coordinator is presumed gone after liveness x
-  // interval without a message). Use the coordinator's values.
-  double heartbeat_interval_s = 1.0;
-  int liveness = 5;
-  // Reconnection back-off: first wait, doubling up to the maximum.
-  double reconnect_initial_s = 0.5;
-  double reconnect_max_s = 16;
-  // Give up (exit with an error) after this long without hearing from a coordinator.
-  double give_up_after_s = 300;
+  static constexpr const char* kOptionGroup = "";
+#define MS_OPTION MS_OPTION_FIELD
+#include "worker/worker_options_def.h"
+#undef MS_OPTION
+  // Set from --cache-dir, --image-cache-mb and --max-message-mb by the command.
   ImageCacheOptions cache;
   WireLimits limits;
-  // Debugging and tests: sleep this long before each sweep (to catch a worker mid-job).
-  double debug_delay_s = 0;
-  void Check() const;  // throws InputError naming the field
+
+  // visit(value, spec) for the declared options (not cache, limits).
+  template <typename Self, typename Visitor>
+  static void ForEachOption(Self&& self, Visitor&& visit) {
+#define MS_OPTION MS_OPTION_VISIT
+#include "worker/worker_options_def.h"
+#undef MS_OPTION
+  }
+  void Check() const;  // throws InputError naming the flag
 };
 
 struct WorkerSummary {

@@ -1,0 +1,21 @@
+// The options of a worker process, one line each: MS_OPTION(type, name, default, flag, help,
+// bound). Top-level flags (--liveness). Included by worker/worker_process.h only.
+
+MS_OPTION(std::string, id, "", "id",
+          "name in the coordinator's logs and statistics (default host:pid)", AnyValue())
+// The coordinator is presumed gone after liveness x interval without a message.
+MS_OPTION(double, heartbeat_interval_s, 1.0, "heartbeat-interval",
+          "seconds between heartbeats (use the coordinator's value)", InRange(0.01, 3600))
+MS_OPTION(int, liveness, 5, "liveness",
+          "the coordinator is presumed gone after this many silent heartbeat intervals",
+          InRange(2, 1000))
+MS_OPTION(double, reconnect_initial_s, 0.5, "reconnect-initial",
+          "first back-off before reconnecting (seconds); doubles each time", Above(0))
+MS_OPTION(double, reconnect_max_s, 16, "reconnect-max",
+          "longest back-off between reconnections (seconds; at least --reconnect-initial)",
+          Above(0))
+MS_OPTION(double, give_up_after_s, 300, "give-up-after",
+          "exit with an error after this many seconds without a coordinator", Above(0))
+// Debugging and tests: catch a worker in the middle of a job.
+MS_OPTION(double, debug_delay_s, 0, "debug.delay-s", "testing: sleep this long before each sweep",
+          InRange(0, 3600))
