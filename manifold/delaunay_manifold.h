@@ -27,6 +27,8 @@ struct ManifoldCamera {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // world -> camera
   // Normalised image-coordinate extent of the camera's view (x/z, y/z), e.g. from intrinsics.
   double u_min = -1, u_max = 1, v_min = -1, v_max = 1;
+  // A pixel's footprint per unit of depth (1 / focal length in pixels); 0 = unknown.
+  double pixel_angle = 0;
 };
 
 // A point and the cameras that see it (its viewing rays run camera centre -> point).

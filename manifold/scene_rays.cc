@@ -1,5 +1,7 @@
 #include "manifold/scene_rays.h"
 
+#include <cmath>
+
 namespace ms {
 
 std::vector<ManifoldCamera> ManifoldCamerasFromScene(const Scene& scene) {
@@ -14,6 +16,7 @@ std::vector<ManifoldCamera> ManifoldCamerasFromScene(const Scene& scene) {
     camera.u_max = (k.width - k.cx) / k.fx;
     camera.v_min = (0 - k.cy) / k.fy;
     camera.v_max = (k.height - k.cy) / k.fy;
+    camera.pixel_angle = 1.0 / std::sqrt(k.fx * k.fy);
     cameras.push_back(camera);
   }
   return cameras;
