@@ -322,7 +322,7 @@ void MeasureFaces(const Mesh& mesh, const std::vector<uint8_t>& usable, FloatRob
       const Eigen::Vector3d ab = mesh.vertices[b] - mesh.vertices[a];
       const Eigen::Vector3d ac = mesh.vertices[c] - mesh.vertices[a];
       const double length = ab.norm();
-      if (length < shortest) {
+      if (length < shortest || !r->shortest_edge) {
         shortest = length;
         r->shortest_edge = length;
         r->shortest_edge_vertices = {std::min(a, b), std::max(a, b)};
@@ -330,7 +330,7 @@ void MeasureFaces(const Mesh& mesh, const std::vector<uint8_t>& usable, FloatRob
       }
       // atan2 of |sin| and cos: accurate for tiny angles, where acos is not.
       const double angle = std::atan2(ab.cross(ac).norm(), ab.dot(ac)) * (180.0 / M_PI);
-      if (angle < smallest) {
+      if (angle < smallest || !r->smallest_angle_degrees) {
         smallest = angle;
         r->smallest_angle_degrees = angle;
         r->smallest_angle_face = static_cast<int64_t>(f);
@@ -488,7 +488,10 @@ FloatRobustnessReport CheckFloatRobustness(const Mesh& mesh, const std::vector<u
   r.diagonal = (lo.array() <= hi.array()).all() ? (hi - lo).norm() : 0.0;
   r.tolerance = options.absolute_tolerance > 0 ? options.absolute_tolerance
                                                : options.relative_tolerance * r.diagonal;
-  r.relative_tolerance = r.diagonal > 0 ? r.tolerance / r.diagonal : 0.0;
+  r.relative_tolerance =
+      options.absolute_tolerance > 0
+          ? (r.diagonal > 0 && std::isfinite(r.diagonal) ? r.tolerance / r.diagonal : 0.0)
+          : options.relative_tolerance;
 
   Timer timer;
   MeasureFaces(mesh, usable, &r);

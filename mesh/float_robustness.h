@@ -33,7 +33,7 @@ struct FloatRobustnessReport {
   bool face_pairs_checked = false;
   double diagonal = 0;            // bounding-box diagonal of the vertices of usable faces
   double tolerance = 0;           // absolute (mesh units), as used
-  double relative_tolerance = 0;  // tolerance / diagonal (0 when the diagonal is 0)
+  double relative_tolerance = 0;  // as given, or tolerance / diagonal for an absolute one
 
   // Shortest edge of a face with three distinct indices, and the face it was seen in.
   std::optional<double> shortest_edge;
