@@ -55,8 +55,8 @@ void RegisterCheckMeshCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "check-mesh",
       "Check that a mesh file (.ply/.obj) is a closed, oriented 2-manifold without "
-      "self-intersections. Reads only the file. Exit 0: valid; 3: readable but not valid; "
-      "2: unreadable.");
+      "self-intersections, exactly and in double precision. Reads only the file. Exit 0: valid; "
+      "3: readable but not valid; 2: unreadable.");
   cmd->add_option("mesh", options->mesh, "mesh file (.ply or .obj)")->required();
   cmd->add_flag("--allow-boundary", options->check.allow_boundary,
                 "accept a manifold with boundary (open fans) as valid")
@@ -65,7 +65,19 @@ void RegisterCheckMeshCommand(CLI::App& app) {
       "--json", options->json,
       "also write the report as JSON to this file ('-': stdout, the table then goes to stderr)");
   cmd->add_flag("--no-self-intersections", options->no_self_intersections,
-                "skip the exact self-intersection test (the only slow check)")
+                "skip every face-pair test: the exact self-intersection test and the "
+                "floating-point close-pair and intersection tests (the only slow checks)")
+      ->capture_default_str();
+  cmd->add_option("--float-tolerance", options->check.float_tolerance,
+                  "floating-point robustness: vertices, and faces sharing no vertex, closer than "
+                  "this times the bounding-box diagonal make the mesh not valid")
+      ->capture_default_str();
+  cmd->add_option("--float-tolerance-abs", options->check.float_tolerance_abs,
+                  "the same tolerance in mesh units; > 0 replaces --float-tolerance")
+      ->capture_default_str();
+  cmd->add_flag("--allow-float-issues", options->check.allow_float_issues,
+                "report near-coincident vertices, close face pairs and double-precision "
+                "intersections, but accept them as valid")
       ->capture_default_str();
   cmd->add_option("--max-examples", options->check.max_examples,
                   "indices listed per kind of problem")

@@ -218,6 +218,22 @@ std::string FormatPairs(const std::vector<std::array<int64_t, 2>>& pairs) {
   return s;
 }
 
+FloatRobustnessOptions FloatOptions(const MeshCheckOptions& options) {
+  FloatRobustnessOptions f;
+  f.relative_tolerance = options.float_tolerance;
+  f.absolute_tolerance = options.float_tolerance_abs;
+  f.check_face_pairs = options.check_self_intersections;
+  f.max_examples = options.max_examples;
+  f.max_pairs = options.max_self_intersections;
+  return f;
+}
+
+// "1.2e-07 (3.4e-08 of the diagonal)".
+std::string WithRelative(double value, double diagonal) {
+  return diagonal > 0 ? fmt::format("{:.3g} ({:.2g} of the diagonal)", value, value / diagonal)
+                      : fmt::format("{:.3g}", value);
+}
+
 }  // namespace
 
 void MeshCheckOptions::Check() const {
@@ -225,6 +241,7 @@ void MeshCheckOptions::Check() const {
   if (max_self_intersections < 1) {
     throw InputError("mesh check: max_self_intersections must be >= 1");
   }
+  FloatOptions(*this).Check();
 }
 
 MeshReport CheckMesh(const Mesh& mesh, const MeshCheckOptions& options) {
@@ -484,12 +501,22 @@ MeshReport CheckMesh(const Mesh& mesh, const MeshCheckOptions& options) {
     FindSelfIntersections(mesh, points, state, zero_area, options, &r);
   }
 
+  // --- Floating-point robustness (double precision, mesh/float_robustness.h). --------------
+  {
+    std::vector<uint8_t> usable(nf);
+    for (int64_t f = 0; f < nf; ++f) usable[f] = state[f] != kInvalid;
+    r.float_robustness = CheckFloatRobustness(mesh, usable, FloatOptions(options));
+  }
+  r.allow_float_issues = options.allow_float_issues;
+  r.is_float_robust = r.float_robustness.IsRobust();
+
   const bool common = nf > 0 && r.num_invalid_faces == 0 && r.num_non_manifold_edges == 0 &&
                       r.num_non_manifold_vertices == 0 && r.num_inconsistent_edges == 0 &&
                       r.num_degenerate_faces == 0 && r.num_duplicate_faces == 0 &&
                       r.num_self_intersections == 0;
   r.is_closed_manifold = common && r.num_boundary_edges == 0 && r.num_boundary_vertices == 0;
-  r.is_valid = options.allow_boundary ? common : r.is_closed_manifold;
+  r.is_valid = (options.allow_boundary ? common : r.is_closed_manifold) &&
+               (r.is_float_robust || options.allow_float_issues);
   return r;
 }
 
@@ -533,6 +560,30 @@ std::vector<std::string> MeshReport::Problems() const {
                             self_intersections_truncated ? "at least " : "", num_self_intersections,
                             FormatPairs(self_intersection_examples)));
   }
+  if (!allow_float_issues) {
+    const FloatRobustnessReport& fr = float_robustness;
+    const std::string tolerance = WithRelative(fr.tolerance, fr.diagonal);
+    if (fr.num_near_vertex_pairs > 0) {
+      p.push_back(fmt::format(
+          "{}{} pairs of distinct vertices at most {} apart (e.g. {}): near-coincident in "
+          "floating point",
+          fr.near_vertex_pairs_truncated ? "at least " : "", fr.num_near_vertex_pairs, tolerance,
+          FormatEdges(fr.near_vertex_examples)));
+    }
+    if (fr.num_close_face_pairs > 0) {
+      p.push_back(fmt::format("{}{} pairs of faces sharing no vertex at most {} apart (e.g. {})",
+                              fr.close_face_pairs_truncated ? "at least " : "",
+                              fr.num_close_face_pairs, tolerance,
+                              FormatPairs(fr.close_face_pair_examples)));
+    }
+    if (fr.num_float_intersections > 0) {
+      p.push_back(fmt::format(
+          "{}{} pairs of faces sharing no vertex intersect in double precision (Moller's test, "
+          "as Open3D's get_self_intersecting_triangles) (e.g. {})",
+          fr.float_intersections_truncated ? "at least " : "", fr.num_float_intersections,
+          FormatPairs(fr.float_intersection_examples)));
+    }
+  }
   return p;
 }
 
@@ -570,6 +621,44 @@ std::string MeshReport::ToTable(const std::string& source) const {
   } else {
     row("self-intersecting pairs", "not checked");
   }
+  // Floating-point robustness: the values, then the counts that decide validity.
+  const FloatRobustnessReport& fr = float_robustness;
+  auto note = [&out](const char* label, const std::string& value, const std::string& text) {
+    fmt::format_to(std::back_inserter(out), "  {:<28}{:>12}{}{}\n", label, value,
+                   text.empty() ? "" : "   ", text);
+  };
+  out += "  floating point (double precision):\n";
+  note("bounding-box diagonal", fmt::format("{:.6g}", fr.diagonal), "");
+  note("float tolerance", fmt::format("{:.3g}", fr.tolerance),
+       fr.diagonal > 0 ? fmt::format("{:.2g} of the diagonal", fr.relative_tolerance) : "");
+  if (fr.shortest_edge) {
+    note("shortest edge", fmt::format("{:.3g}", *fr.shortest_edge),
+         fmt::format("{}edge {}-{} of face {}",
+                     fr.diagonal > 0
+                         ? fmt::format("{:.2g} of the diagonal; ", *fr.shortest_edge / fr.diagonal)
+                         : "",
+                     fr.shortest_edge_vertices[0], fr.shortest_edge_vertices[1],
+                     fr.shortest_edge_face));
+    note("smallest angle (degrees)", fmt::format("{:.3g}", *fr.smallest_angle_degrees),
+         fmt::format("face {} at vertex {}", fr.smallest_angle_face, fr.smallest_angle_vertex));
+  } else {
+    row("shortest edge", "-");
+    row("smallest angle (degrees)", "-");
+  }
+  count("near-coincident vertices", fr.num_near_vertex_pairs,
+        (fr.near_vertex_pairs_truncated ? "(search stopped) " : "") +
+            FormatEdges(fr.near_vertex_examples));
+  if (fr.face_pairs_checked) {
+    count("close face pairs", fr.num_close_face_pairs,
+          (fr.close_face_pairs_truncated ? "(search stopped) " : "") +
+              FormatPairs(fr.close_face_pair_examples));
+    count("float self-intersections", fr.num_float_intersections,
+          (fr.float_intersections_truncated ? "(search stopped) " : "") +
+              FormatPairs(fr.float_intersection_examples));
+  } else {
+    row("close face pairs", "not checked");
+    row("float self-intersections", "not checked");
+  }
   if (components.size() > 1) {
     out += "  components (largest first):\n";
     fmt::format_to(std::back_inserter(out), "    {:>10} {:>10} {:>8} {:>7} {:>8} {:>8} {:>6}\n",
@@ -587,8 +676,9 @@ std::string MeshReport::ToTable(const std::string& source) const {
     }
   }
   if (is_valid) {
-    out += is_closed_manifold ? "result: VALID closed 2-manifold\n"
-                              : "result: VALID 2-manifold with boundary\n";
+    out += is_closed_manifold ? "result: VALID closed 2-manifold"
+                              : "result: VALID 2-manifold with boundary";
+    out += is_float_robust ? "\n" : " (floating-point issues allowed, see above)\n";
   } else {
     out += "result: NOT VALID\n";
     for (const std::string& p : Problems()) out += "  - " + p + "\n";
@@ -643,6 +733,53 @@ std::string MeshReport::ToJson(const std::string& source) const {
   for (const auto& p : self_intersection_examples) pairs.push_back({p[0], p[1]});
   ex["self_intersections"] = pairs;
   j["examples"] = ex;
+  j["float_robust"] = is_float_robust;
+  j["allow_float_issues"] = allow_float_issues;
+  {
+    const FloatRobustnessReport& fr = float_robustness;
+    auto optional = [](const std::optional<double>& x) { return x ? json(*x) : json(nullptr); };
+    auto pair_list = [](const std::vector<std::array<int64_t, 2>>& list) {
+      json a = json::array();
+      for (const auto& p : list) a.push_back({p[0], p[1]});
+      return a;
+    };
+    json f;
+    f["diagonal"] = fr.diagonal;
+    f["tolerance"] = fr.tolerance;
+    f["relative_tolerance"] = fr.relative_tolerance;
+    f["shortest_edge"] = optional(fr.shortest_edge);
+    f["shortest_edge_relative"] =
+        fr.shortest_edge && fr.diagonal > 0 ? json(*fr.shortest_edge / fr.diagonal) : json(nullptr);
+    f["shortest_edge_vertices"] =
+        fr.shortest_edge ? json({fr.shortest_edge_vertices[0], fr.shortest_edge_vertices[1]})
+                         : json(nullptr);
+    f["shortest_edge_face"] = fr.shortest_edge ? json(fr.shortest_edge_face) : json(nullptr);
+    f["smallest_angle_degrees"] = optional(fr.smallest_angle_degrees);
+    f["smallest_angle_face"] =
+        fr.smallest_angle_degrees ? json(fr.smallest_angle_face) : json(nullptr);
+    f["smallest_angle_vertex"] =
+        fr.smallest_angle_degrees ? json(fr.smallest_angle_vertex) : json(nullptr);
+    f["near_vertex_pairs"] = fr.num_near_vertex_pairs;
+    f["near_vertex_pairs_truncated"] = fr.near_vertex_pairs_truncated;
+    f["closest_vertex_distance"] = optional(fr.closest_vertex_distance);
+    f["face_pairs_checked"] = fr.face_pairs_checked;
+    if (fr.face_pairs_checked) {
+      f["close_face_pairs"] = fr.num_close_face_pairs;
+      f["close_face_pairs_truncated"] = fr.close_face_pairs_truncated;
+      f["closest_face_pair_distance"] = optional(fr.closest_face_pair_distance);
+      f["float_intersections"] = fr.num_float_intersections;
+      f["float_intersections_truncated"] = fr.float_intersections_truncated;
+    } else {
+      f["close_face_pairs"] = nullptr;
+      f["float_intersections"] = nullptr;
+    }
+    json fex;
+    fex["near_vertex_pairs"] = edges(fr.near_vertex_examples);
+    fex["close_face_pairs"] = pair_list(fr.close_face_pair_examples);
+    fex["float_intersections"] = pair_list(fr.float_intersection_examples);
+    f["examples"] = fex;
+    j["float_robustness"] = f;
+  }
   json comps = json::array();
   constexpr size_t kMaxListed = 1000;
   for (size_t i = 0; i < std::min(components.size(), kMaxListed); ++i) {

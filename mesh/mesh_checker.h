@@ -3,7 +3,9 @@
 //
 // A vertex is regular (the paper's Fig. 1, after Litvinov & Lhuillier) when the edges opposite
 // to it form one closed path without loops; with boundaries allowed, one open path is also
-// accepted. Every count below is exact (CGAL exact predicates for zero area and intersections).
+// accepted. Every count below is exact (CGAL exact predicates for zero area and intersections),
+// except the floating-point robustness report (mesh/float_robustness.h), which says what tools
+// working in double precision will see.
 #pragma once
 
 #include <array>
@@ -12,16 +14,23 @@
 #include <string>
 #include <vector>
 
+#include "mesh/float_robustness.h"
 #include "mesh/mesh.h"
 
 namespace ms {
 
 struct MeshCheckOptions {
   bool allow_boundary = false;              // valid = manifold with boundary (open fans allowed)
-  bool check_self_intersections = true;     // exact triangle-pair tests; the only slow check
+  bool check_self_intersections = true;     // every face-pair test, exact and floating-point
   int max_examples = 10;                    // indices listed per kind of problem in the report
-  int64_t max_self_intersections = 100000;  // stop the search after this many pairs
-  void Check() const;                       // throws InputError naming the field
+  int64_t max_self_intersections = 100000;  // stop each pair search after this many pairs
+  // Floating-point robustness (mesh/float_robustness.h): vertices or faces sharing no vertex
+  // closer than the tolerance, and face pairs that intersect in double precision, make the
+  // mesh not valid unless allow_float_issues.
+  double float_tolerance = 1e-6;    // --float-tolerance: relative to the bounding-box diagonal
+  double float_tolerance_abs = 0;   // --float-tolerance-abs: > 0 replaces it (mesh units)
+  bool allow_float_issues = false;  // --allow-float-issues: reported, but valid regardless
+  void Check() const;               // throws InputError naming the field
 };
 
 // One connected component: faces that share vertices, directly or through other faces.
@@ -42,6 +51,7 @@ struct MeshReport {
   // Options the report was made with.
   bool allow_boundary = false;
   bool self_intersections_checked = false;
+  bool allow_float_issues = false;
 
   int64_t num_vertices = 0;
   int64_t num_faces = 0;
@@ -73,11 +83,21 @@ struct MeshReport {
   std::vector<int64_t> duplicate_face_examples;
   std::vector<std::array<int64_t, 2>> self_intersection_examples;
 
+  // What double-precision tools see: shortest edge, smallest angle, near-coincident vertices,
+  // close face pairs and double-precision intersections (face pairs only when
+  // self_intersections_checked).
+  FloatRobustnessReport float_robustness;
+
   // Closed 2-manifold: at least one face, no boundary, no non-manifold edge or vertex,
   // consistently oriented, no invalid/degenerate/duplicate face, no self-intersection (when
-  // checked). Unreferenced vertices are reported but allowed.
+  // checked). Unreferenced vertices are reported but allowed. Exact: floating-point robustness
+  // plays no part here.
   bool is_closed_manifold = false;
-  // is_closed_manifold, or with allow_boundary the same except that boundaries are allowed.
+  // float_robustness found no near-coincident vertices, close face pairs or double-precision
+  // intersections.
+  bool is_float_robust = false;
+  // is_closed_manifold, or with allow_boundary the same except that boundaries are allowed;
+  // and is_float_robust unless allow_float_issues.
   bool is_valid = false;
 
   // One line per reason why the mesh is not valid (empty when valid).

@@ -32,6 +32,14 @@ def two_tets(offset, share_vertex=False):
     return TET_V + shifted(TET_V, offset), TET_F + [tuple(i + 4 for i in t) for t in TET_F]
 
 
+def apex_to_apex(gap):
+    """Two tetrahedra whose right-angled corners are `gap` apart, back to back: exactly a valid
+    closed 2-manifold, but two near-coincident vertices in floating point."""
+    d = gap / 3 ** 0.5
+    second = [(-d, -d, -d), (-1, 0, 0), (0, -1, 0), (0, 0, -1)]
+    return TET_V + second, TET_F + [(4, 5, 6), (4, 7, 5), (4, 6, 7), (5, 7, 6)]
+
+
 def binary_ply(vertices, faces):
     header = ("ply\nformat binary_little_endian 1.0\n"
               f"element vertex {len(vertices)}\nproperty float x\nproperty float y\n"
@@ -68,6 +76,7 @@ def main():
         "truncated.ply": tet_ply[:-3],
         "badindex.obj": obj(TET_V, TET_F[:3] + [(1, 2, 7)]),
         "mesh.stl": "solid x\nendsolid x\n",
+        "near.obj": obj(*apex_to_apex(3.5e-9)),  # 1e-9 of the bounding-box diagonal
     }
     paths = {name: write(name, content) for name, content in files.items()}
     json_path = os.path.join(args.workdir, "report.json")
@@ -88,6 +97,12 @@ def main():
         ("badindex.obj", [], 2, None),
         ("mesh.stl", [], 2, None),
         ("missing.ply", [], 2, None),
+        # Floating-point robustness: exactly valid, but two vertices 1e-9 (relative) apart.
+        ("near.obj", [], 3, {"valid": False, "closed_manifold": True, "float_robust": False}),
+        ("near.obj", ["--allow-float-issues"], 0, {"valid": True, "float_robust": False}),
+        ("near.obj", ["--float-tolerance", "1e-12"], 0, {"valid": True, "float_robust": True}),
+        ("near.obj", ["--float-tolerance-abs", "1e-6"], 3, {"valid": False}),
+        ("tet.obj", [], 0, {"float_robust": True, "allow_float_issues": False}),
     ]
     failures = 0
     for name, extra, code, expect in cases:
@@ -112,6 +127,15 @@ def main():
         if not ok:
             print(run.stdout, run.stderr)
             failures += 1
+    # A bad option value: exit 2, one line naming the flag the user typed.
+    for flag, value in (("--float-tolerance", "-1"), ("--float-tolerance-abs", "-0.5")):
+        run = subprocess.run([args.manisweep, "check-mesh", paths["tet.obj"], flag, value],
+                             capture_output=True, text=True)
+        expected = f"{flag} must be >= 0, got {value}"
+        ok = run.returncode == 2 and expected in run.stderr
+        print(f"{'ok  ' if ok else 'FAIL'} {flag} {value}: exit {run.returncode}, "
+              f"stderr {run.stderr.strip()!r}")
+        failures += 0 if ok else 1
     # `--json -` prints only JSON on stdout.
     run = subprocess.run([args.manisweep, "check-mesh", paths["tet.obj"], "--json", "-"],
                          capture_output=True, text=True)

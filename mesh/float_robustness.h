@@ -1,0 +1,100 @@
+// Floating-point robustness of a mesh: what tools that work in double precision (Open3D,
+// MeshLab, game and physics engines) will see in it, next to the exact verdict of the checker
+// (mesh/mesh_checker.h). A mesh can be a valid closed 2-manifold in exact arithmetic and still
+// have two distinct vertices 1e-7 m apart, or needle faces whose neighbours cross them after
+// rounding; such a mesh "self-intersects" in Open3D. See docs/mesh-checker.md.
+//
+// Everything here is computed in double precision on purpose (no exact predicates).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "mesh/mesh.h"
+
+namespace ms {
+
+struct FloatRobustnessOptions {
+  // The distance below which two vertices, or two faces that share no vertex, count as
+  // touching: relative_tolerance times the bounding-box diagonal of the referenced vertices,
+  // or absolute_tolerance (mesh units) when that is > 0.
+  double relative_tolerance = 1e-6;
+  double absolute_tolerance = 0;
+  bool check_face_pairs = true;  // close face pairs and double-precision intersections (slow)
+  int max_examples = 10;         // indices listed per kind of problem
+  int64_t max_pairs = 100000;    // each pair search stops after this many pairs
+  void Check() const;            // throws InputError naming the field
+};
+
+struct FloatRobustnessReport {
+  bool face_pairs_checked = false;
+  double diagonal = 0;            // bounding-box diagonal of the vertices of usable faces
+  double tolerance = 0;           // absolute (mesh units), as used
+  double relative_tolerance = 0;  // as given, or tolerance / diagonal for an absolute one
+
+  // Shortest edge of a face with three distinct indices, and the face it was seen in.
+  std::optional<double> shortest_edge;
+  std::array<int32_t, 2> shortest_edge_vertices{-1, -1};
+  int64_t shortest_edge_face = -1;
+  // Smallest interior angle (degrees) of a face with three distinct indices, at which corner.
+  std::optional<double> smallest_angle_degrees;
+  int64_t smallest_angle_face = -1;
+  int32_t smallest_angle_vertex = -1;
+
+  // Pairs of distinct vertices (of usable faces) at most `tolerance` apart.
+  int64_t num_near_vertex_pairs = 0;
+  bool near_vertex_pairs_truncated = false;
+  std::optional<double> closest_vertex_distance;  // of the pairs found
+  std::vector<std::array<int32_t, 2>> near_vertex_examples;
+
+  // Pairs of faces sharing no vertex index whose distance is at most `tolerance` (0 when they
+  // cross or touch in double precision).
+  int64_t num_close_face_pairs = 0;
+  bool close_face_pairs_truncated = false;
+  std::optional<double> closest_face_pair_distance;  // of the pairs found
+  std::vector<std::array<int64_t, 2>> close_face_pair_examples;
+
+  // Pairs of faces sharing no vertex index that intersect by Möller's triangle-triangle test
+  // in double precision, as Open3D's TriangleMesh::GetSelfIntersectingTriangles decides it.
+  int64_t num_float_intersections = 0;
+  bool float_intersections_truncated = false;
+  std::vector<std::array<int64_t, 2>> float_intersection_examples;
+
+  // No near vertices, no close face pairs, no double-precision intersections (the face-pair
+  // counts only when they were checked).
+  bool IsRobust() const {
+    return num_near_vertex_pairs == 0 && num_close_face_pairs == 0 && num_float_intersections == 0;
+  }
+};
+
+// Faces with usable[f] == 0 (an index out of range or a non-finite vertex) are ignored; the
+// others, degenerate ones included, take part in the pair tests. Edges and angles are measured
+// on faces with three distinct indices.
+FloatRobustnessReport CheckFloatRobustness(const Mesh& mesh, const std::vector<uint8_t>& usable,
+                                           const FloatRobustnessOptions& options = {});
+
+// The geometric kernels, exposed for tests.
+namespace float_robustness_internal {
+
+using Triangle = std::array<Eigen::Vector3d, 3>;
+
+// Möller's test ("A fast triangle-triangle intersection test", JGT 1997, the division-free
+// variant with plane distances below 1e-6 snapped to 0) after Open3D's preconditioning (the six
+// points shifted to zero mean and scaled to unit spread per axis): true when the triangles
+// intersect or touch. Bit for bit what Open3D's IntersectionTest::TriangleTriangle3d computes.
+bool TrianglesIntersectLikeOpen3d(const Triangle& p, const Triangle& q);
+
+// True when segment ab crosses triangle t (touching included), in double precision; false
+// when ab lies in the triangle's plane (left to the distance computation).
+bool SegmentCrossesTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Triangle& t);
+
+// Distance between two triangles in double precision: 0 when an edge of one crosses the other,
+// else the minimum of the 6 point-triangle and 9 segment-segment distances.
+double TriangleDistance(const Triangle& p, const Triangle& q);
+
+}  // namespace float_robustness_internal
+
+}  // namespace ms

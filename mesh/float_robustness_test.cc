@@ -1,0 +1,391 @@
+#include "mesh/float_robustness.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "base/error.h"
+#include "mesh/mesh_checker.h"
+
+namespace ms {
+namespace {
+
+using float_robustness_internal::SegmentCrossesTriangle;
+using float_robustness_internal::TriangleDistance;
+using float_robustness_internal::TrianglesIntersectLikeOpen3d;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+using Triangle = float_robustness_internal::Triangle;
+using V = Eigen::Vector3d;
+
+// Faces counter-clockwise seen from outside for a convex mesh around the origin.
+void OrientOutward(Mesh* m) {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  for (const auto& v : m->vertices) center += v;
+  center /= static_cast<double>(m->vertices.size());
+  for (size_t f = 0; f < m->faces.size(); ++f) {
+    auto& t = m->faces[f];
+    const V mid = (m->vertices[t[0]] + m->vertices[t[1]] + m->vertices[t[2]]) / 3;
+    if (m->FaceNormal(f).dot(mid - center) < 0) std::swap(t[1], t[2]);
+  }
+}
+
+Mesh Icosahedron() {
+  const double g = (1 + std::sqrt(5.0)) / 2;
+  Mesh m;
+  m.vertices = {{-1, g, 0},  {1, g, 0},  {-1, -g, 0}, {1, -g, 0}, {0, -1, g},  {0, 1, g},
+                {0, -1, -g}, {0, 1, -g}, {g, 0, -1},  {g, 0, 1},  {-g, 0, -1}, {-g, 0, 1}};
+  m.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+             {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+             {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  OrientOutward(&m);
+  return m;
+}
+
+Mesh Cube() {
+  Mesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+  for (const auto& q : std::vector<std::array<int, 4>>{
+           {0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}}) {
+    m.faces.push_back({q[0], q[1], q[2]});
+    m.faces.push_back({q[0], q[2], q[3]});
+  }
+  OrientOutward(&m);
+  return m;
+}
+
+// A tetrahedron with its right-angled corner at `apex` and its other vertices at apex + s*e_i,
+// s = +1 or -1 (outward faces either way).
+Mesh Corner(const V& apex, double s) {
+  Mesh m;
+  m.vertices = {apex, apex + V(s, 0, 0), apex + V(0, s, 0), apex + V(0, 0, s)};
+  m.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  OrientOutward(&m);
+  return m;
+}
+
+Mesh Append(Mesh a, const Mesh& b) {
+  const auto base = static_cast<int32_t>(a.vertices.size());
+  a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (auto f : b.faces) a.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+  return a;
+}
+
+// Two corners apex to apex, the second one pointing the other way with its apex at `apex`:
+// exactly apart when the apex is outside the first one.
+Mesh ApexToApex(const V& apex) {
+  Mesh m = Append(Corner(V(0, 0, 0), 1), Corner(V(0, 0, 0), -1));
+  m.vertices[4] = apex;
+  return m;
+}
+
+// Flips face f if its normal points towards `inside`.
+void OrientAwayFrom(Mesh* m, size_t f, const V& inside) {
+  auto& t = m->faces[f];
+  if (m->FaceNormal(f).dot(m->vertices[t[0]] - inside) < 0) std::swap(t[1], t[2]);
+}
+
+// A closed bipyramid (two tetrahedra glued on the triangle 0 1 2) whose shared triangle has one
+// edge of length `needle` (vertices 1 and 2): the faces 3 1 2 and 4 2 1 are needles.
+Mesh Bipyramid(double needle) {
+  Mesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {1, needle, 0}, {0.7, 0.3, 1}, {0.7, 0.3, -1}};
+  m.faces = {{3, 0, 1}, {3, 1, 2}, {3, 2, 0}, {4, 1, 0}, {4, 2, 1}, {4, 0, 2}};
+  for (size_t f = 0; f < 6; ++f) {
+    const int apex = f < 3 ? 3 : 4;
+    OrientAwayFrom(&m, f, (m.vertices[0] + m.vertices[1] + m.vertices[2] + m.vertices[apex]) / 4);
+  }
+  return m;
+}
+
+// A rotation with no axis along the coordinate axes (Open3D's test scales each axis on its own,
+// which makes axis-aligned near-coincidences look large to it).
+Eigen::Matrix3d Rotation() {
+  Eigen::Matrix3d r;
+  r << 0.36, 0.48, -0.8, -0.8, 0.6, 0, 0.48, 0.64, 0.6;
+  return r;
+}
+
+MeshReport Check(const Mesh& m, double tolerance = 1e-6, bool allow = false) {
+  MeshCheckOptions options;
+  options.float_tolerance = tolerance;
+  options.allow_float_issues = allow;
+  return CheckMesh(m, options);
+}
+
+TEST(FloatRobustness, CleanClosedMeshesPass) {
+  for (const auto& [name, mesh, edge, angle] :
+       std::vector<std::tuple<std::string, Mesh, double, double>>{
+           {"icosahedron", Icosahedron(), 2.0, 60.0}, {"cube", Cube(), 1.0, 45.0}}) {
+    SCOPED_TRACE(name);
+    const MeshReport r = Check(mesh);
+    EXPECT_TRUE(r.is_valid) << r.ToTable();
+    EXPECT_TRUE(r.is_float_robust);
+    const FloatRobustnessReport& f = r.float_robustness;
+    EXPECT_TRUE(f.face_pairs_checked);
+    EXPECT_EQ(f.num_near_vertex_pairs, 0);
+    EXPECT_EQ(f.num_close_face_pairs, 0);
+    EXPECT_EQ(f.num_float_intersections, 0);
+    ASSERT_TRUE(f.shortest_edge.has_value());
+    EXPECT_NEAR(*f.shortest_edge, edge, 1e-12);
+    ASSERT_TRUE(f.smallest_angle_degrees.has_value());
+    EXPECT_NEAR(*f.smallest_angle_degrees, angle, 1e-9);
+    EXPECT_NEAR(f.tolerance, 1e-6 * f.diagonal, 1e-18);
+    EXPECT_DOUBLE_EQ(f.relative_tolerance, 1e-6);
+  }
+  EXPECT_NEAR(Check(Cube()).float_robustness.diagonal, std::sqrt(3.0), 1e-12);
+}
+
+TEST(FloatRobustness, NearCoincidentVerticesFail) {
+  // Diagonal ~3.46; the apexes are 1e-9 of it apart, on the far side of the first corner.
+  const double d = 1e-9 * 2 * std::sqrt(3.0);
+  const Mesh m = ApexToApex(V(-d, -d, -d) / std::sqrt(3.0));
+  const MeshReport r = Check(m);
+  EXPECT_TRUE(r.is_closed_manifold) << r.ToTable();  // exact: two separate tetrahedra
+  EXPECT_EQ(r.num_self_intersections, 0);
+  EXPECT_FALSE(r.is_float_robust);
+  EXPECT_FALSE(r.is_valid);
+  const FloatRobustnessReport& f = r.float_robustness;
+  EXPECT_EQ(f.num_near_vertex_pairs, 1);
+  EXPECT_THAT(f.near_vertex_examples, ElementsAre(std::array<int32_t, 2>{0, 4}));
+  ASSERT_TRUE(f.closest_vertex_distance.has_value());
+  EXPECT_NEAR(*f.closest_vertex_distance, d, 1e-20);
+  // The three faces at each apex are within the tolerance of the three at the other; they do
+  // not cross (back to back), for Möller's test either.
+  EXPECT_EQ(f.num_close_face_pairs, 9);
+  EXPECT_EQ(f.num_float_intersections, 0);
+  EXPECT_THAT(r.Problems(),
+              ElementsAre(HasSubstr("near-coincident"), HasSubstr("sharing no vertex at most")));
+  EXPECT_THAT(r.ToTable(), HasSubstr("NOT VALID"));
+  // Relaxed: reported, but valid.
+  const MeshReport allowed = Check(m, 1e-6, /*allow=*/true);
+  EXPECT_TRUE(allowed.is_valid);
+  EXPECT_FALSE(allowed.is_float_robust);
+  EXPECT_TRUE(allowed.Problems().empty());
+  EXPECT_THAT(allowed.ToTable(), HasSubstr("floating-point issues allowed"));
+  // A tolerance below the gap: nothing is near.
+  EXPECT_TRUE(Check(m, 1e-10).is_valid);
+}
+
+TEST(FloatRobustness, ApexOnTheOtherPlaneCrossesInDoublePrecision) {
+  // The second apex a hair below the first corner's bottom face (z = 0), over its inside:
+  // exactly apart, but Möller's test (its 1e-6 snap) takes it as touching, as Open3D 0.16 does
+  // (the same 4 face pairs).
+  const double e = 3.5e-9;  // 1e-9 of the diagonal
+  const Mesh m = ApexToApex(V(e, e, -e));
+  const MeshReport r = Check(m);
+  EXPECT_TRUE(r.is_closed_manifold) << r.ToTable();
+  EXPECT_EQ(r.num_self_intersections, 0);
+  EXPECT_EQ(r.float_robustness.num_float_intersections, 4);
+  EXPECT_GT(r.float_robustness.num_close_face_pairs, 0);
+  EXPECT_FALSE(r.is_valid);
+  EXPECT_THAT(r.Problems(), testing::Contains(HasSubstr("intersect in double precision")));
+  // A zero tolerance leaves the crossings; only the option accepts them.
+  const MeshReport zero = Check(m, 0);
+  EXPECT_EQ(zero.float_robustness.num_near_vertex_pairs, 0);
+  EXPECT_EQ(zero.float_robustness.num_float_intersections, 4);
+  EXPECT_FALSE(zero.is_valid);
+  EXPECT_TRUE(Check(m, 0, /*allow=*/true).is_valid);
+}
+
+TEST(FloatRobustness, NonAdjacentFacesTouchingOrCrossingFail) {
+  // Nearly touching: a corner whose apex is 1e-8 (~4e-9 of the diagonal) above the middle of
+  // the first corner's slanted face x + y + z = 1, pointing away from it.
+  const V n = V(1, 1, 1).normalized();
+  const Mesh near = Append(Corner(V(0, 0, 0), 1), Corner(V(1, 1, 1) / 3 + 1e-8 * n, 1));
+  MeshReport r = Check(near);
+  EXPECT_TRUE(r.is_closed_manifold) << r.ToTable();
+  EXPECT_EQ(r.float_robustness.num_near_vertex_pairs, 0);
+  EXPECT_EQ(r.float_robustness.num_close_face_pairs, 3);  // the slanted face, three at the apex
+  ASSERT_TRUE(r.float_robustness.closest_face_pair_distance.has_value());
+  EXPECT_NEAR(*r.float_robustness.closest_face_pair_distance, 1e-8, 1e-15);
+  EXPECT_EQ(r.float_robustness.num_float_intersections, 3);  // Open3D: the same 3
+  EXPECT_FALSE(r.is_valid);
+  const MeshReport small = Check(near, 1e-10);  // the gap is above this tolerance
+  EXPECT_EQ(small.float_robustness.num_close_face_pairs, 0);
+  EXPECT_EQ(small.float_robustness.num_float_intersections, 3);
+
+  // A real crossing: the exact test and both floating-point tests see it.
+  const Mesh crossing = Append(Corner(V(0, 0, 0), 1), Corner(V(1, 1, 1) / 3 - 0.1 * n, 1));
+  r = Check(crossing);
+  EXPECT_EQ(r.num_self_intersections, 3);
+  EXPECT_EQ(r.float_robustness.num_float_intersections, 3);
+  EXPECT_EQ(r.float_robustness.num_close_face_pairs, 3);
+  EXPECT_EQ(*r.float_robustness.closest_face_pair_distance, 0.0);
+  EXPECT_FALSE(r.is_valid);
+}
+
+TEST(FloatRobustness, NeedleFacesReportTheShortestEdgeAndSmallestAngle) {
+  const double needle = 1e-4;
+  const Mesh m = Bipyramid(needle);
+  const MeshReport r = Check(m);
+  EXPECT_TRUE(r.is_valid) << r.ToTable();  // short, but far above the tolerance
+  const FloatRobustnessReport& f = r.float_robustness;
+  ASSERT_TRUE(f.shortest_edge.has_value());
+  EXPECT_NEAR(*f.shortest_edge, needle, 1e-15);
+  EXPECT_THAT(f.shortest_edge_vertices, ElementsAre(1, 2));
+  // The smallest angle is at an apex, opposite the needle edge.
+  const V a = m.vertices[1] - m.vertices[3], b = m.vertices[2] - m.vertices[3];
+  const double expected = std::asin(a.cross(b).norm() / (a.norm() * b.norm())) * 180 / M_PI;
+  ASSERT_TRUE(f.smallest_angle_degrees.has_value());
+  EXPECT_NEAR(*f.smallest_angle_degrees, expected, 1e-9 * expected);
+  EXPECT_LT(*f.smallest_angle_degrees, 0.01);
+  EXPECT_THAT(f.smallest_angle_vertex, testing::AnyOf(3, 4));
+  EXPECT_THAT(f.smallest_angle_face, testing::AnyOf(1, 4));
+  EXPECT_THAT(r.ToTable(), HasSubstr("edge 1-2 of face"));
+
+  // Shorter than the tolerance: the needle's ends are near-coincident vertices.
+  const MeshReport tiny = Check(Bipyramid(1e-9));
+  EXPECT_TRUE(tiny.is_closed_manifold);
+  EXPECT_FALSE(tiny.is_valid);
+  EXPECT_THAT(tiny.float_robustness.near_vertex_examples,
+              ElementsAre(std::array<int32_t, 2>{1, 2}));
+  EXPECT_TRUE(Check(Bipyramid(1e-9), 1e-6, /*allow=*/true).is_valid);
+}
+
+TEST(FloatRobustness, ToleranceZeroAndAbsoluteTolerance) {
+  // Two distinct vertices at the same position: found even with a zero tolerance.
+  Mesh m = Append(Cube(), Cube());
+  for (size_t v = 8; v < 16; ++v) m.vertices[v] += V(1, 1, 1);  // corner (1,1,1) twice
+  MeshReport r = Check(m, 0);
+  EXPECT_EQ(r.float_robustness.tolerance, 0.0);
+  EXPECT_EQ(r.float_robustness.num_near_vertex_pairs, 1);
+  EXPECT_THAT(r.float_robustness.near_vertex_examples, ElementsAre(std::array<int32_t, 2>{7, 8}));
+  EXPECT_EQ(*r.float_robustness.closest_vertex_distance, 0.0);
+
+  // An absolute tolerance replaces the relative one.
+  MeshCheckOptions options;
+  options.float_tolerance_abs = 0.25;
+  r = CheckMesh(Icosahedron(), options);
+  EXPECT_EQ(r.float_robustness.tolerance, 0.25);
+  EXPECT_TRUE(r.is_float_robust);
+  options.float_tolerance_abs = 2.5;  // more than an edge: every neighbour is "near"
+  r = CheckMesh(Icosahedron(), options);
+  EXPECT_EQ(r.float_robustness.num_near_vertex_pairs, 30);  // the 30 edges
+  EXPECT_FALSE(r.is_valid);
+}
+
+TEST(FloatRobustness, FacePairsAreSkippedWithTheSelfIntersectionTest) {
+  const double e = 3.5e-9;
+  const Mesh m = ApexToApex(V(e, e, -e));
+  MeshCheckOptions options;
+  options.check_self_intersections = false;
+  const MeshReport r = CheckMesh(m, options);
+  EXPECT_FALSE(r.float_robustness.face_pairs_checked);
+  EXPECT_EQ(r.float_robustness.num_float_intersections, 0);
+  EXPECT_EQ(r.float_robustness.num_near_vertex_pairs, 1);  // still checked: it is cheap
+  EXPECT_FALSE(r.is_valid);
+  EXPECT_THAT(r.ToTable(), HasSubstr("not checked"));
+  const nlohmann::json j = nlohmann::json::parse(r.ToJson());
+  EXPECT_TRUE(j["float_robustness"]["close_face_pairs"].is_null());
+  EXPECT_TRUE(j["float_robustness"]["float_intersections"].is_null());
+}
+
+TEST(FloatRobustness, JsonAndLimits) {
+  const double e = 3.5e-9;
+  const Mesh m = ApexToApex(V(e, e, -e));
+  const nlohmann::json j = nlohmann::json::parse(Check(m).ToJson("m.ply"));
+  EXPECT_EQ(j["valid"], false);
+  EXPECT_EQ(j["closed_manifold"], true);
+  EXPECT_EQ(j["float_robust"], false);
+  const auto& f = j["float_robustness"];
+  EXPECT_EQ(f["near_vertex_pairs"], 1);
+  EXPECT_GT(f["float_intersections"].get<int>(), 0);
+  EXPECT_EQ(f["examples"]["near_vertex_pairs"].size(), 1u);
+  EXPECT_DOUBLE_EQ(f["relative_tolerance"].get<double>(), 1e-6);
+  EXPECT_TRUE(f["shortest_edge"].is_number());
+  EXPECT_TRUE(f["smallest_angle_degrees"].is_number());
+
+  MeshCheckOptions options;
+  options.max_self_intersections = 1;
+  const MeshReport limited = CheckMesh(m, options);
+  EXPECT_EQ(limited.float_robustness.num_close_face_pairs, 1);
+  EXPECT_TRUE(limited.float_robustness.close_face_pairs_truncated);
+  EXPECT_THAT(limited.Problems(), testing::Contains(HasSubstr("at least 1 pairs of faces")));
+
+  // A mesh with no usable face has no edge or angle.
+  const nlohmann::json empty = nlohmann::json::parse(Check(Mesh{}).ToJson());
+  EXPECT_TRUE(empty["float_robustness"]["shortest_edge"].is_null());
+}
+
+TEST(FloatRobustness, OptionsAreChecked) {
+  MeshCheckOptions options;
+  options.float_tolerance = -1;
+  try {
+    CheckMesh(Cube(), options);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "--float-tolerance must be >= 0, got -1");
+  }
+  options.float_tolerance = NAN;
+  EXPECT_THROW(options.Check(), InputError);
+  options.float_tolerance = 1e-6;
+  options.float_tolerance_abs = -0.5;
+  EXPECT_THROW(
+      {
+        try {
+          options.Check();
+        } catch (const InputError& e) {
+          EXPECT_THAT(e.what(), HasSubstr("--float-tolerance-abs must be >= 0, got -0.5"));
+          throw;
+        }
+      },
+      InputError);
+}
+
+// ----- The kernels. ----------------------------------------------------------------------------
+
+TEST(FloatRobustnessKernels, TriangleTriangleLikeOpen3d) {
+  const Triangle t = {V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)};
+  auto shifted = [](Triangle x, const V& d) {
+    for (auto& p : x) p += d;
+    return x;
+  };
+  auto rotated = [](Triangle x) {
+    for (auto& p : x) p = Rotation() * p;
+    return x;
+  };
+  // Piercing, apart, touching at a vertex, coplanar overlapping, coplanar apart.
+  EXPECT_TRUE(TrianglesIntersectLikeOpen3d(t, {V(0.2, 0.2, -1), V(0.3, 0.2, 1), V(0.2, 0.3, 1)}));
+  EXPECT_FALSE(TrianglesIntersectLikeOpen3d(t, shifted(t, V(0, 0, 1))));
+  EXPECT_TRUE(TrianglesIntersectLikeOpen3d(t, {V(0.2, 0.2, 0), V(0.2, 0.2, 1), V(1, 1, 1)}));
+  EXPECT_TRUE(TrianglesIntersectLikeOpen3d(t, shifted(t, V(0.2, 0.2, 0))));
+  EXPECT_FALSE(TrianglesIntersectLikeOpen3d(t, shifted(t, V(2, 2, 0))));
+  // The 1e-6 snap: a parallel triangle 1e-9 above counts as in the plane, hence overlapping,
+  // unless the gap is along a coordinate axis, where the per-axis scaling blows it up. These
+  // are Open3D 0.16's answers (TriangleMesh.is_intersecting on one-triangle meshes).
+  EXPECT_TRUE(TrianglesIntersectLikeOpen3d(rotated(t), rotated(shifted(t, V(0.2, 0.2, 1e-9)))));
+  EXPECT_FALSE(TrianglesIntersectLikeOpen3d(t, shifted(t, V(0.2, 0.2, 1e-9))));
+  EXPECT_FALSE(TrianglesIntersectLikeOpen3d(rotated(t), rotated(shifted(t, V(0.2, 0.2, 1e-7)))));
+}
+
+TEST(FloatRobustnessKernels, SegmentCrossesTriangle) {
+  const Triangle t = {V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)};
+  EXPECT_TRUE(SegmentCrossesTriangle(V(0.2, 0.2, -1), V(0.2, 0.2, 1), t));
+  EXPECT_TRUE(SegmentCrossesTriangle(V(0.2, 0.2, 0), V(0.2, 0.2, 1), t));  // touching
+  EXPECT_FALSE(SegmentCrossesTriangle(V(0.8, 0.8, -1), V(0.8, 0.8, 1), t));
+  EXPECT_FALSE(SegmentCrossesTriangle(V(0.2, 0.2, 0.5), V(0.2, 0.2, 1), t));
+  EXPECT_FALSE(SegmentCrossesTriangle(V(-1, 0.2, 0), V(2, 0.2, 0), t));  // in the plane
+}
+
+TEST(FloatRobustnessKernels, TriangleDistance) {
+  const Triangle t = {V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)};
+  // Parallel, 0.5 above: a vertex over the inside.
+  EXPECT_NEAR(TriangleDistance(t, {V(0.2, 0.2, 0.5), V(0.3, 0.2, 0.5), V(0.2, 0.3, 0.5)}), 0.5,
+              1e-15);
+  // Edge to edge: the segment x = 2, z = 1 (along y) and the edge (1,0,0)-(0,1,0) ... the
+  // closest points are (1,0,0) and (2,0,1): sqrt(2).
+  EXPECT_NEAR(TriangleDistance(t, {V(2, -1, 1), V(2, 1, 1), V(3, 0, 5)}), std::sqrt(2.0), 1e-15);
+  // Skew edges crossing over each other: the distance between the lines.
+  EXPECT_NEAR(TriangleDistance(t, {V(0.25, 0.25, 0.1), V(0.25, 0.25, 5), V(0.5, 0.5, 5)}), 0.1,
+              1e-15);
+  EXPECT_EQ(TriangleDistance(t, {V(0.2, 0.2, -1), V(0.3, 0.2, 1), V(0.2, 0.3, 1)}), 0.0);
+  // A degenerate (zero-area) triangle is measured through its edges.
+  EXPECT_NEAR(TriangleDistance(t, {V(2, 0, 0), V(3, 0, 0), V(4, 0, 0)}), 1.0, 1e-15);
+}
+
+}  // namespace
+}  // namespace ms
