@@ -227,6 +227,7 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
     progress.Update(static_cast<int64_t>(n));
     InsertOne(points[n], &batch, &stats);
   }
+  // The exact recount of the cells born in the batch.
   RewalkOldRays(batch, &stats);
   TraceNewRays(batch, &stats);
   stats.seconds_insertion = timer.Seconds();
