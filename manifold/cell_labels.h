@@ -15,17 +15,26 @@
 
 namespace ms::manifold_detail {
 
+// In O (an infinite cell never is).
+inline bool InO(const Delaunay& dt, const Cell_handle& c) {
+  return !dt.is_infinite(c) && c->info().outside;
+}
+
 class CellLabels {
  public:
-  // Both must outlive this object.
-  CellLabels(const Delaunay& dt, const ManifoldOptions& options) : dt_(dt), options_(options) {}
+  // `dt` must outlive this object; the weight parameters of `options` are copied.
+  CellLabels(const Delaunay& dt, const ManifoldOptions& options)
+      : dt_(dt),
+        w1_(options.w1),
+        w2_(options.w2),
+        free_threshold_(options.free_threshold),
+        w2_rule_(options.w2_rule) {}
 
   // Graded Steiner points in use (decided by Build): cells of Steiner points only are free.
   void set_graded(bool graded) { graded_ = graded; }
   int64_t outside_count() const { return outside_count_; }
 
-  // In O (an infinite cell never is).
-  bool InO(const Cell_handle& c) const { return !dt_.is_infinite(c) && c->info().outside; }
+  bool InO(const Cell_handle& c) const { return manifold_detail::InO(dt_, c); }
 
   // w1 per ray crossing c, plus w2 per ray crossing a face neighbour n that spreads across
   // the face n shares with c.
@@ -35,7 +44,7 @@ class CellLabels {
       const Cell_handle n = c->neighbor(i);
       neighbours += n->info().spread[n->index(c)];
     }
-    return options_.w1 * c->info().crossings + options_.w2 * static_cast<double>(neighbours);
+    return w1_ * c->info().crossings + w2_ * static_cast<double>(neighbours);
   }
 
   bool IsFree(const Cell_handle& c) const {
@@ -47,14 +56,14 @@ class CellLabels {
         c->vertex(2)->info().id < 0 && c->vertex(3)->info().id < 0) {
       return true;
     }
-    return Weight(c) >= options_.free_threshold;
+    return Weight(c) >= free_threshold_;
   }
 
   // Counts one ray crossing c; bit i of `spread_mask` says it spreads w2 across face i.
   void CountCrossing(const Cell_handle& c, unsigned spread_mask) {
     CellInfo& info = c->info();
     ++info.crossings;
-    if (options_.w2_rule == W2Rule::kAllFaces) spread_mask = 0xF;
+    if (w2_rule_ == W2Rule::kAllFaces) spread_mask = 0xF;
     for (int i = 0; i < 4; ++i) info.spread[i] += (spread_mask >> i) & 1;
   }
 
@@ -78,7 +87,9 @@ class CellLabels {
 
  private:
   const Delaunay& dt_;
-  const ManifoldOptions& options_;
+  // Weights (paper section 2.1): w1 per crossing ray, w2 per ray spreading from a neighbour.
+  const double w1_, w2_, free_threshold_;
+  const W2Rule w2_rule_;
   bool graded_ = false;
   int64_t outside_count_ = 0;
 };

@@ -140,7 +140,7 @@ class DelaunayManifold::Impl {
   std::vector<ManifoldCamera> cameras_;
   Delaunay dt_;
   manifold_detail::CellLabels labels_{dt_, options_};
-  manifold_detail::Regularity regularity_{dt_, labels_};
+  manifold_detail::Regularity regularity_{dt_};
   manifold_detail::RayWalker walker_;
   manifold_detail::GrowShrink grow_shrink_{dt_, options_, labels_, regularity_};
   std::unique_ptr<RayIndex> ray_index_;

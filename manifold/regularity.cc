@@ -12,7 +12,7 @@ namespace ms::manifold_detail {
 bool Regularity::FlipKeepsManifold(const Cell_handle& t) {
   const bool joining_outside = !t->info().outside;
   const auto on_target_side = [&](const Cell_handle& c) {
-    return c != t && (joining_outside ? labels_.InO(c) : !labels_.InO(c));
+    return c != t && (joining_outside ? InO(dt_, c) : !InO(dt_, c));
   };
   int F = 0, shared[4], num_shared = 0;
   for (int i = 0; i < 4; ++i) {
@@ -58,12 +58,12 @@ bool Regularity::FlipKeepsManifold(const Cell_handle& t) {
 // VertexRegular (the exhaustive criterion) is cross-checked against this in tests.
 bool Regularity::VertexRegularAfterFlip(const Vertex_handle& v, const Cell_handle& t) {
   const int iv = t->index(v);
-  const bool t_outside = labels_.InO(t);
+  const bool t_outside = InO(dt_, t);
   int k = 0, w3 = -1;
   for (int i = 0; i < 4; ++i) {
     if (i == iv) continue;
     // Face i of t (opposite vertex i) contains v; it is on the surface iff labels differ.
-    if (t_outside != labels_.InO(t->neighbor(i))) {
+    if (t_outside != InO(dt_, t->neighbor(i))) {
       ++k;
       w3 = i;  // with k = 1: the surface face is the one opposite w3
     }
@@ -74,9 +74,9 @@ bool Regularity::VertexRegularAfterFlip(const Vertex_handle& v, const Cell_handl
     case 1: {
       // Is the edge (v, w3) on the surface (some label change around it)?
       auto circ = dt_.incident_cells(t, iv, w3), done = circ;
-      const bool first = labels_.InO(circ);
+      const bool first = InO(dt_, circ);
       bool on_surface = false;
-      while (!on_surface && ++circ != done) on_surface = labels_.InO(circ) != first;
+      while (!on_surface && ++circ != done) on_surface = InO(dt_, circ) != first;
       ++counts_.link_steps;
       return !on_surface;
     }
@@ -89,7 +89,7 @@ bool Regularity::VertexRegularAfterFlip(const Vertex_handle& v, const Cell_handl
 // closed cycle (or there are none).
 bool Regularity::VertexRegular(const Vertex_handle& v, const Cell_handle& flipped) {
   const auto label = [&](const Cell_handle& c) {
-    return c == flipped ? !labels_.InO(c) : labels_.InO(c);
+    return c == flipped ? !InO(dt_, c) : InO(dt_, c);
   };
   std::vector<Cell_handle>& around = cells_;
   around.clear();

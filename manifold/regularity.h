@@ -20,8 +20,9 @@ class Regularity {
     int64_t fast = 0, full = 0, link_steps = 0;
   };
 
-  // Both must outlive this object.
-  Regularity(const Delaunay& dt, const CellLabels& labels) : dt_(dt), labels_(labels) {}
+  // `dt` must outlive this object. The labels are read from CellInfo::outside (InO) and the
+  // per-vertex counts that CellLabels::SetOutside keeps.
+  explicit Regularity(const Delaunay& dt) : dt_(dt) {}
 
   // Would flipping t (into O if it is outside O, out of O otherwise) keep the surface
   // manifold? (V,E,F) test, then the link test on every vertex of t. Counted in counts().
@@ -39,7 +40,6 @@ class Regularity {
 
  private:
   const Delaunay& dt_;
-  const CellLabels& labels_;
   Counts counts_;
   // Reused by VertexRegular (no allocation in the hot path).
   std::vector<Cell_handle> cells_;
