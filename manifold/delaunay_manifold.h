@@ -7,7 +7,7 @@
 //   Mesh mesh = manifold.ExtractSurface();
 //   manifold.Insert(new_points);         // shrink, insert or discard, regrow
 //
-// CGAL types stay inside delaunay_manifold.cc.
+// CGAL types stay inside manifold/'s internal headers and .cc files (see manifold_impl.h).
 #pragma once
 
 #include <Eigen/Core>

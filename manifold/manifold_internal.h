@@ -1,4 +1,5 @@
-// Test hooks into delaunay_manifold.cc (no CGAL types). Not for production callers.
+// Test hooks into the manifold's internals (no CGAL types), defined in manifold_test_hooks.cc,
+// which only the test executable compiles. Not for production callers.
 #pragma once
 
 #include <Eigen/Core>

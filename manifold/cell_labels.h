@@ -1,0 +1,97 @@
+// The labels and weights of the cells (paper section 2.1, docs/manifold.md): the visibility
+// weight of a cell from the rays counted on it and its neighbours, whether it is free space,
+// and the set O of outside cells with the per-vertex counts that keep the manifold tests
+// (regularity.h) local. Internal to manifold/.
+//
+// Holds no cell data itself: that lives in CellInfo and VertexInfo (triangulation.h); the
+// triangulation's structure is only read. Inline: growing and the ray walks call these per cell.
+#pragma once
+
+#include <cstdint>
+
+#include "base/check.h"
+#include "manifold/manifold_options.h"
+#include "manifold/triangulation.h"
+
+namespace ms::manifold_detail {
+
+// In O (an infinite cell never is).
+inline bool InO(const Delaunay& dt, const Cell_handle& c) {
+  return !dt.is_infinite(c) && c->info().outside;
+}
+
+class CellLabels {
+ public:
+  // `dt` must outlive this object; the weight parameters of `options` are copied.
+  CellLabels(const Delaunay& dt, const ManifoldOptions& options)
+      : dt_(dt),
+        w1_(options.w1),
+        w2_(options.w2),
+        free_threshold_(options.free_threshold),
+        w2_rule_(options.w2_rule) {}
+
+  // Graded Steiner points in use (decided by Build): cells of Steiner points only are free.
+  void set_graded(bool graded) { graded_ = graded; }
+  int64_t outside_count() const { return outside_count_; }
+
+  bool InO(const Cell_handle& c) const { return manifold_detail::InO(dt_, c); }
+
+  // w1 per ray crossing c, plus w2 per ray crossing a face neighbour n that spreads across
+  // the face n shares with c.
+  double Weight(const Cell_handle& c) const {
+    int64_t neighbours = 0;
+    for (int i = 0; i < 4; ++i) {
+      const Cell_handle n = c->neighbor(i);
+      neighbours += n->info().spread[n->index(c)];
+    }
+    return w1_ * c->info().crossings + w2_ * static_cast<double>(neighbours);
+  }
+
+  bool IsFree(const Cell_handle& c) const {
+    if (dt_.is_infinite(c)) return false;
+    // With graded Steiner points, a cell of Steiner points only is empty space (no input point
+    // in its circumsphere): free without rays, so the free space stays one region around the
+    // cameras instead of narrow cones that growing cannot carve (docs/manifold.md).
+    if (graded_ && c->vertex(0)->info().id < 0 && c->vertex(1)->info().id < 0 &&
+        c->vertex(2)->info().id < 0 && c->vertex(3)->info().id < 0) {
+      return true;
+    }
+    return Weight(c) >= free_threshold_;
+  }
+
+  // Counts one ray crossing c; bit i of `spread_mask` says it spreads w2 across face i.
+  void CountCrossing(const Cell_handle& c, unsigned spread_mask) {
+    CellInfo& info = c->info();
+    ++info.crossings;
+    if (w2_rule_ == W2Rule::kAllFaces) spread_mask = 0xF;
+    for (int i = 0; i < 4; ++i) info.spread[i] += (spread_mask >> i) & 1;
+  }
+
+  // Puts c into O or takes it out, keeping |O| and the per-vertex counts (cells in O, surface
+  // faces) up to date.
+  void SetOutside(const Cell_handle& c, bool outside) {
+    MS_CHECK(!dt_.is_infinite(c));
+    if (c->info().outside == outside) return;
+    c->info().outside = outside;
+    const int delta = outside ? 1 : -1;
+    outside_count_ += delta;
+    for (int i = 0; i < 4; ++i) c->vertex(i)->info().outside_cells += delta;
+    // Flipping c toggles whether each of its faces is on the surface.
+    for (int i = 0; i < 4; ++i) {
+      const int face_delta = InO(c->neighbor(i)) != outside ? 1 : -1;
+      for (int j = 0; j < 4; ++j) {
+        if (j != i) c->vertex(j)->info().surface_faces += face_delta;
+      }
+    }
+  }
+
+ private:
+  const Delaunay& dt_;
+  // Weights (paper section 2.1): w1 per crossing ray, w2 per ray spreading from a neighbour.
+  const double w1_, w2_, free_threshold_;
+  const W2Rule w2_rule_;
+  bool graded_ = false;
+  int64_t outside_count_ = 0;
+};
+
+}  // namespace ms::manifold_detail

@@ -1,0 +1,147 @@
+#include "manifold/grow_shrink.h"
+
+#include <algorithm>
+#include <iterator>
+#include <queue>
+
+namespace ms::manifold_detail {
+namespace {
+
+struct QueueEntry {
+  double weight;
+  CellKey key;
+  Cell_handle cell;
+  // Max-heap: heavier first; among equal weights the smaller key first (determinism).
+  bool operator<(const QueueEntry& o) const {
+    if (weight != o.weight) return weight < o.weight;
+    return key > o.key;
+  }
+};
+
+}  // namespace
+
+void GrowShrink::Grow(const std::vector<Cell_handle>& seeds) {
+  std::priority_queue<QueueEntry> queue;
+  const auto push = [&](const Cell_handle& c) {
+    if (dt_.is_infinite(c) || c->info().outside || c->info().queued || !labels_.IsFree(c)) {
+      return;
+    }
+    c->info().queued = true;
+    queue.push({labels_.Weight(c), KeyOf(c), c});
+  };
+  for (const Cell_handle& c : seeds) push(c);
+  std::vector<Cell_handle> refused;
+  for (;;) {
+    int64_t added = 0;
+    while (!queue.empty()) {
+      const Cell_handle c = queue.top().cell;
+      queue.pop();
+      c->info().queued = false;
+      if (c->info().outside) continue;
+      if (regularity_.FlipKeepsManifold(c)) {
+        labels_.SetOutside(c, true);
+        ++added;
+        for (int i = 0; i < 4; ++i) push(c->neighbor(i));
+      } else {
+        refused.push_back(c);
+      }
+    }
+    // A cell refused earlier may be accepted now that O has changed around it: retry until
+    // a round adds nothing.
+    if (added == 0 || refused.empty()) break;
+    std::vector<Cell_handle> retry;
+    retry.swap(refused);
+    for (const Cell_handle& c : retry) push(c);
+  }
+  for (const Cell_handle& c : refused) c->info().queued = false;
+}
+
+int64_t GrowShrink::GrowFromHeaviest() {
+  const int64_t before = labels_.outside_count();
+  for (;;) {
+    Cell_handle best;
+    QueueEntry best_entry{-1, {}, Cell_handle()};
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      if (c->info().outside || !labels_.IsFree(c)) continue;
+      if (labels_.outside_count() > 0) {
+        // Later seeds must start a separate component: no vertex touching O.
+        bool touches = false;
+        for (int i = 0; i < 4; ++i) touches |= c->vertex(i)->info().outside_cells > 0;
+        if (touches) continue;
+      }
+      const QueueEntry entry{labels_.Weight(c), KeyOf(c), c};
+      if (best == Cell_handle() || best_entry < entry) {
+        best = c;
+        best_entry = entry;
+      }
+    }
+    if (best == Cell_handle()) break;
+    Grow({best});
+    if (!options_.grow_all_components) break;
+  }
+  return labels_.outside_count() - before;
+}
+
+std::vector<Cell_handle> GrowShrink::BoundarySeeds(uint32_t changed_in) const {
+  std::vector<Cell_handle> seeds;
+  for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+    if (c->info().outside) continue;
+    bool changed = false;
+    for (int i = 0; i < 4; ++i) changed |= c->vertex(i)->info().changed == changed_in;
+    if (!changed) continue;
+    for (int i = 0; i < 4; ++i) {
+      if (labels_.InO(c->neighbor(i))) {
+        seeds.push_back(c);
+        break;
+      }
+    }
+  }
+  return seeds;
+}
+
+bool GrowShrink::ShrinkAround(const std::vector<Cell_handle>& conflicts, uint32_t stamp,
+                              uint32_t batch, int64_t* shrunk) {
+  // E: the cells of D in O first, then those of its neighbourhood, each part sorted by key.
+  std::vector<std::pair<CellKey, Cell_handle>>& shrink_set = shrink_set_;
+  shrink_set.clear();
+  const auto add_to_shrink_set = [&](const Cell_handle& c) {
+    if (dt_.is_infinite(c) || c->info().stamp == stamp) return;
+    c->info().stamp = stamp;
+    if (c->info().outside) shrink_set.push_back({KeyOf(c), c});
+  };
+  for (const Cell_handle& c : conflicts) add_to_shrink_set(c);
+  const size_t num_in_d = shrink_set.size();
+  if (num_in_d > 0) {
+    for (const Cell_handle& c : conflicts) {
+      if (options_.shrink_neighbourhood == 0) {
+        for (int i = 0; i < 4; ++i) add_to_shrink_set(c->neighbor(i));
+      } else {
+        for (int i = 0; i < 4; ++i) {
+          around_.clear();
+          dt_.incident_cells(c->vertex(i), std::back_inserter(around_));
+          for (const Cell_handle& a : around_) add_to_shrink_set(a);
+        }
+      }
+    }
+    const auto by_key = [](const auto& x, const auto& y) { return x.first < y.first; };
+    std::sort(shrink_set.begin(), shrink_set.begin() + num_in_d, by_key);
+    std::sort(shrink_set.begin() + num_in_d, shrink_set.end(), by_key);
+  }
+  size_t d_in_o = num_in_d;
+  for (bool changed = true; changed && d_in_o > 0;) {
+    changed = false;
+    for (size_t k = 0; k < shrink_set.size() && d_in_o > 0; ++k) {
+      const Cell_handle& c = shrink_set[k].second;
+      if (c->info().outside && regularity_.FlipKeepsManifold(c)) {
+        labels_.SetOutside(c, false);
+        for (int i = 0; i < 4; ++i) c->vertex(i)->info().changed = batch;
+        ++*shrunk;
+        changed = true;
+        if (k < num_in_d) --d_in_o;
+      }
+    }
+  }
+  return d_in_o == 0;
+}
+
+}  // namespace ms::manifold_detail

@@ -1,0 +1,54 @@
+// Growing and shrinking of O (paper sections 2.1 and 2.3, docs/manifold.md): cells flip into O
+// heaviest first, or out of O around a new point's conflict region, each flip only where the
+// boundary of O stays a 2-manifold (regularity.h). Internal to manifold/.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "manifold/cell_labels.h"
+#include "manifold/manifold_options.h"
+#include "manifold/regularity.h"
+#include "manifold/triangulation.h"
+
+namespace ms::manifold_detail {
+
+class GrowShrink {
+ public:
+  // All must outlive this object.
+  GrowShrink(const Delaunay& dt, const ManifoldOptions& options, CellLabels& labels,
+             Regularity& regularity)
+      : dt_(dt), options_(options), labels_(labels), regularity_(regularity) {}
+
+  // Grows O from `seeds` through free cells, heaviest first (ties: smaller CellKey), retrying
+  // refused cells until a round adds nothing.
+  void Grow(const std::vector<Cell_handle>& seeds);
+
+  // Grows O from the heaviest free cell (with options.grow_all_components, then from the
+  // heaviest free cell of every further component). Returns the cells added.
+  int64_t GrowFromHeaviest();
+
+  // Cells not in O, sharing a face with O, with a vertex marked changed in batch `changed_in`:
+  // where regrowing after an insertion batch starts.
+  std::vector<Cell_handle> BoundarySeeds(uint32_t changed_in) const;
+
+  // Shrinks O around a new point's conflict region D (`conflicts`): removes cells of E (D,
+  // then its neighbourhood, options.shrink_neighbourhood) from O where the surface stays
+  // manifold, until D has left O or nothing more can be removed. Marks the vertices of removed
+  // cells changed in `batch`; `stamp` (RayWalker::NextStamp) marks E while it is collected.
+  // Returns whether D left O; *shrunk is increased by the cells removed.
+  bool ShrinkAround(const std::vector<Cell_handle>& conflicts, uint32_t stamp, uint32_t batch,
+                    int64_t* shrunk);
+
+ private:
+  const Delaunay& dt_;
+  const ManifoldOptions& options_;
+  CellLabels& labels_;
+  Regularity& regularity_;
+  // Reused by ShrinkAround.
+  std::vector<std::pair<CellKey, Cell_handle>> shrink_set_;
+  std::vector<Cell_handle> around_;
+};
+
+}  // namespace ms::manifold_detail

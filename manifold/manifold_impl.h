@@ -1,0 +1,155 @@
+// DelaunayManifold's state and its steps (paper sections 2.1 and 2.3, docs/manifold.md).
+// Internal to manifold/ (and the test hooks, manifold_test_hooks.cc): it names CGAL types.
+//
+// The pieces it combines, bottom up:
+//   triangulation.h    CGAL's Delaunay triangulation, VertexInfo and CellInfo
+//   cell_predicates.h  stateless exact predicates on a cell and a segment
+//   cell_labels.h      weights, free space, the set O and its per-vertex counts
+//   ray_walker.h       viewing rays through the triangulation (visit stamps, camera starts)
+//   regularity.h       does the surface stay a 2-manifold when a cell flips?
+//   grow_shrink.h      growing and shrinking O
+// Build and Insert (delaunay_manifold.cc) are short lists of named steps over these;
+// Validate (manifold_validate.cc) checks them layer by layer.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "manifold/cell_labels.h"
+#include "manifold/delaunay_manifold.h"
+#include "manifold/grow_shrink.h"
+#include "manifold/manifold_options.h"
+#include "manifold/ray_index.h"
+#include "manifold/ray_walker.h"
+#include "manifold/regularity.h"
+#include "manifold/steiner_points.h"
+#include "manifold/triangulation.h"
+
+namespace ms {
+
+struct ManifoldTestAccess;  // manifold_test_hooks.cc
+
+class DelaunayManifold::Impl {
+ public:
+  using Delaunay = manifold_detail::Delaunay;
+  using Cell_handle = manifold_detail::Cell_handle;
+  using Vertex_handle = manifold_detail::Vertex_handle;
+  using Point = manifold_detail::Point;
+
+  Impl(std::vector<ManifoldCamera> cameras, const ManifoldOptions& options);
+
+  BuildStats Build(const std::vector<RayPoint>& points);
+  InsertionStats Insert(const std::vector<RayPoint>& points);
+  Mesh ExtractSurface(SurfaceInfo* info) const;
+  // Not const, unlike DelaunayManifold::Validate: the weight layer walks every ray again,
+  // which takes visit stamps and the walker's scratch buffers. The state checked is unchanged.
+  std::string Validate(bool check_weights);
+
+  int64_t num_points() const { return static_cast<int64_t>(positions_.size()); }
+  int64_t num_vertices() const { return static_cast<int64_t>(dt_.number_of_vertices()); }
+  int64_t num_cells() const { return static_cast<int64_t>(dt_.number_of_finite_cells()); }
+  int64_t num_outside_cells() const { return labels_.outside_count(); }
+  // Free cells that growing left out of O (refused by the manifold test or unreachable).
+  int64_t CountFreeCellsInside() const {
+    int64_t n = 0;
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      n += !c->info().outside && labels_.IsFree(c);
+    }
+    return n;
+  }
+  size_t MemoryBytes() const {
+    return dt_.number_of_cells() * sizeof(Delaunay::Cell) +
+           dt_.number_of_vertices() * sizeof(Delaunay::Vertex) +
+           positions_.capacity() * sizeof(Eigen::Vector3d) +
+           point_cameras_.capacity() * sizeof(std::vector<int32_t>) +
+           ray_index_->size() * sizeof(int32_t) +
+           vertex_of_point_.capacity() * sizeof(Vertex_handle) + ray_index_->MemoryBytes();
+  }
+
+ private:
+  friend struct ManifoldTestAccess;
+
+  // One Insert call's state, shared by its steps.
+  struct InsertionBatch {
+    uint32_t number = 0;       // cells born and vertices changed in the batch carry it
+    int32_t first_new_id = 0;  // id of the batch's first inserted point
+    // Per old ray (by its id in the ray index): the smallest parameter (0 at the camera, 1 at
+    // the point) where it may enter a new cell; > 1: none.
+    std::vector<float> ray_reach;
+    bool all_affected = false;  // every old ray from its camera on
+    // Slack for the segment/box test: rounding in the box and the clipping, scene-relative.
+    double box_slack = 0;
+    Cell_handle hint;  // where locating the next point starts
+    // The current point's conflict region D and the facets on its boundary.
+    std::vector<Cell_handle> conflicts;
+    std::vector<manifold_detail::Facet> boundary;
+    std::vector<RayRef> candidates;   // scratch of MarkRaysNear
+    std::vector<Cell_handle> around;  // scratch of InsertPoint
+  };
+
+  // --- Build steps ---
+  // Bounding box of the points and cameras; throws InputError for bad input.
+  void CheckAndBound(const std::vector<RayPoint>& points, Eigen::Vector3d* lo,
+                     Eigen::Vector3d* hi) const;
+  // Steiner points around [lo, hi]; decides graded Steiner points and sets the Steiner box.
+  SteinerPoints PlaceSteinerPoints(const std::vector<RayPoint>& points, const Eigen::Vector3d& lo,
+                                   const Eigen::Vector3d& hi, BuildStats* stats);
+  // (1) Delaunay triangulation of the Steiner points and the points.
+  void Triangulate(const std::vector<RayPoint>& points, const std::vector<Eigen::Vector3d>& steiner,
+                   BuildStats* stats);
+  // (2) Every viewing ray walked and counted on the cells it crosses.
+  void TraceRays(BuildStats* stats);
+  // (3) O grown from the heaviest free cell.
+  void GrowInitial(BuildStats* stats);
+
+  // --- Insert steps ---
+  // Throws InputError for a non-finite point or a camera out of range.
+  void CheckNewPoints(const std::vector<RayPoint>& points) const;
+  InsertionBatch StartBatch();
+  // One new point: discarded, or O shrunk around it and the point inserted.
+  void InsertOne(const RayPoint& point, InsertionBatch* batch, InsertionStats* stats);
+  // D, the cells in conflict with p (batch->conflicts, batch->boundary), from *located.
+  // Returns false, having counted the discard, for a point outside the Steiner box or the
+  // triangulation or on an existing vertex.
+  bool FindConflictRegion(const Eigen::Vector3d& position, const Point& p, InsertionBatch* batch,
+                          Cell_handle* located, InsertionStats* stats);
+  // Shrinks O around D; false if D still meets O (the point is then discarded).
+  bool ShrinkAround(const InsertionBatch& batch, InsertionStats* stats);
+  // Lowers the reach of the old rays that may cross D (for RewalkOldRays).
+  void MarkRaysNear(InsertionBatch* batch, InsertionStats* stats);
+  // Replaces D by the star of the new point; the new cells are born in this batch.
+  void InsertPoint(const Point& p, const RayPoint& point, InsertionBatch* batch,
+                   InsertionStats* stats);
+  // Exact ray counts on the cells born in the batch: the old rays that may cross one, walked
+  // again and counted on those cells only, then the new points' rays, counted everywhere.
+  void RewalkOldRays(const InsertionBatch& batch, InsertionStats* stats);
+  void TraceNewRays(const InsertionBatch& batch, InsertionStats* stats);
+  // Regrows O from its boundary where the batch changed something.
+  void Regrow(const InsertionBatch& batch, const InsertionStats& stats);
+
+  // --- Validate layers (manifold_validate.cc), each run only when the one before passed ---
+  std::string ValidateTriangulation() const;  // CGAL's own check
+  std::string ValidateLabels() const;         // O and the per-vertex counts
+  std::string ValidateManifold();             // every vertex regular
+  std::string ValidateWeights();              // ray counts against a recount from scratch
+
+  ManifoldOptions options_;
+  std::vector<ManifoldCamera> cameras_;
+  Delaunay dt_;
+  manifold_detail::CellLabels labels_{dt_, options_};
+  manifold_detail::Regularity regularity_{dt_};
+  manifold_detail::RayWalker walker_;
+  manifold_detail::GrowShrink grow_shrink_{dt_, options_, labels_, regularity_};
+  std::unique_ptr<RayIndex> ray_index_;
+  std::vector<Eigen::Vector3d> positions_;
+  std::vector<std::vector<int32_t>> point_cameras_;
+  std::vector<Vertex_handle> vertex_of_point_;
+  Eigen::Vector3d box_min_, box_max_;  // Steiner box: points outside are discarded
+  uint32_t batch_ = 0;                 // insertion batches so far
+  bool built_ = false;
+};
+
+}  // namespace ms

@@ -1,0 +1,158 @@
+// Test hooks (manifold/manifold_internal.h): compiled into manifold_test only, never into the
+// ms_manifold library. They reach DelaunayManifold::Impl through the internal headers.
+#include <algorithm>
+#include <utility>
+#include <vector>
+
+#include "base/check.h"
+#include "manifold/cell_predicates.h"
+#include "manifold/manifold_impl.h"
+#include "manifold/manifold_internal.h"
+
+namespace ms {
+
+using manifold_detail::Cell_handle;
+using manifold_detail::Delaunay;
+using manifold_detail::KeyOf;
+using manifold_detail::Point;
+using manifold_detail::SegmentCrossesCell;
+using manifold_detail::ToPoint;
+using manifold_detail::Vertex_handle;
+using manifold_detail::VertexInfo;
+
+namespace manifold_internal {
+namespace {
+
+Delaunay Triangulate(const std::vector<Eigen::Vector3d>& points) {
+  std::vector<std::pair<Point, VertexInfo>> vertices;
+  for (size_t i = 0; i < points.size(); ++i) {
+    vertices.push_back({ToPoint(points[i]), {static_cast<int32_t>(i), 0, 0, 0, 0}});
+  }
+  Delaunay dt(vertices.begin(), vertices.end());
+  return dt;
+}
+
+}  // namespace
+
+bool SegmentCrossesTetrahedron(std::array<Eigen::Vector3d, 4> tet, const Eigen::Vector3d& a,
+                               const Eigen::Vector3d& b) {
+  std::vector<Eigen::Vector3d> points(tet.begin(), tet.end());
+  Delaunay dt = Triangulate(points);
+  MS_CHECK(dt.number_of_finite_cells() == 1) << "degenerate tetrahedron";
+  return SegmentCrossesCell(dt.finite_cells_begin(), ToPoint(a), ToPoint(b));
+}
+
+std::vector<CellVertices> DelaunayCells(const std::vector<Eigen::Vector3d>& points) {
+  Delaunay dt = Triangulate(points);
+  std::vector<CellVertices> cells;
+  for (auto c = dt.finite_cells_begin(); c != dt.finite_cells_end(); ++c) {
+    cells.push_back(KeyOf(c));
+  }
+  std::sort(cells.begin(), cells.end());
+  return cells;
+}
+
+}  // namespace manifold_internal
+
+// Friend of DelaunayManifold::Impl for the hooks that need its internals.
+struct ManifoldTestAccess {
+  static bool IsVertexRegular(const std::vector<Eigen::Vector3d>& points,
+                              const std::vector<manifold_internal::CellVertices>& outside,
+                              int32_t v) {
+    DelaunayManifold::Impl impl({}, ManifoldOptions{});
+    impl.dt_ = manifold_internal::Triangulate(points);
+    Vertex_handle vertex;
+    for (auto c = impl.dt_.finite_cells_begin(); c != impl.dt_.finite_cells_end(); ++c) {
+      if (std::binary_search(outside.begin(), outside.end(), KeyOf(c))) {
+        impl.labels_.SetOutside(c, true);
+      }
+    }
+    for (auto it = impl.dt_.finite_vertices_begin(); it != impl.dt_.finite_vertices_end(); ++it) {
+      if (it->info().id == v) vertex = it;
+    }
+    MS_CHECK(vertex != Vertex_handle()) << "no vertex " << v;
+    return impl.regularity_.VertexRegular(vertex, Cell_handle());
+  }
+
+  // Random O sets (random flips that keep the surface manifold), then both regularity tests
+  // on every vertex of random cells: they must agree.
+  static int64_t RegularityTestMismatches(const std::vector<Eigen::Vector3d>& points, uint32_t seed,
+                                          int64_t* checked) {
+    DelaunayManifold::Impl impl({}, ManifoldOptions{});
+    std::vector<RayPoint> rays(points.size());
+    for (size_t i = 0; i < points.size(); ++i) rays[i].position = points[i];
+    impl.Build(rays);
+    std::vector<Cell_handle> cells;
+    for (auto c = impl.dt_.finite_cells_begin(); c != impl.dt_.finite_cells_end(); ++c) {
+      cells.push_back(c);
+    }
+    uint64_t state = seed * 2654435761u + 1;
+    const auto next = [&]() {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      return static_cast<size_t>(state >> 33);
+    };
+    int64_t mismatches = 0;
+    *checked = 0;
+    for (int step = 0; step < 4000; ++step) {
+      const Cell_handle t = cells[next() % cells.size()];
+      bool fast = true, full = true;
+      for (int i = 0; i < 4; ++i) {
+        const bool a = impl.regularity_.VertexRegularAfterFlip(t->vertex(i), t);
+        const bool b = impl.regularity_.VertexRegular(t->vertex(i), t);
+        mismatches += a != b;
+        ++*checked;
+        fast &= a;
+        full &= b;
+      }
+      if (fast && full) impl.labels_.SetOutside(t, !t->info().outside);
+    }
+    return mismatches;
+  }
+
+  static void CrossedCells(const std::vector<Eigen::Vector3d>& points,
+                           const Eigen::Vector3d& camera, int32_t target,
+                           std::vector<manifold_internal::CellVertices>* walked,
+                           std::vector<manifold_internal::CellVertices>* brute_force) {
+    ManifoldCamera cam;
+    cam.center = camera;
+    DelaunayManifold::Impl impl({cam}, ManifoldOptions{});
+    std::vector<RayPoint> rays(points.size());
+    for (size_t i = 0; i < points.size(); ++i) rays[i].position = points[i];
+    impl.Build(rays);
+    const Point a = impl.walker_.camera_point(0);
+    const Point b = impl.vertex_of_point_[target]->point();
+    walked->clear();
+    impl.walker_.WalkFromCamera(
+        0, impl.vertex_of_point_[target],
+        [&](const Cell_handle& c, unsigned) { walked->push_back(KeyOf(c)); });
+    brute_force->clear();
+    for (auto c = impl.dt_.finite_cells_begin(); c != impl.dt_.finite_cells_end(); ++c) {
+      if (SegmentCrossesCell(c, a, b)) brute_force->push_back(KeyOf(c));
+    }
+    std::sort(walked->begin(), walked->end());
+    std::sort(brute_force->begin(), brute_force->end());
+  }
+};
+
+namespace manifold_internal {
+
+int64_t RegularityTestMismatches(const std::vector<Eigen::Vector3d>& points, uint32_t seed,
+                                 int64_t* checked) {
+  return ManifoldTestAccess::RegularityTestMismatches(points, seed, checked);
+}
+
+bool IsVertexRegular(const std::vector<Eigen::Vector3d>& points,
+                     const std::vector<CellVertices>& outside, int32_t v) {
+  std::vector<CellVertices> sorted = outside;
+  std::sort(sorted.begin(), sorted.end());
+  return ManifoldTestAccess::IsVertexRegular(points, sorted, v);
+}
+
+void CrossedCells(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& camera,
+                  int32_t target, std::vector<CellVertices>* walked,
+                  std::vector<CellVertices>* brute_force) {
+  ManifoldTestAccess::CrossedCells(points, camera, target, walked, brute_force);
+}
+
+}  // namespace manifold_internal
+}  // namespace ms
