@@ -112,7 +112,9 @@ TEST(RayIndex, VisitsEveryRayOnceCameraByCameraInDirectionOrder) {
     ASSERT_LT(ray.id, static_cast<int32_t>(added.size()));
     EXPECT_TRUE(added[ray.id] == ray);
     ++seen[ray.id];
-    if (k > 0) EXPECT_LE(visited[k - 1].camera, ray.camera) << "cameras one after another";
+    if (k > 0) {
+      EXPECT_LE(visited[k - 1].camera, ray.camera) << "cameras one after another";
+    }
   }
   for (int count : seen) EXPECT_EQ(count, 1);
 }
