@@ -20,6 +20,7 @@ namespace ms {
 using manifold_detail::CellInfo;
 using manifold_detail::Locate_type;
 using manifold_detail::SegmentMeetsBox;
+using manifold_detail::ToEigen;
 using manifold_detail::ToPoint;
 using manifold_detail::VertexInfo;
 
@@ -60,6 +61,8 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   Timer timer;
   Eigen::Vector3d lo, hi;
   CheckAndBound(points, &lo, &hi);
+  merge_.pixel_fraction = options_.merge_pixels;
+  merge_.floor = options_.merge_floor * (hi - lo).norm();
   const SteinerPoints steiner = PlaceSteinerPoints(points, lo, hi, &stats);
   Triangulate(points, steiner.points, &stats);
   stats.seconds_triangulation = timer.Seconds();
@@ -143,6 +146,9 @@ SteinerPoints DelaunayManifold::Impl::PlaceSteinerPoints(const std::vector<RayPo
 void DelaunayManifold::Impl::Triangulate(const std::vector<RayPoint>& points,
                                          const std::vector<Eigen::Vector3d>& steiner,
                                          BuildStats* stats) {
+  // A near-duplicate joins the point it duplicates: never a vertex, its rays end there.
+  const std::vector<int32_t> representative =
+      NearDuplicateRepresentatives(points, cameras_, merge_);
   // Steiner points and input points together (CGAL sorts spatially).
   std::vector<std::pair<Point, VertexInfo>> vertices;
   vertices.reserve(steiner.size() + points.size());
@@ -150,6 +156,7 @@ void DelaunayManifold::Impl::Triangulate(const std::vector<RayPoint>& points,
     vertices.push_back({ToPoint(steiner[k]), {static_cast<int32_t>(-1 - k), 0, 0, 0, 0}});
   }
   for (size_t i = 0; i < points.size(); ++i) {
+    if (representative[i] != static_cast<int32_t>(i)) continue;
     vertices.push_back({ToPoint(points[i].position), {static_cast<int32_t>(i), 0, 0, 0, 0}});
   }
   dt_.insert(vertices.begin(), vertices.end());
@@ -159,9 +166,19 @@ void DelaunayManifold::Impl::Triangulate(const std::vector<RayPoint>& points,
   for (auto v = dt_.finite_vertices_begin(); v != dt_.finite_vertices_end(); ++v) {
     if (v->info().id >= 0) vertex_of_point_[v->info().id] = v;
   }
+  int64_t near_duplicates = 0;
   for (size_t i = 0; i < points.size(); ++i) {
-    positions_.push_back(points[i].position);
     point_cameras_.push_back(SortedCameras(points[i].cameras));
+    const int32_t r = representative[i];
+    if (r != static_cast<int32_t>(i)) {
+      // Its rays run to the representative's vertex, so they are indexed by its position.
+      positions_.push_back(points[r].position);
+      vertex_of_point_[i] = vertex_of_point_[r];
+      ++stats->merged_duplicates;
+      ++near_duplicates;
+      continue;
+    }
+    positions_.push_back(points[i].position);
     if (vertex_of_point_[i] == Vertex_handle()) {
       // Same position as another point: its rays end at that vertex.
       Locate_type type;
@@ -171,6 +188,12 @@ void DelaunayManifold::Impl::Triangulate(const std::vector<RayPoint>& points,
       vertex_of_point_[i] = c->vertex(li);
       ++stats->merged_duplicates;
     }
+  }
+  if (near_duplicates > 0) {
+    spdlog::info(
+        "manifold: merged {} near-duplicate points into others ({} of a pixel's footprint, "
+        "floor {:.3g})",
+        near_duplicates, merge_.pixel_fraction, merge_.floor);
   }
   for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
     for (int i = 0; i < 4; ++i) ++c->vertex(i)->info().cells;
@@ -229,7 +252,7 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
   }
   // The exact recount of the cells born in the batch.
   RewalkOldRays(batch, &stats);
-  TraceNewRays(batch, &stats);
+  TraceNewRays(&batch, &stats);
   stats.seconds_insertion = timer.Seconds();
 
   timer.Restart();
@@ -277,7 +300,7 @@ void DelaunayManifold::Impl::InsertOne(const RayPoint& point, InsertionBatch* ba
                                        InsertionStats* stats) {
   const Point p = ToPoint(point.position);
   Cell_handle located;
-  if (!FindConflictRegion(point.position, p, batch, &located, stats)) return;
+  if (!FindConflictRegion(point, p, batch, &located, stats)) return;
   if (!ShrinkAround(*batch, stats)) {
     // Discarded (the paper's rule); the cells shrunk for it stay out of O until regrowing.
     ++stats->discarded_conflict;
@@ -288,9 +311,10 @@ void DelaunayManifold::Impl::InsertOne(const RayPoint& point, InsertionBatch* ba
   InsertPoint(p, point, batch, stats);
 }
 
-bool DelaunayManifold::Impl::FindConflictRegion(const Eigen::Vector3d& position, const Point& p,
+bool DelaunayManifold::Impl::FindConflictRegion(const RayPoint& point, const Point& p,
                                                 InsertionBatch* batch, Cell_handle* located,
                                                 InsertionStats* stats) {
+  const Eigen::Vector3d& position = point.position;
   if (!((position.array() > box_min_.array()).all() &&
         (position.array() < box_max_.array()).all())) {
     ++stats->discarded_outside;
@@ -301,11 +325,24 @@ bool DelaunayManifold::Impl::FindConflictRegion(const Eigen::Vector3d& position,
   *located = dt_.locate(p, type, li, lj, batch->hint);
   if (type == Delaunay::VERTEX) {
     ++stats->discarded_duplicate;
+    if (options_.merge_new_points) GainCameras((*located)->vertex(li), point.cameras, batch);
     return false;
   }
   if (type == Delaunay::OUTSIDE_CONVEX_HULL || type == Delaunay::OUTSIDE_AFFINE_HULL) {
     ++stats->discarded_outside;
     return false;
+  }
+  if (options_.merge_new_points) {
+    // Nearer an existing vertex than the merge tolerance: that vertex gains the point's cameras
+    // (its visibility is kept, not its position).
+    const Vertex_handle nearest = dt_.nearest_vertex(p, *located);
+    if ((ToEigen(nearest->point()) - position).norm() <
+        DuplicateDistance(position, point.cameras, cameras_, merge_)) {
+      ++stats->discarded_duplicate;
+      GainCameras(nearest, point.cameras, batch);
+      batch->hint = *located;
+      return false;
+    }
   }
   batch->conflicts.clear();
   batch->boundary.clear();
@@ -409,11 +446,40 @@ void DelaunayManifold::Impl::RewalkOldRays(const InsertionBatch& batch, Insertio
   });
 }
 
-// The new points' rays are walked and counted everywhere, then join the index.
-void DelaunayManifold::Impl::TraceNewRays(const InsertionBatch& batch, InsertionStats* stats) {
-  for (int32_t id = batch.first_new_id; id < static_cast<int32_t>(positions_.size()); ++id) {
+// The cameras of a duplicate that `vertex` does not have yet, for TraceNewRays (Steiner vertices
+// gain none: they are no observation).
+void DelaunayManifold::Impl::GainCameras(const Vertex_handle& vertex,
+                                         const std::vector<int32_t>& cameras,
+                                         InsertionBatch* batch) {
+  const int32_t id = vertex->info().id;
+  if (id < 0) return;
+  const std::vector<int32_t>& has = point_cameras_[id];
+  for (int32_t c : cameras) {
+    const std::pair<int32_t, int32_t> ray(id, c);
+    if (!std::binary_search(has.begin(), has.end(), c) &&
+        std::find(batch->gained_rays.begin(), batch->gained_rays.end(), ray) ==
+            batch->gained_rays.end()) {
+      batch->gained_rays.push_back(ray);
+    }
+  }
+}
+
+// The new points' rays, and the rays existing vertices gained from duplicates, are walked and
+// counted everywhere, then join the index.
+void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats* stats) {
+  const auto count = [&](const Cell_handle& c, unsigned mask) { labels_.CountCrossing(c, mask); };
+  for (const auto& [id, c] : batch->gained_rays) {
     const Vertex_handle target = vertex_of_point_[id];
-    const auto count = [&](const Cell_handle& c, unsigned mask) { labels_.CountCrossing(c, mask); };
+    walker_.WalkFromCamera(c, target, count);
+    ray_index_->Add(c, id, positions_[id]);
+    std::vector<int32_t>& cams = point_cameras_[id];
+    cams.insert(std::upper_bound(cams.begin(), cams.end(), c), c);
+    target->info().changed = batch->number;  // growing looks at its cells again
+    ++stats->new_rays;
+    ++stats->gained_rays;
+  }
+  for (int32_t id = batch->first_new_id; id < static_cast<int32_t>(positions_.size()); ++id) {
+    const Vertex_handle target = vertex_of_point_[id];
     for (int32_t c : point_cameras_[id]) {
       walker_.WalkFromCamera(c, target, count);
       ray_index_->Add(c, id, positions_[id]);
@@ -427,7 +493,7 @@ void DelaunayManifold::Impl::TraceNewRays(const InsertionBatch& batch, Insertion
 // vertices touches a new or shrunk cell has the weight and neighbourhood it had when the last
 // growing refused it.
 void DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, const InsertionStats& stats) {
-  if (stats.inserted == 0 && stats.shrunk_cells == 0) return;  // nothing changed
+  if (stats.inserted == 0 && stats.shrunk_cells == 0 && stats.gained_rays == 0) return;
   grow_shrink_.Grow(grow_shrink_.BoundarySeeds(batch.number));
   if (labels_.outside_count() == 0) grow_shrink_.GrowFromHeaviest();
 }

@@ -56,7 +56,8 @@ struct InsertionStats {
   int64_t requested = 0;
   int64_t inserted = 0;
   int64_t discarded_conflict = 0;   // D still met O after shrinking (the paper's rule)
-  int64_t discarded_duplicate = 0;  // same position as an existing vertex
+  int64_t discarded_duplicate = 0;  // at (or within the merge tolerance of) an existing vertex
+  int64_t gained_rays = 0;          // cameras of those duplicates their vertex did not have
   int64_t discarded_outside = 0;    // outside the Steiner box
   int64_t shrunk_cells = 0;         // cells removed from O while shrinking (for inserted and discarded points)
   int64_t candidate_rays = 0;       // rays found near conflict regions (with repeats)

@@ -22,6 +22,7 @@
 #include "manifold/delaunay_manifold.h"
 #include "manifold/grow_shrink.h"
 #include "manifold/manifold_options.h"
+#include "manifold/point_merging.h"
 #include "manifold/ray_index.h"
 #include "manifold/ray_walker.h"
 #include "manifold/regularity.h"
@@ -86,6 +87,8 @@ class DelaunayManifold::Impl {
     // The current point's conflict region D and the facets on its boundary.
     std::vector<Cell_handle> conflicts;
     std::vector<manifold_detail::Facet> boundary;
+    // Cameras of duplicate points that the vertex they duplicate gains: (point id, camera).
+    std::vector<std::pair<int32_t, int32_t>> gained_rays;
     std::vector<RayRef> candidates;   // scratch of MarkRaysNear
     std::vector<Cell_handle> around;  // scratch of InsertPoint
   };
@@ -114,7 +117,7 @@ class DelaunayManifold::Impl {
   // D, the cells in conflict with p (batch->conflicts, batch->boundary), from *located.
   // Returns false, having counted the discard, for a point outside the Steiner box or the
   // triangulation or on an existing vertex.
-  bool FindConflictRegion(const Eigen::Vector3d& position, const Point& p, InsertionBatch* batch,
+  bool FindConflictRegion(const RayPoint& point, const Point& p, InsertionBatch* batch,
                           Cell_handle* located, InsertionStats* stats);
   // Shrinks O around D; false if D still meets O (the point is then discarded).
   bool ShrinkAround(const InsertionBatch& batch, InsertionStats* stats);
@@ -126,7 +129,9 @@ class DelaunayManifold::Impl {
   // Exact ray counts on the cells born in the batch: the old rays that may cross one, walked
   // again and counted on those cells only, then the new points' rays, counted everywhere.
   void RewalkOldRays(const InsertionBatch& batch, InsertionStats* stats);
-  void TraceNewRays(const InsertionBatch& batch, InsertionStats* stats);
+  void TraceNewRays(InsertionBatch* batch, InsertionStats* stats);
+  void GainCameras(const Vertex_handle& vertex, const std::vector<int32_t>& cameras,
+                   InsertionBatch* batch);
   // Regrows O from its boundary where the batch changed something.
   void Regrow(const InsertionBatch& batch, const InsertionStats& stats);
 
@@ -148,6 +153,7 @@ class DelaunayManifold::Impl {
   std::vector<std::vector<int32_t>> point_cameras_;
   std::vector<Vertex_handle> vertex_of_point_;
   Eigen::Vector3d box_min_, box_max_;  // Steiner box: points outside are discarded
+  MergeTolerance merge_;                // near-duplicate points (set by Build)
   uint32_t batch_ = 0;                 // insertion batches so far
   bool built_ = false;
 };

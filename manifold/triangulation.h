@@ -53,6 +53,7 @@ using Facet = Delaunay::Facet;
 using Locate_type = Delaunay::Locate_type;
 
 inline Point ToPoint(const Eigen::Vector3d& p) { return Point(p.x(), p.y(), p.z()); }
+inline Eigen::Vector3d ToEigen(const Point& p) { return Eigen::Vector3d(p.x(), p.y(), p.z()); }
 
 // A cell's name independent of memory layout: the ids of its vertices, sorted. Unique among the
 // finite cells; orders the growing queue's ties and the shrink set.
