@@ -2,6 +2,7 @@
 // plane (the paper's simulated dataset: 2 x 2 base, 0.3 high; sweep/pyramid_geometry.h), seen
 // from three cameras looking down, rendered analytically (each pixel's rays cast against the
 // exact surface, textured with procedural multi-scale value noise, 2 x 2 supersampled).
+// Test-only (ms_sweep_test_scene): linked by tests and benchmarks, never by `manisweep`.
 #pragma once
 
 #include <Eigen/Core>
