@@ -534,6 +534,8 @@ TileRecords::TileRecords(const TileGrid& tiles, float threshold, int match_words
 
 // The offsets of one batch: layer b of every texture array sweeps prep.offsets[first + b].
 struct GlslSweepKernel::Impl::Batch {
+  // The offsets in batches of `size` (the last one may be smaller).
+  static std::vector<Batch> Split(const std::vector<int>& offsets, int size);
   int index = 0;
   int first = 0;
   int layers = 0;
@@ -550,7 +552,8 @@ struct GlslSweepKernel::Impl::Group {
 // A job on the GPU (UploadJob): its mesh, images and tile records, and what the passes of every
 // batch need.
 struct GlslSweepKernel::Impl::GpuJob {
-  GpuJob(const SweepJob& job, const PreparedSweep& prep, int match_words, int num_batches);
+  // Uploads the mesh, the images and the tile records; `batch_size` offsets per batch.
+  GpuJob(const SweepJob& job, const PreparedSweep& prep, int batch_size, bool clip_control);
   // The uniforms of a raster program sweeping the mesh as seen from `view` (C or a neighbour).
   void SetSweep(const gl::ShaderProgram& program, const View& view, double far) const;
   // Those of C's draw with a group of neighbours' reprojections.
@@ -558,8 +561,8 @@ struct GlslSweepKernel::Impl::GpuJob {
 
   const SweepJob& job;
   const PreparedSweep& prep;
-  int width = 0, height = 0, num_neighbours = 0, radius = 0, match_words = 0;
-  std::vector<Batch> batches;
+  const int width, height, num_neighbours, radius, match_words;
+  const std::vector<Batch> batches;
   BlurPrograms* blur = nullptr;
   gl::ShaderProgram* tile_best = nullptr;
   // Dispatch sizes of the row-sum and column-sum + NCC passes.
@@ -572,29 +575,57 @@ struct GlslSweepKernel::Impl::GpuJob {
   const TileRecords records;
 
   // Rendering state.
-  bool clip_control = false;  // reversed-Z depth
-  gl::DepthRange range = gl::DepthRange::kNegativeOneToOne;
-  float clear_depth = 1;
-  Eigen::Vector3f center;  // C's, relative to origin
-  double far_c = 0;        // far planes of C's and the neighbours' views
+  const bool clip_control;  // reversed-Z depth
+  const gl::DepthRange range;
+  const float clear_depth;
+  const Eigen::Vector3f center;  // C's, relative to origin
+  double far_c = 0;              // far planes of C's and the neighbours' views
   std::vector<double> far_n;
   std::vector<Group> groups;
 };
 
+std::vector<GlslSweepKernel::Impl::Batch> GlslSweepKernel::Impl::Batch::Split(
+    const std::vector<int>& offsets, int size) {
+  std::vector<Batch> batches;
+  const int num_offsets = static_cast<int>(offsets.size());
+  for (int first = 0; first < num_offsets; first += size) {
+    Batch batch;
+    batch.index = static_cast<int>(batches.size());
+    batch.first = first;
+    batch.layers = std::min(size, num_offsets - first);
+    batch.first_offset = offsets[first];
+    batches.push_back(batch);
+  }
+  return batches;
+}
+
 GlslSweepKernel::Impl::GpuJob::GpuJob(const SweepJob& job, const PreparedSweep& prep,
-                                      int match_words, int num_batches)
+                                      int batch_size, bool clip_control)
     : job(job),
       prep(prep),
       width(prep.camera.view.intrinsics.width),
       height(prep.camera.view.intrinsics.height),
       num_neighbours(static_cast<int>(prep.neighbours.size())),
       radius((prep.window.rows - 1) / 2),
-      match_words(match_words),
+      match_words(DivUp(num_neighbours, 32)),
+      batches(Batch::Split(prep.offsets, batch_size)),
       mesh(job.mesh),
       origin(mesh.origin()),
       image(ImageTexture(prep.camera.image)),
-      records(prep.tiles, static_cast<float>(job.options.ncc_threshold), match_words, num_batches) {
+      records(prep.tiles, static_cast<float>(job.options.ncc_threshold), match_words,
+              static_cast<int>(batches.size())),
+      clip_control(clip_control),
+      range(clip_control ? gl::DepthRange::kReversedZeroToOne : gl::DepthRange::kNegativeOneToOne),
+      clear_depth(clip_control ? 0.0f : 1.0f),
+      center((prep.camera.view.Center() - origin).cast<float>()) {
   for (const SweepCamera& n : prep.neighbours) neighbour_images.push_back(ImageTexture(n.image));
+  // Far planes beyond every swept vertex.
+  const int max_offset = std::max(std::abs(prep.offsets.front()), std::abs(prep.offsets.back()));
+  const double max_shift = std::abs(prep.alpha) * max_offset;
+  far_c = FarPlane(prep.camera.view, job.mesh, max_shift);
+  for (const SweepCamera& n : prep.neighbours) {
+    far_n.push_back(FarPlane(n.view, job.mesh, max_shift));
+  }
 }
 
 void GlslSweepKernel::Impl::GpuJob::SetSweep(const gl::ShaderProgram& program, const View& view,
@@ -770,52 +801,25 @@ void GlslSweepKernel::Impl::CheckLimits(const SweepJob& job, const PreparedSweep
   }
 }
 
-// Batches the offsets as `plan` says, gets the programs and textures of the job's shape, uploads
-// the mesh, the images and the tile records, and sets the uniforms that stay for the whole job.
+// Gets the programs and textures of the job's shape, puts the job on the GPU (GpuJob) in batches
+// of plan.offsets_per_batch, groups the neighbours for C's draws, and sets the compute passes'
+// uniforms that stay for the whole job.
 std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
     const SweepJob& job, const PreparedSweep& prep, const MemoryPlan& plan) {
-  const int num_offsets = static_cast<int>(prep.offsets.size());
-  const int num_neighbours = static_cast<int>(prep.neighbours.size());
   const int radius = (prep.window.rows - 1) / 2;
-  const int match_words = DivUp(num_neighbours, 32);
-  const int batch_size = plan.offsets_per_batch;
-  const int num_batches = DivUp(num_offsets, batch_size);
   BlurPrograms& programs = Blur(radius);
-  gl::ShaderProgram& tile_best = TileBest(radius, match_words);
-  Allocate(prep, batch_size, radius);
-
-  auto gpu = std::make_unique<GpuJob>(job, prep, match_words, num_batches);
+  Allocate(prep, plan.offsets_per_batch, radius);
+  auto gpu =
+      std::make_unique<GpuJob>(job, prep, plan.offsets_per_batch, context->info().clip_control);
+  gl::ShaderProgram& tile_best = TileBest(radius, gpu->match_words);
   gpu->blur = &programs;
   gpu->tile_best = &tile_best;
-  for (int b = 0; b < num_batches; ++b) {
-    Batch batch;
-    batch.index = b;
-    batch.first = b * batch_size;
-    batch.layers = std::min(batch_size, num_offsets - batch.first);
-    batch.first_offset = prep.offsets[batch.first];
-    gpu->batches.push_back(batch);
-  }
-
-  // Rendering state.
-  const gl::GlInfo& info = context->info();
-  const View& view = prep.camera.view;
-  const int max_offset = std::max(std::abs(prep.offsets.front()), std::abs(prep.offsets.back()));
-  const double max_shift = std::abs(prep.alpha) * max_offset;
-  gpu->clip_control = info.clip_control;
-  gpu->range =
-      info.clip_control ? gl::DepthRange::kReversedZeroToOne : gl::DepthRange::kNegativeOneToOne;
-  gpu->clear_depth = info.clip_control ? 0.0f : 1.0f;
-  gpu->center = (view.Center() - gpu->origin).cast<float>();
-  gpu->far_c = FarPlane(view, job.mesh, max_shift);
-  for (const SweepCamera& n : prep.neighbours) {
-    gpu->far_n.push_back(FarPlane(n.view, job.mesh, max_shift));
-  }
+  const int num_neighbours = gpu->num_neighbours;
   for (int first = 0; first < num_neighbours; first += max_group) {
     const int count = std::min(max_group, num_neighbours - first);
     gpu->groups.push_back({first, count, &RasterWorld(count)});
   }
 
-  // Constant uniforms and dispatch sizes of the compute passes.
   const int width = gpu->width, height = gpu->height;
   const SweepOptions& sweep = job.options;
   const std::vector<float> weights(prep.window.begin<float>(), prep.window.end<float>());
