@@ -314,7 +314,24 @@ struct GlslSweepKernel::Impl {
   int PaddedWidth(int width, int radius) const { return width + 2 * radius + block; }
 
   void Allocate(const PreparedSweep& prep, int batch_size, int radius);
+
+  // Run and its stages (below): UploadJob puts a job on the GPU; each batch of offsets goes
+  // through RenderShadowMaps, RenderCameraView, NccBatch and ReduceBatch; ReadBackWinners turns
+  // the tile records into points. A CaptureRecorder copies one offset's images out between them.
+  struct Batch;
+  struct Group;
+  struct GpuJob;
+  class CaptureRecorder;
   SweepResult Run(GlslSweepKernel* kernel, const SweepJob& job, GlslSweepCapture* capture);
+  void CheckLimits(const SweepJob& job, const PreparedSweep& prep,
+                   const GlslSweepCapture* capture) const;
+  std::unique_ptr<GpuJob> UploadJob(const SweepJob& job, const PreparedSweep& prep,
+                                    const MemoryPlan& plan);
+  void RenderShadowMaps(const GpuJob& gpu, const Batch& batch);
+  void RenderCameraView(const GpuJob& gpu, const Batch& batch);
+  void NccBatch(const GpuJob& gpu, const Batch& batch);
+  void ReduceBatch(const GpuJob& gpu, const Batch& batch);
+  std::vector<SweepPoint> ReadBackWinners(const GpuJob& gpu, SweepStats* stats) const;
 };
 
 void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, int radius) {
@@ -450,49 +467,327 @@ SweepResult GlslSweepKernel::Run(const SweepJob& job, GlslSweepCapture* capture)
   return impl_->Run(this, job, capture);
 }
 
+// ---------------------------------------------------------------------------------------------
+// Run's stages.
+
+namespace {
+
+// The stage times of SweepStats. With `wait_for_gpu` (GlslSweepKernelOptions::time_stages), Book
+// waits for the GPU and adds the time since the last stage boundary to a stage; without, it
+// books nothing (total and prepare times only).
+class StageClock {
+ public:
+  explicit StageClock(bool wait_for_gpu) : wait_for_gpu_(wait_for_gpu) {}
+  // The time since the start, without waiting for the GPU; the first stage starts now.
+  double Prepared() {
+    const double seconds = stage_.Seconds();
+    stage_.Restart();
+    return seconds;
+  }
+  void Book(double* stage_seconds) {
+    if (!wait_for_gpu_) return;
+    glFinish();
+    *stage_seconds += stage_.Seconds();
+    stage_.Restart();
+  }
+  // Leaves the time since the last boundary out of every stage (a capture's read-backs).
+  void Skip() { stage_.Restart(); }
+  double Total() const { return total_.Seconds(); }
+
+ private:
+  bool wait_for_gpu_;
+  Timer total_, stage_;
+};
+
+// The tile records every batch reduces into (see sweep_tile_best.comp): per tile its column and
+// row range, best NCC (the threshold until one beats it), winner (offset, neighbour, pixel,
+// face), world position and the other neighbours that matched; per batch two counters (defined
+// NCCs, covered pixels).
+struct TileRecords {
+  TileRecords(const TileGrid& tiles, float threshold, int match_words, int num_batches);
+  gl::Buffer columns, rows, best_ncc, best_info, best_position, best_matched, counters;
+};
+
+// begin(t) for t = 0..count (the last one: the image's size).
+template <typename Begin>
+std::vector<int32_t> TileBegins(int count, Begin begin) {
+  std::vector<int32_t> begins(count + 1);
+  for (int t = 0; t <= count; ++t) begins[t] = begin(t);
+  return begins;
+}
+
+TileRecords::TileRecords(const TileGrid& tiles, float threshold, int match_words, int num_batches)
+    : columns(gl::Buffer::FromVector(
+          TileBegins(tiles.tiles_x, [&tiles](int t) { return tiles.XBegin(t); }))),
+      rows(gl::Buffer::FromVector(
+          TileBegins(tiles.tiles_y, [&tiles](int t) { return tiles.YBegin(t); }))),
+      best_ncc(gl::Buffer::FromVector(std::vector<float>(tiles.NumTiles(), threshold))),
+      best_info(
+          gl::Buffer::FromVector(std::vector<Eigen::Vector4i>(tiles.NumTiles(), {0, -1, 0, -1}))),
+      best_position(gl::Buffer::FromVector(
+          std::vector<Eigen::Vector4f>(tiles.NumTiles(), Eigen::Vector4f::Zero()))),
+      best_matched(gl::Buffer::FromVector(
+          std::vector<uint32_t>(size_t{1} * tiles.NumTiles() * match_words, 0))),
+      counters(gl::Buffer::FromVector(std::vector<uint32_t>(2 * size_t{1} * num_batches, 0))) {}
+
+}  // namespace
+
+// The offsets of one batch: layer b of every texture array sweeps prep.offsets[first + b].
+struct GlslSweepKernel::Impl::Batch {
+  // The offsets in batches of `size` (the last one may be smaller).
+  static std::vector<Batch> Split(const std::vector<int>& offsets, int size);
+  int index = 0;
+  int first = 0;
+  int layers = 0;
+  int first_offset = 0;  // k of layer 0
+};
+
+// One draw from C per group of neighbours (colour attachments are limited). Groups of the same
+// size share a program: GpuJob::SetGroup sets its uniforms before each draw.
+struct GlslSweepKernel::Impl::Group {
+  int first, count;
+  gl::ShaderProgram* program;
+};
+
+// A job on the GPU (UploadJob): its mesh, images and tile records, and what the passes of every
+// batch need.
+struct GlslSweepKernel::Impl::GpuJob {
+  // Uploads the mesh, the images and the tile records; `batch_size` offsets per batch.
+  GpuJob(const SweepJob& job, const PreparedSweep& prep, int batch_size, bool clip_control);
+  // The uniforms of a raster program sweeping the mesh as seen from `view` (C or a neighbour).
+  void SetSweep(const gl::ShaderProgram& program, const View& view, double far) const;
+  // Those of C's draw with a group of neighbours' reprojections.
+  void SetGroup(const Group& group) const;
+
+  const SweepJob& job;
+  const PreparedSweep& prep;
+  const int width, height, num_neighbours, radius, match_words;
+  const std::vector<Batch> batches;
+  BlurPrograms* blur = nullptr;
+  gl::ShaderProgram* tile_best = nullptr;
+  // Dispatch sizes of the row-sum and column-sum + NCC passes.
+  int rows_groups_x = 0, rows_groups_y = 0, ncc_groups_x = 0, ncc_groups_y = 0;
+
+  const gl::GpuMesh mesh;
+  const Eigen::Vector3d origin;  // of the mesh's float coordinates
+  const gl::Texture2D image;     // C's
+  std::vector<gl::Texture2D> neighbour_images;
+  const TileRecords records;
+
+  // Rendering state.
+  const bool clip_control;  // reversed-Z depth
+  const gl::DepthRange range;
+  const float clear_depth;
+  const Eigen::Vector3f center;  // C's, relative to origin
+  double far_c = 0;              // far planes of C's and the neighbours' views
+  std::vector<double> far_n;
+  std::vector<Group> groups;
+};
+
+std::vector<GlslSweepKernel::Impl::Batch> GlslSweepKernel::Impl::Batch::Split(
+    const std::vector<int>& offsets, int size) {
+  std::vector<Batch> batches;
+  const int num_offsets = static_cast<int>(offsets.size());
+  for (int first = 0; first < num_offsets; first += size) {
+    Batch batch;
+    batch.index = static_cast<int>(batches.size());
+    batch.first = first;
+    batch.layers = std::min(size, num_offsets - first);
+    batch.first_offset = offsets[first];
+    batches.push_back(batch);
+  }
+  return batches;
+}
+
+GlslSweepKernel::Impl::GpuJob::GpuJob(const SweepJob& job, const PreparedSweep& prep,
+                                      int batch_size, bool clip_control)
+    : job(job),
+      prep(prep),
+      width(prep.camera.view.intrinsics.width),
+      height(prep.camera.view.intrinsics.height),
+      num_neighbours(static_cast<int>(prep.neighbours.size())),
+      radius((prep.window.rows - 1) / 2),
+      match_words(DivUp(num_neighbours, 32)),
+      batches(Batch::Split(prep.offsets, batch_size)),
+      mesh(job.mesh),
+      origin(mesh.origin()),
+      image(ImageTexture(prep.camera.image)),
+      records(prep.tiles, static_cast<float>(job.options.ncc_threshold), match_words,
+              static_cast<int>(batches.size())),
+      clip_control(clip_control),
+      range(clip_control ? gl::DepthRange::kReversedZeroToOne : gl::DepthRange::kNegativeOneToOne),
+      clear_depth(clip_control ? 0.0f : 1.0f),
+      center((prep.camera.view.Center() - origin).cast<float>()) {
+  for (const SweepCamera& n : prep.neighbours) neighbour_images.push_back(ImageTexture(n.image));
+  // Far planes beyond every swept vertex.
+  const int max_offset = std::max(std::abs(prep.offsets.front()), std::abs(prep.offsets.back()));
+  const double max_shift = std::abs(prep.alpha) * max_offset;
+  far_c = FarPlane(prep.camera.view, job.mesh, max_shift);
+  for (const SweepCamera& n : prep.neighbours) {
+    far_n.push_back(FarPlane(n.view, job.mesh, max_shift));
+  }
+}
+
+void GlslSweepKernel::Impl::GpuJob::SetSweep(const gl::ShaderProgram& program, const View& view,
+                                             double far) const {
+  program.Set("u_center", center);
+  program.Set("u_alpha", static_cast<float>(prep.alpha));
+  program.Set("u_model_view", gl::ModelView(view, origin).cast<float>().eval());
+  program.Set("u_projection",
+              gl::GlProjection(view.intrinsics, prep.near, far, range).cast<float>().eval());
+}
+
+void GlslSweepKernel::Impl::GpuJob::SetGroup(const Group& group) const {
+  const gl::ShaderProgram& p = *group.program;
+  SetSweep(p, prep.camera.view, far_c);
+  p.Set("u_pixel_offset", radius);
+  p.Set("u_occlusion", static_cast<float>(1 + job.options.occlusion_tolerance));
+  for (int i = 0; i < group.count; ++i) {
+    const View& n = prep.neighbours[group.first + i].view;
+    p.Set(fmt::format("u_neighbour_size[{}]", i),
+          Eigen::Vector2i(n.intrinsics.width, n.intrinsics.height));
+    p.Set(fmt::format("u_rotation[{}]", i), n.R.cast<float>().eval());
+    p.Set(fmt::format("u_translation[{}]", i), (n.R * origin + n.t).cast<float>().eval());
+    p.Set(fmt::format("u_intrinsics[{}]", i),
+          Eigen::Vector4f(n.intrinsics.fx, n.intrinsics.fy, n.intrinsics.cx, n.intrinsics.cy));
+  }
+}
+
+// Copies the images of GlslSweepCapture::offset out of the batch that sweeps it, at the stage
+// boundaries Run calls it at; does nothing without a capture. Returns whether it read anything
+// back (that time belongs to no stage).
+class GlslSweepKernel::Impl::CaptureRecorder {
+ public:
+  CaptureRecorder(GlslSweepCapture* capture, const GpuJob& gpu, const Resources& resources)
+      : capture_(capture), gpu_(gpu), resources_(resources) {}
+  // After RenderCameraView: C's world position, depth and face; per neighbour the shadow map,
+  // the reprojection and its mask.
+  bool AfterRender(const Batch& batch);
+  // After NccBatch: the NCC maps.
+  bool AfterNcc(const Batch& batch);
+
+ private:
+  // The captured offset's layer in `batch`, -1 if the batch does not sweep it.
+  int Layer(const Batch& batch) const {
+    if (capture_ == nullptr) return -1;
+    const int layer = capture_->offset - batch.first_offset;
+    return layer >= 0 && layer < batch.layers ? layer : -1;
+  }
+
+  GlslSweepCapture* capture_;
+  const GpuJob& gpu_;
+  const Resources& resources_;
+};
+
+bool GlslSweepKernel::Impl::CaptureRecorder::AfterRender(const Batch& batch) {
+  const int layer = Layer(batch);
+  if (layer < 0) return false;
+  const int width = gpu_.width, height = gpu_.height, radius = gpu_.radius;
+  const Eigen::Vector3d& origin = gpu_.origin;
+  const View& view = gpu_.prep.camera.view;
+  const cv::Mat world4 = DownloadLayer(*resources_.world, layer).colRange(radius, radius + width);
+  capture_->world.create(height, width, CV_32FC3);
+  capture_->depth.create(height, width, CV_32F);
+  capture_->face.create(height, width, CV_32S);
+  for (int r = 0; r < height; ++r) {
+    for (int c = 0; c < width; ++c) {
+      const cv::Vec4f w = world4.at<cv::Vec4f>(r, c);
+      const bool covered = w[3] >= 0;
+      const Eigen::Vector3d x(w[0], w[1], w[2]);
+      capture_->depth.at<float>(r, c) = covered ? static_cast<float>(view.ToCamera(x + origin).z())
+                                                : std::numeric_limits<float>::infinity();
+      capture_->face.at<int32_t>(r, c) = covered ? static_cast<int32_t>(w[3]) : -1;
+      capture_->world.at<cv::Vec3f>(r, c) = covered
+                                                ? cv::Vec3f(static_cast<float>(w[0] + origin.x()),
+                                                            static_cast<float>(w[1] + origin.y()),
+                                                            static_cast<float>(w[2] + origin.z()))
+                                                : cv::Vec3f(0, 0, 0);
+    }
+  }
+  capture_->shadow.clear();
+  capture_->reprojected.clear();
+  capture_->mask.clear();
+  for (int j = 0; j < gpu_.num_neighbours; ++j) {
+    capture_->shadow.push_back(DownloadLayer(*resources_.shadow[j], layer));
+    const cv::Mat reprojected =
+        DownloadLayer(*resources_.reprojected[j], layer).colRange(radius, radius + width);
+    cv::Mat values(height, width, CV_32F, cv::Scalar(0));
+    cv::Mat mask(height, width, CV_8U, cv::Scalar(0));
+    for (int r = 0; r < height; ++r) {
+      for (int c = 0; c < width; ++c) {
+        const cv::Vec4f v = reprojected.at<cv::Vec4f>(r, c);
+        if (v[0] > 0) {
+          mask.at<uint8_t>(r, c) = 255;
+          values.at<float>(r, c) = v[3];
+        }
+      }
+    }
+    capture_->reprojected.push_back(values);
+    capture_->mask.push_back(mask);
+  }
+  return true;
+}
+
+bool GlslSweepKernel::Impl::CaptureRecorder::AfterNcc(const Batch& batch) {
+  const int layer = Layer(batch);
+  if (layer < 0) return false;
+  capture_->ncc.clear();
+  for (int j = 0; j < gpu_.num_neighbours; ++j) {
+    cv::Mat ncc = DownloadLayer(*resources_.ncc, layer * gpu_.num_neighbours + j);
+    ncc.setTo(std::numeric_limits<float>::quiet_NaN(), ncc < -1.5f);
+    capture_->ncc.push_back(ncc);
+  }
+  return true;
+}
+
 SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& job,
                                        GlslSweepCapture* capture) {
-  Timer total;
-  Timer stage;
+  StageClock clock(options.time_stages);
   const PreparedSweep prep = PrepareSweep(job);
-  const SweepOptions& sweep = job.options;
-  const bool time_stages = options.time_stages;
+  CheckLimits(job, prep, capture);
+  if (!context->IsCurrent()) context->MakeCurrent();
+  SweepResult result;
+  result.stats = PreparedSweepStats(prep);
+  SweepStats& stats = result.stats;
+  const std::unique_ptr<GpuJob> gpu = UploadJob(job, prep, kernel->PlanMemory(prep));
+  CaptureRecorder recorder(capture, *gpu, resources);
+  stats.prepare_s = clock.Prepared();
+  for (const Batch& batch : gpu->batches) {
+    RenderShadowMaps(*gpu, batch);
+    clock.Book(&stats.raster_s);
+    RenderCameraView(*gpu, batch);
+    clock.Book(&stats.reproject_s);
+    if (recorder.AfterRender(batch)) clock.Skip();
+    NccBatch(*gpu, batch);
+    clock.Book(&stats.ncc_s);
+    if (recorder.AfterNcc(batch)) clock.Skip();
+    ReduceBatch(*gpu, batch);
+    clock.Book(&stats.reduce_s);
+  }
+  result.points = ReadBackWinners(*gpu, &stats);
+  clock.Book(&stats.reduce_s);
+  stats.total_s = clock.Total();
+  return result;
+}
+
+// The kernel's limits (2^24 faces, the driver's texture size with the blur padding) and the
+// capture's offset.
+void GlslSweepKernel::Impl::CheckLimits(const SweepJob& job, const PreparedSweep& prep,
+                                        const GlslSweepCapture* capture) const {
   const std::string name = fmt::format("sweep job for camera {}", job.camera.id);
   if (static_cast<int64_t>(job.mesh.faces.size()) >= kMaxFaces) {
     throw InputError(fmt::format("{}: {} faces; the GLSL kernel takes fewer than {}", name,
                                  job.mesh.faces.size(), kMaxFaces));
   }
-  if (!context->IsCurrent()) context->MakeCurrent();
-  const gl::GlInfo& info = context->info();
-
-  const View& view = prep.camera.view;
-  const int width = view.intrinsics.width, height = view.intrinsics.height;
-  const int num_neighbours = static_cast<int>(prep.neighbours.size());
-  const int num_offsets = static_cast<int>(prep.offsets.size());
+  const int width = prep.camera.view.intrinsics.width;
+  const int height = prep.camera.view.intrinsics.height;
   const int radius = (prep.window.rows - 1) / 2;
-  const int padded_width = PaddedWidth(width, radius);
-  const int match_words = DivUp(num_neighbours, 32);
-  const bool transposed = variant == GlslBlurVariant::kUnrolled;
-
-  SweepResult result;
-  SweepStats& stats = result.stats;
-  stats.image_width = width;
-  stats.image_height = height;
-  stats.pyramid_level = prep.pyramid_level;
-  stats.alpha = prep.alpha;
-  stats.median_depth = prep.median_depth;
-  stats.num_offsets = num_offsets;
-  stats.num_neighbours = num_neighbours;
-  stats.tiles_x = prep.tiles.tiles_x;
-  stats.tiles_y = prep.tiles.tiles_y;
-  stats.hypotheses = int64_t{width} * height * num_offsets * num_neighbours;
-
-  // The driver's limits: texture sizes with the blur padding.
-  int64_t longest = std::max<int64_t>(padded_width, height + 2 * radius + block);
+  int64_t longest = std::max<int64_t>(PaddedWidth(width, radius), height + 2 * radius + block);
   for (const SweepCamera& n : prep.neighbours) {
     longest =
         std::max<int64_t>(longest, std::max(n.view.intrinsics.width, n.view.intrinsics.height));
   }
+  const gl::GlInfo& info = context->info();
   if (info.max_texture_size > 0 && longest > info.max_texture_size) {
     throw InputError(fmt::format(
         "{}: images of {}x{} (swept resolution, plus {} px of blur padding) exceed the GL "
@@ -504,87 +799,29 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
     throw InputError(fmt::format("{}: capture of offset {}, which the job does not sweep", name,
                                  capture->offset));
   }
+}
 
-  const MemoryPlan plan = kernel->PlanMemory(prep);
-  const int batch_size = plan.offsets_per_batch;
-  const int num_batches = DivUp(num_offsets, batch_size);
+// Gets the programs and textures of the job's shape, puts the job on the GPU (GpuJob) in batches
+// of plan.offsets_per_batch, groups the neighbours for C's draws, and sets the compute passes'
+// uniforms that stay for the whole job.
+std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
+    const SweepJob& job, const PreparedSweep& prep, const MemoryPlan& plan) {
+  const int radius = (prep.window.rows - 1) / 2;
   BlurPrograms& programs = Blur(radius);
-  gl::ShaderProgram& tile_best = TileBest(radius, match_words);
-  Allocate(prep, batch_size, radius);
-
-  // ---- Per-job GL state ----
-  const gl::GpuMesh mesh(job.mesh);
-  const Eigen::Vector3d origin = mesh.origin();
-  const gl::Texture2D image = ImageTexture(prep.camera.image);
-  std::vector<gl::Texture2D> neighbour_images;
-  for (const SweepCamera& n : prep.neighbours) neighbour_images.push_back(ImageTexture(n.image));
-
-  // Tile records (see sweep_tile_best.comp).
-  const TileGrid& tiles = prep.tiles;
-  const int num_tiles = tiles.NumTiles();
-  std::vector<int32_t> x_begin(tiles.tiles_x + 1), y_begin(tiles.tiles_y + 1);
-  for (int t = 0; t <= tiles.tiles_x; ++t) x_begin[t] = tiles.XBegin(t);
-  for (int t = 0; t <= tiles.tiles_y; ++t) y_begin[t] = tiles.YBegin(t);
-  const float threshold = static_cast<float>(sweep.ncc_threshold);
-  const gl::Buffer tile_columns = gl::Buffer::FromVector(x_begin);
-  const gl::Buffer tile_rows = gl::Buffer::FromVector(y_begin);
-  const gl::Buffer best_ncc = gl::Buffer::FromVector(std::vector<float>(num_tiles, threshold));
-  const gl::Buffer best_info =
-      gl::Buffer::FromVector(std::vector<Eigen::Vector4i>(num_tiles, {0, -1, 0, -1}));
-  const gl::Buffer best_position =
-      gl::Buffer::FromVector(std::vector<Eigen::Vector4f>(num_tiles, Eigen::Vector4f::Zero()));
-  const gl::Buffer best_matched =
-      gl::Buffer::FromVector(std::vector<uint32_t>(size_t{1} * num_tiles * match_words, 0));
-  const gl::Buffer counters =
-      gl::Buffer::FromVector(std::vector<uint32_t>(2 * size_t{1} * num_batches, 0));
-
-  // ---- Rendering state ----
-  const int max_offset = std::max(std::abs(prep.offsets.front()), std::abs(prep.offsets.back()));
-  const double max_shift = std::abs(prep.alpha) * max_offset;
-  const gl::DepthRange range =
-      info.clip_control ? gl::DepthRange::kReversedZeroToOne : gl::DepthRange::kNegativeOneToOne;
-  const float clear_depth = info.clip_control ? 0.0f : 1.0f;
-  const Eigen::Vector3f center = (view.Center() - origin).cast<float>();
-  const auto set_sweep = [&](const gl::ShaderProgram& p, const View& v, double far) {
-    p.Set("u_center", center);
-    p.Set("u_alpha", static_cast<float>(prep.alpha));
-    p.Set("u_model_view", gl::ModelView(v, origin).cast<float>().eval());
-    p.Set("u_projection",
-          gl::GlProjection(v.intrinsics, prep.near, far, range).cast<float>().eval());
-  };
-  const double far_c = FarPlane(view, job.mesh, max_shift);
-  std::vector<double> far_n;
-  for (const SweepCamera& n : prep.neighbours) {
-    far_n.push_back(FarPlane(n.view, job.mesh, max_shift));
-  }
-  // One draw from C per group of neighbours (colour attachments are limited). Groups of the
-  // same size share a program: set_group sets its uniforms before each draw.
-  struct Group {
-    int first, count;
-    gl::ShaderProgram* program;
-  };
-  std::vector<Group> groups;
+  Allocate(prep, plan.offsets_per_batch, radius);
+  auto gpu =
+      std::make_unique<GpuJob>(job, prep, plan.offsets_per_batch, context->info().clip_control);
+  gl::ShaderProgram& tile_best = TileBest(radius, gpu->match_words);
+  gpu->blur = &programs;
+  gpu->tile_best = &tile_best;
+  const int num_neighbours = gpu->num_neighbours;
   for (int first = 0; first < num_neighbours; first += max_group) {
     const int count = std::min(max_group, num_neighbours - first);
-    groups.push_back({first, count, &RasterWorld(count)});
+    gpu->groups.push_back({first, count, &RasterWorld(count)});
   }
-  const auto set_group = [&](const Group& group) {
-    const gl::ShaderProgram& p = *group.program;
-    set_sweep(p, view, far_c);
-    p.Set("u_pixel_offset", radius);
-    p.Set("u_occlusion", static_cast<float>(1 + sweep.occlusion_tolerance));
-    for (int i = 0; i < group.count; ++i) {
-      const View& n = prep.neighbours[group.first + i].view;
-      p.Set(fmt::format("u_neighbour_size[{}]", i),
-            Eigen::Vector2i(n.intrinsics.width, n.intrinsics.height));
-      p.Set(fmt::format("u_rotation[{}]", i), n.R.cast<float>().eval());
-      p.Set(fmt::format("u_translation[{}]", i), (n.R * origin + n.t).cast<float>().eval());
-      p.Set(fmt::format("u_intrinsics[{}]", i),
-            Eigen::Vector4f(n.intrinsics.fx, n.intrinsics.fy, n.intrinsics.cx, n.intrinsics.cy));
-    }
-  };
 
-  // Constant uniforms of the compute passes.
+  const int width = gpu->width, height = gpu->height;
+  const SweepOptions& sweep = job.options;
   const std::vector<float> weights(prep.window.begin<float>(), prep.window.end<float>());
   programs.rows.Set("u_size", Eigen::Vector2i(width, height));
   programs.rows.Set("u_weights", weights);
@@ -594,210 +831,172 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
   SetDouble(programs.ncc, "u_min_texture_variance", sweep.min_texture_variance);
   tile_best.Set("u_neighbours", num_neighbours);
   tile_best.Set("u_width", width);
-  tile_best.Set("u_threshold", threshold);
+  tile_best.Set("u_threshold", static_cast<float>(sweep.ncc_threshold));
   gl::CheckGlError("sweep setup");
+  const bool transposed = variant == GlslBlurVariant::kUnrolled;
+  gpu->rows_groups_x = DivUp(DivUp(width, block), local_x);
+  gpu->rows_groups_y = DivUp(height, local_y);
+  gpu->ncc_groups_x = DivUp(transposed ? DivUp(height, block) : width, local_x);
+  gpu->ncc_groups_y = DivUp(transposed ? width : DivUp(height, block), local_y);
+  return gpu;
+}
 
-  const int rows_groups_x = DivUp(DivUp(width, block), local_x);
-  const int rows_groups_y = DivUp(height, local_y);
-  const int ncc_groups_x = DivUp(transposed ? DivUp(height, block) : width, local_x);
-  const int ncc_groups_y = DivUp(transposed ? width : DivUp(height, block), local_y);
-  // Waits for the GPU and books the time since the last stage boundary (time_stages only).
-  const auto book = [&](double* seconds) {
-    if (!time_stages) return;
-    glFinish();
-    *seconds += stage.Seconds();
-    stage.Restart();
-  };
-  stats.prepare_s = stage.Seconds();
-  stage.Restart();
+namespace {
 
-  for (int batch = 0; batch < num_batches; ++batch) {
-    const int first = batch * batch_size;
-    const int layers = std::min(batch_size, num_offsets - first);
-    const int first_offset = prep.offsets[first];
-    const int capture_layer = capture != nullptr && capture->offset >= first_offset &&
-                                      capture->offset < first_offset + layers
-                                  ? capture->offset - first_offset
-                                  : -1;
+// Depth-tested drawing of the swept meshes (reversed Z with clip control).
+void BeginSweepRaster(bool clip_control) {
+  glEnable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_BLEND);
+  if (clip_control) {
+    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    glDepthFunc(GL_GREATER);
+  } else {
+    glDepthFunc(GL_LESS);
+  }
+}
 
-    // ---- Shadow maps, then C's view with the reprojections (one instanced draw each) ----
-    glEnable(GL_DEPTH_TEST);
-    glDisable(GL_CULL_FACE);
-    glDisable(GL_BLEND);
-    if (info.clip_control) {
-      glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
-      glDepthFunc(GL_GREATER);
-    } else {
-      glDepthFunc(GL_LESS);
+void EndSweepRaster(bool clip_control, const char* what) {
+  if (clip_control) glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  gl::CheckGlError(what);
+}
+
+}  // namespace
+
+// Every swept mesh of the batch seen from each neighbour: its camera z (one instanced draw per
+// neighbour, one layer per offset).
+void GlslSweepKernel::Impl::RenderShadowMaps(const GpuJob& gpu, const Batch& batch) {
+  BeginSweepRaster(gpu.clip_control);
+  gpu.mesh.vertex_array().Bind();
+  const GLsizei index_count = static_cast<GLsizei>(3 * gpu.mesh.num_faces());
+  const float infinity = std::numeric_limits<float>::infinity();
+  for (int j = 0; j < gpu.num_neighbours; ++j) {
+    const SweepCamera& n = gpu.prep.neighbours[j];
+    resources.shadow_targets[j]->BindAndClear(
+        {Eigen::Vector4f(infinity, 0, 0, 0)}, gpu.clear_depth,
+        cv::Rect(0, 0, n.view.intrinsics.width, n.view.intrinsics.height));
+    if (!(gpu.far_n[j] > gpu.prep.near)) continue;
+    gpu.SetSweep(*raster_depth, n.view, gpu.far_n[j]);
+    raster_depth->Set("u_first_offset", batch.first_offset);
+    raster_depth->Use();
+    glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, batch.layers);
+  }
+  EndSweepRaster(gpu.clip_control, "sweep shadow maps");
+}
+
+// Every swept mesh of the batch seen from C: world position and face, and each neighbour's
+// image reprojected through it (one instanced draw per group of neighbours).
+void GlslSweepKernel::Impl::RenderCameraView(const GpuJob& gpu, const Batch& batch) {
+  BeginSweepRaster(gpu.clip_control);
+  gpu.mesh.vertex_array().Bind();
+  const GLsizei index_count = static_cast<GLsizei>(3 * gpu.mesh.num_faces());
+  gpu.image.Bind(0);
+  for (size_t g = 0; g < gpu.groups.size(); ++g) {
+    const Group& group = gpu.groups[g];
+    std::vector<Eigen::Vector4f> clear(1 + group.count, Eigen::Vector4f::Zero());
+    clear[0] = Eigen::Vector4f(0, 0, 0, -1);  // no surface
+    resources.world_targets[g]->BindAndClear(clear, gpu.clear_depth,
+                                             cv::Rect(gpu.radius, 0, gpu.width, gpu.height));
+    if (!(gpu.far_c > gpu.prep.near)) continue;
+    for (int i = 0; i < group.count; ++i) {
+      gpu.neighbour_images[group.first + i].Bind(1 + i);
+      resources.shadow[group.first + i]->Bind(1 + group.count + i);
     }
-    mesh.vertex_array().Bind();
-    const GLsizei index_count = static_cast<GLsizei>(3 * mesh.num_faces());
-    const float infinity = std::numeric_limits<float>::infinity();
-    for (int j = 0; j < num_neighbours; ++j) {
-      const Intrinsics& k = prep.neighbours[j].view.intrinsics;
-      resources.shadow_targets[j]->BindAndClear({Eigen::Vector4f(infinity, 0, 0, 0)}, clear_depth,
-                                                cv::Rect(0, 0, k.width, k.height));
-      if (!(far_n[j] > prep.near)) continue;
-      set_sweep(*raster_depth, prep.neighbours[j].view, far_n[j]);
-      raster_depth->Set("u_first_offset", first_offset);
-      raster_depth->Use();
-      glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, layers);
-    }
-    book(&stats.raster_s);
-    image.Bind(0);
-    for (size_t g = 0; g < groups.size(); ++g) {
-      const Group& group = groups[g];
-      std::vector<Eigen::Vector4f> clear(1 + group.count, Eigen::Vector4f::Zero());
-      clear[0] = Eigen::Vector4f(0, 0, 0, -1);  // no surface
-      resources.world_targets[g]->BindAndClear(clear, clear_depth,
-                                               cv::Rect(radius, 0, width, height));
-      if (!(far_c > prep.near)) continue;
-      for (int i = 0; i < group.count; ++i) {
-        neighbour_images[group.first + i].Bind(1 + i);
-        resources.shadow[group.first + i]->Bind(1 + group.count + i);
-      }
-      set_group(group);
-      group.program->Set("u_first_offset", first_offset);
-      group.program->Use();
-      glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, layers);
-    }
-    if (info.clip_control) glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    gl::CheckGlError("sweep rasterization and reprojection");
-    book(&stats.reproject_s);
-    if (capture_layer >= 0) {
-      const cv::Mat world4 =
-          DownloadLayer(*resources.world, capture_layer).colRange(radius, radius + width);
-      capture->world.create(height, width, CV_32FC3);
-      capture->depth.create(height, width, CV_32F);
-      capture->face.create(height, width, CV_32S);
-      for (int r = 0; r < height; ++r) {
-        for (int c = 0; c < width; ++c) {
-          const cv::Vec4f w = world4.at<cv::Vec4f>(r, c);
-          const bool covered = w[3] >= 0;
-          const Eigen::Vector3d x(w[0], w[1], w[2]);
-          capture->depth.at<float>(r, c) = covered
-                                               ? static_cast<float>(view.ToCamera(x + origin).z())
-                                               : std::numeric_limits<float>::infinity();
-          capture->face.at<int32_t>(r, c) = covered ? static_cast<int32_t>(w[3]) : -1;
-          capture->world.at<cv::Vec3f>(r, c) =
-              covered ? cv::Vec3f(static_cast<float>(w[0] + origin.x()),
-                                  static_cast<float>(w[1] + origin.y()),
-                                  static_cast<float>(w[2] + origin.z()))
-                      : cv::Vec3f(0, 0, 0);
-        }
-      }
-      capture->shadow.clear();
-      capture->reprojected.clear();
-      capture->mask.clear();
-      for (int j = 0; j < num_neighbours; ++j) {
-        capture->shadow.push_back(DownloadLayer(*resources.shadow[j], capture_layer));
-        const cv::Mat reprojected = DownloadLayer(*resources.reprojected[j], capture_layer)
-                                        .colRange(radius, radius + width);
-        cv::Mat values(height, width, CV_32F, cv::Scalar(0));
-        cv::Mat mask(height, width, CV_8U, cv::Scalar(0));
-        for (int r = 0; r < height; ++r) {
-          for (int c = 0; c < width; ++c) {
-            const cv::Vec4f v = reprojected.at<cv::Vec4f>(r, c);
-            if (v[0] > 0) {
-              mask.at<uint8_t>(r, c) = 255;
-              values.at<float>(r, c) = v[3];
-            }
-          }
-        }
-        capture->reprojected.push_back(values);
-        capture->mask.push_back(mask);
-      }
-      stage.Restart();
-    }
+    gpu.SetGroup(group);
+    group.program->Set("u_first_offset", batch.first_offset);
+    group.program->Use();
+    glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, batch.layers);
+  }
+  EndSweepRaster(gpu.clip_control, "sweep rasterization and reprojection");
+}
 
-    // ---- Per offset and neighbour: row sums, column sums + NCC ----
-    for (int b = 0; b < layers; ++b) {
-      for (int j = 0; j < num_neighbours; ++j) {
-        BindImageArray(*resources.reprojected[j], 2, GL_READ_ONLY, GL_RGBA32F);
-        resources.sums0->BindImage(0, gl::ImageAccess::kWriteOnly);
-        resources.sums1->BindImage(1, gl::ImageAccess::kWriteOnly);
-        programs.rows.Set("u_layer", b);
-        programs.rows.Dispatch(rows_groups_x, rows_groups_y);
-        Barrier();
+// Per offset and neighbour: the row sums, then the column sums and the NCC.
+void GlslSweepKernel::Impl::NccBatch(const GpuJob& gpu, const Batch& batch) {
+  const BlurPrograms& programs = *gpu.blur;
+  for (int b = 0; b < batch.layers; ++b) {
+    for (int j = 0; j < gpu.num_neighbours; ++j) {
+      BindImageArray(*resources.reprojected[j], 2, GL_READ_ONLY, GL_RGBA32F);
+      resources.sums0->BindImage(0, gl::ImageAccess::kWriteOnly);
+      resources.sums1->BindImage(1, gl::ImageAccess::kWriteOnly);
+      programs.rows.Set("u_layer", b);
+      programs.rows.Dispatch(gpu.rows_groups_x, gpu.rows_groups_y);
+      Barrier();
 
-        resources.sums0->BindImage(1, gl::ImageAccess::kReadOnly);
-        resources.sums1->BindImage(2, gl::ImageAccess::kReadOnly);
-        BindImageArray(*resources.reprojected[j], 3, GL_READ_ONLY, GL_RGBA32F);
-        BindImageArray(*resources.ncc, 0, GL_WRITE_ONLY, GL_R32F);
-        programs.ncc.Set("u_layer", b);
-        programs.ncc.Set("u_ncc_layer", b * num_neighbours + j);
-        programs.ncc.Dispatch(ncc_groups_x, ncc_groups_y);
-        Barrier();
-      }
-    }
-    gl::CheckGlError("sweep NCC");
-    book(&stats.ncc_s);
-
-    // ---- Tile-best over the batch ----
-    BindImageArray(*resources.ncc, 0, GL_READ_ONLY, GL_R32F);
-    BindImageArray(*resources.world, 1, GL_READ_ONLY, GL_RGBA32F);
-    tile_columns.BindStorage(0);
-    tile_rows.BindStorage(1);
-    best_ncc.BindStorage(2);
-    best_info.BindStorage(3);
-    best_position.BindStorage(4);
-    best_matched.BindStorage(5);
-    counters.BindStorage(6);
-    tile_best.Set("u_layers", layers);
-    tile_best.Set("u_first_offset", first_offset);
-    tile_best.Set("u_batch", batch);
-    tile_best.Dispatch(tiles.tiles_x, tiles.tiles_y);
-    Barrier();
-    gl::CheckGlError("sweep tile-best");
-    book(&stats.reduce_s);
-    if (capture_layer >= 0) {
-      capture->ncc.clear();
-      for (int j = 0; j < num_neighbours; ++j) {
-        cv::Mat ncc = DownloadLayer(*resources.ncc, capture_layer * num_neighbours + j);
-        ncc.setTo(std::numeric_limits<float>::quiet_NaN(), ncc < -1.5f);
-        capture->ncc.push_back(ncc);
-      }
-      stage.Restart();
+      resources.sums0->BindImage(1, gl::ImageAccess::kReadOnly);
+      resources.sums1->BindImage(2, gl::ImageAccess::kReadOnly);
+      BindImageArray(*resources.reprojected[j], 3, GL_READ_ONLY, GL_RGBA32F);
+      BindImageArray(*resources.ncc, 0, GL_WRITE_ONLY, GL_R32F);
+      programs.ncc.Set("u_layer", b);
+      programs.ncc.Set("u_ncc_layer", b * gpu.num_neighbours + j);
+      programs.ncc.Dispatch(gpu.ncc_groups_x, gpu.ncc_groups_y);
+      Barrier();
     }
   }
+  gl::CheckGlError("sweep NCC");
+}
 
-  // ---- Read back the tile winners ----
-  const std::vector<float> ncc = best_ncc.DownloadVector<float>(num_tiles);
-  const std::vector<Eigen::Vector4i> winners = best_info.DownloadVector<Eigen::Vector4i>(num_tiles);
+// Every tile's best pixel of the batch against its record so far (one work group per tile).
+void GlslSweepKernel::Impl::ReduceBatch(const GpuJob& gpu, const Batch& batch) {
+  const TileRecords& records = gpu.records;
+  BindImageArray(*resources.ncc, 0, GL_READ_ONLY, GL_R32F);
+  BindImageArray(*resources.world, 1, GL_READ_ONLY, GL_RGBA32F);
+  records.columns.BindStorage(0);
+  records.rows.BindStorage(1);
+  records.best_ncc.BindStorage(2);
+  records.best_info.BindStorage(3);
+  records.best_position.BindStorage(4);
+  records.best_matched.BindStorage(5);
+  records.counters.BindStorage(6);
+  gl::ShaderProgram& tile_best = *gpu.tile_best;
+  tile_best.Set("u_layers", batch.layers);
+  tile_best.Set("u_first_offset", batch.first_offset);
+  tile_best.Set("u_batch", batch.index);
+  tile_best.Dispatch(gpu.prep.tiles.tiles_x, gpu.prep.tiles.tiles_y);
+  Barrier();
+  gl::CheckGlError("sweep tile-best");
+}
+
+// The tile records as points (MakeSweepPoint), and the batches' counters into `stats`.
+std::vector<SweepPoint> GlslSweepKernel::Impl::ReadBackWinners(const GpuJob& gpu,
+                                                               SweepStats* stats) const {
+  const TileRecords& records = gpu.records;
+  const int num_tiles = gpu.prep.tiles.NumTiles();
+  const int num_batches = static_cast<int>(gpu.batches.size());
+  const size_t match_words = gpu.match_words;
+  const std::vector<float> ncc = records.best_ncc.DownloadVector<float>(num_tiles);
+  const std::vector<Eigen::Vector4i> winners =
+      records.best_info.DownloadVector<Eigen::Vector4i>(num_tiles);
   const std::vector<Eigen::Vector4f> positions =
-      best_position.DownloadVector<Eigen::Vector4f>(num_tiles);
+      records.best_position.DownloadVector<Eigen::Vector4f>(num_tiles);
   const std::vector<uint32_t> matched =
-      best_matched.DownloadVector<uint32_t>(size_t{1} * num_tiles * match_words);
+      records.best_matched.DownloadVector<uint32_t>(num_tiles * match_words);
   const std::vector<uint32_t> counts =
-      counters.DownloadVector<uint32_t>(2 * size_t{1} * num_batches);
+      records.counters.DownloadVector<uint32_t>(2 * size_t{1} * num_batches);
   for (int batch = 0; batch < num_batches; ++batch) {
-    stats.valid_hypotheses += counts[2 * batch];
-    stats.covered_pixels += counts[2 * batch + 1];
+    stats->valid_hypotheses += counts[2 * batch];
+    stats->covered_pixels += counts[2 * batch + 1];
   }
+  std::vector<SweepPoint> points;
   for (int t = 0; t < num_tiles; ++t) {
-    const Eigen::Vector4i& w = winners[t];
+    const Eigen::Vector4i& w = winners[t];  // offset, neighbour (-1: none), pixel index, face
     if (w[1] < 0) continue;
-    const int col = w[2] % width, row = w[2] / width;
-    SweepPoint point;
-    point.position = origin + positions[t].head<3>().cast<double>();
-    point.ncc = ncc[t];
-    point.pixel = {static_cast<float>((col + 0.5) / prep.scale_x),
-                   static_cast<float>((row + 0.5) / prep.scale_y)};
-    point.offset = w[0];
-    point.face = w[3];
-    point.cameras.push_back(job.camera.id);
-    point.cameras.push_back(job.neighbours[w[1]].id);
-    for (int other = 0; other < num_neighbours; ++other) {
-      if (matched[size_t{1} * t * match_words + other / 32] & (1u << (other % 32))) {
-        point.cameras.push_back(job.neighbours[other].id);
+    TileWinner winner;
+    winner.ncc = ncc[t];
+    winner.offset = w[0];
+    winner.neighbour = w[1];
+    winner.col = w[2] % gpu.width;
+    winner.row = w[2] / gpu.width;
+    winner.face = w[3];
+    winner.position = gpu.origin + positions[t].head<3>().cast<double>();
+    for (int other = 0; other < gpu.num_neighbours; ++other) {
+      if (matched[t * match_words + other / 32] & (1u << (other % 32))) {
+        winner.matched.push_back(other);
       }
     }
-    result.points.push_back(std::move(point));
+    points.push_back(MakeSweepPoint(winner, gpu.prep));
   }
-  book(&stats.reduce_s);
-  stats.total_s = total.Seconds();
-  return result;
+  return points;
 }
 
 }  // namespace ms

@@ -131,40 +131,17 @@ int64_t WeightedNcc(const cv::Mat& I, const cv::Mat& J, const cv::Mat& mask, con
   return defined;
 }
 
-namespace {
-
-struct TileBest {
-  float ncc = -std::numeric_limits<float>::infinity();
-  int offset = 0;
-  int neighbour = -1;
-  int col = -1, row = -1;
-  int32_t face = -1;
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  std::vector<int> matched;  // neighbour indices above the threshold at the same pixel
-};
-
-}  // namespace
-
 SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
   Timer total;
   Timer stage;
   const PreparedSweep prep = PrepareSweep(job);
   const SweepOptions& options = job.options;
   SweepResult result;
+  result.stats = PreparedSweepStats(prep);
   SweepStats& stats = result.stats;
   const View& view = prep.camera.view;
   const int width = view.intrinsics.width, height = view.intrinsics.height;
   const int num_neighbours = static_cast<int>(prep.neighbours.size());
-  stats.image_width = width;
-  stats.image_height = height;
-  stats.pyramid_level = prep.pyramid_level;
-  stats.alpha = prep.alpha;
-  stats.median_depth = prep.median_depth;
-  stats.num_offsets = static_cast<int>(prep.offsets.size());
-  stats.num_neighbours = num_neighbours;
-  stats.tiles_x = prep.tiles.tiles_x;
-  stats.tiles_y = prep.tiles.tiles_y;
-  stats.hypotheses = int64_t{width} * height * stats.num_offsets * num_neighbours;
 
   const std::vector<Eigen::Vector3d> normals = FaceNormals(job.mesh);
   const Eigen::Vector3d center = view.Center();
@@ -181,7 +158,7 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
   for (int t = 0; t < prep.tiles.tiles_y; ++t) {
     for (int r = prep.tiles.YBegin(t); r < prep.tiles.YBegin(t + 1); ++r) tile_of_row[r] = t;
   }
-  std::vector<TileBest> best(prep.tiles.NumTiles());
+  std::vector<TileWinner> best(prep.tiles.NumTiles());
   const float threshold = static_cast<float>(options.ncc_threshold);
   stats.prepare_s = stage.Seconds();
 
@@ -216,7 +193,7 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
         for (int col = 0; col < width; ++col) {
           const float value = values[col];
           if (!(value > threshold)) continue;  // NaN and everything that cannot be kept
-          TileBest& tile = best[tile_of_row[row] * prep.tiles.tiles_x + tile_of_col[col]];
+          TileWinner& tile = best[tile_of_row[row] * prep.tiles.tiles_x + tile_of_col[col]];
           if (!(value > tile.ncc)) continue;
           const size_t index = camera_raster.Index(col, row);
           tile.ncc = value;
@@ -238,19 +215,8 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
     stats.reduce_s += stage.Seconds();
   }
 
-  for (const TileBest& tile : best) {
-    if (tile.neighbour < 0) continue;
-    SweepPoint point;
-    point.position = tile.position;
-    point.ncc = tile.ncc;
-    point.pixel = {static_cast<float>((tile.col + 0.5) / prep.scale_x),
-                   static_cast<float>((tile.row + 0.5) / prep.scale_y)};
-    point.offset = tile.offset;
-    point.face = tile.face;
-    point.cameras.push_back(job.camera.id);
-    point.cameras.push_back(job.neighbours[tile.neighbour].id);
-    for (int other : tile.matched) point.cameras.push_back(job.neighbours[other].id);
-    result.points.push_back(std::move(point));
+  for (const TileWinner& tile : best) {
+    if (tile.neighbour >= 0) result.points.push_back(MakeSweepPoint(tile, prep));
   }
   stats.total_s = total.Seconds();
   return result;

@@ -179,6 +179,37 @@ double AutoSweepAlpha(const View& camera, const std::vector<View>& neighbours, c
   return std::min(parallax_px / rate, max_alpha);
 }
 
+SweepStats PreparedSweepStats(const PreparedSweep& prep) {
+  SweepStats stats;
+  stats.image_width = prep.camera.view.intrinsics.width;
+  stats.image_height = prep.camera.view.intrinsics.height;
+  stats.pyramid_level = prep.pyramid_level;
+  stats.alpha = prep.alpha;
+  stats.median_depth = prep.median_depth;
+  stats.num_offsets = static_cast<int>(prep.offsets.size());
+  stats.num_neighbours = static_cast<int>(prep.neighbours.size());
+  stats.tiles_x = prep.tiles.tiles_x;
+  stats.tiles_y = prep.tiles.tiles_y;
+  stats.hypotheses =
+      int64_t{stats.image_width} * stats.image_height * stats.num_offsets * stats.num_neighbours;
+  return stats;
+}
+
+SweepPoint MakeSweepPoint(const TileWinner& winner, const PreparedSweep& prep) {
+  SweepPoint point;
+  point.position = winner.position;
+  point.ncc = winner.ncc;
+  point.pixel = {static_cast<float>((winner.col + 0.5) / prep.scale_x),
+                 static_cast<float>((winner.row + 0.5) / prep.scale_y)};
+  point.offset = winner.offset;
+  point.face = winner.face;
+  point.cameras.reserve(2 + winner.matched.size());
+  point.cameras.push_back(prep.camera.id);
+  point.cameras.push_back(prep.neighbours[winner.neighbour].id);
+  for (int other : winner.matched) point.cameras.push_back(prep.neighbours[other].id);
+  return point;
+}
+
 PreparedSweep PrepareSweep(const SweepJob& job) {
   CheckSweepJob(job);
   const SweepOptions& options = job.options;

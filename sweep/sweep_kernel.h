@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
@@ -126,6 +127,28 @@ struct PreparedSweep {
 // scales intrinsics (fx, cx by the width ratio, fy, cy by the height ratio: exact with the
 // corner-origin convention), and derives alpha (docs/sweep.md).
 PreparedSweep PrepareSweep(const SweepJob& job);
+
+// The stats every kernel knows before sweeping: the swept resolution, level, alpha, median
+// depth, offsets, neighbours, tiles and hypotheses (times and counts left at zero).
+SweepStats PreparedSweepStats(const PreparedSweep& prep);
+
+// The best hypothesis of one tile, as a kernel's tile-best step keeps it. "No winner" is
+// neighbour < 0 (the defaults).
+struct TileWinner {
+  float ncc = -std::numeric_limits<float>::infinity();
+  int offset = 0;          // k
+  int neighbour = -1;      // index into the job's neighbours of the one that won
+  int col = -1, row = -1;  // pixel at the swept resolution
+  int32_t face = -1;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // world
+  // The other neighbours (indices, ascending) whose NCC at the same pixel and offset is above
+  // the threshold.
+  std::vector<int> matched;
+};
+
+// The point of a tile winner: its pixel centre in C's full-resolution image, C's id, then the
+// winning neighbour's, then those of the other neighbours that matched (both kernels).
+SweepPoint MakeSweepPoint(const TileWinner& winner, const PreparedSweep& prep);
 
 // The automatic alpha: alpha_parallax_px / median over visible vertices X and neighbours j of
 // |d pi_j(X + s d) / ds| at s = 0 (pixels per scene unit moved along C's ray), clamped to at

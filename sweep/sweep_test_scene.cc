@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "mesh/visible_mesh.h"
+#include "sweep/pyramid_geometry.h"
 
 namespace ms {
 namespace {
@@ -48,6 +49,11 @@ double Texture(double x, double y) {
   return std::clamp(0.5 + 2.0 * (sum / norm - 0.5), 0.0, 1.0);
 }
 
+// The true surface's height at (x, y): the pyramid of apex height H on the ground plane.
+double SurfaceHeight(double height, double x, double y) {
+  return std::max(0.0, height * (1 - std::max(std::abs(x), std::abs(y))));
+}
+
 // First hit of the ray o + t d (t > 0) with the heightfield h(x, y) = max(0, H (1 - max(|x|,
 // |y|))): the nearest hit on the five planes that lies on the surface.
 bool CastRay(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double height,
@@ -65,7 +71,7 @@ bool CastRay(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double height,
     const double t = (p[0] * o.x() + p[1] * o.y() + p[2] - o.z()) / denom;
     if (!(t > 0 && t < best)) continue;
     const Eigen::Vector3d q = o + t * d;
-    const double surface = std::max(0.0, height * (1 - std::max(std::abs(q.x()), std::abs(q.y()))));
+    const double surface = SurfaceHeight(height, q.x(), q.y());
     if (std::abs(q.z() - surface) <= 1e-9 * (1 + std::abs(q.z()))) best = t;
   }
   if (!std::isfinite(best)) return false;
@@ -119,7 +125,7 @@ View LookAtView(const Eigen::Vector3d& center, const Eigen::Vector3d& target, in
 }
 
 double PyramidScene::Height(double x, double y) const {
-  return std::max(0.0, pyramid_height * (1 - std::max(std::abs(x), std::abs(y))));
+  return SurfaceHeight(pyramid_height, x, y);
 }
 
 double PyramidScene::Distance(const Eigen::Vector3d& p) const {
@@ -173,9 +179,14 @@ PyramidScene MakePyramidScene(const PyramidSceneOptions& options) {
   scene.pyramid_height = options.pyramid_height;
   const double h = options.pyramid_height;
   // Truth: apex, base corners, and a ground ring out to +-20 (counter-clockwise from above).
+  // Not PyramidSides (sweep/pyramid_geometry.h): the same sides, but each face starts at the
+  // apex here, and the sweep tests' numbers depend on the order.
   Mesh& t = scene.truth;
-  t.vertices = {{0, 0, h},     {-1, -1, 0},  {1, -1, 0},  {1, 1, 0},   {-1, 1, 0},
-                {-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}};
+  t.vertices = {{0, 0, h}};
+  for (const Eigen::Vector3d& corner : PyramidBaseCorners()) t.vertices.push_back(corner);
+  for (const Eigen::Vector3d& corner : PyramidBaseCorners()) {
+    t.vertices.push_back(20 * corner);  // the ground ring
+  }
   t.faces = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 1},  // pyramid sides
              {1, 5, 6}, {1, 6, 2}, {2, 6, 7}, {2, 7, 3},  // ground ring
              {3, 7, 8}, {3, 8, 4}, {4, 8, 5}, {4, 5, 1}};

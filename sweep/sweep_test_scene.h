@@ -1,13 +1,15 @@
 // Synthetic scenes for the sweep's tests and benchmark: a textured pyramid on a textured ground
-// plane (the paper's simulated dataset: 2 x 2 base, 0.3 high), seen from three cameras looking
-// down, rendered analytically (each pixel's rays cast against the exact surface, textured with
-// procedural multi-scale value noise, 2 x 2 supersampled).
+// plane (the paper's simulated dataset: 2 x 2 base, 0.3 high; sweep/pyramid_geometry.h), seen
+// from three cameras looking down, rendered analytically (each pixel's rays cast against the
+// exact surface, textured with procedural multi-scale value noise, 2 x 2 supersampled).
+// Test-only (ms_sweep_test_scene): linked by tests and benchmarks, never by `manisweep`.
 #pragma once
 
 #include <Eigen/Core>
 #include <vector>
 
 #include "mesh/mesh.h"
+#include "sweep/pyramid_geometry.h"
 #include "sweep/sweep_kernel.h"
 
 namespace ms {
@@ -15,7 +17,8 @@ namespace ms {
 struct PyramidSceneOptions {
   int width = 160, height = 120;  // every camera's image size
   double focal_px = 150;          // at 160 px wide; scaled with width
-  double pyramid_height = 0.3;    // apex height above the ground (base: [-1, 1]^2 at z = 0)
+  // Apex height above the ground (base: [-1, 1]^2 at z = 0; sweep/pyramid_geometry.h).
+  double pyramid_height = kPyramidHeight;
   double texture_contrast = 1;    // texture = 0.5 + contrast * (noise - 0.5); 0 = blank
   int supersample = 2;            // rays per pixel per axis
   double noise_stddev = 0;        // independent Gaussian noise per camera (fixed seeds)
@@ -28,7 +31,7 @@ struct PyramidScene {
   double Height(double x, double y) const;
   // Euclidean distance from p to the true surface.
   double Distance(const Eigen::Vector3d& p) const;
-  double pyramid_height = 0.3;
+  double pyramid_height = kPyramidHeight;
 };
 
 PyramidScene MakePyramidScene(const PyramidSceneOptions& options = {});

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <random>
@@ -133,23 +134,14 @@ double FitFocalLength(const std::vector<View>& views, const std::vector<Eigen::V
   return focal;
 }
 
-Mesh PyramidBaseSquare() {
-  Mesh mesh;
-  mesh.vertices = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
-  mesh.faces = {{0, 1, 2}, {0, 2, 3}};  // counter-clockwise seen from above (z > 0)
-  return mesh;
-}
-
 SynthGeometry MakePyramidScene(bool apex_up, const SynthLayout& layout) {
   SynthGeometry g;
-  const std::vector<Eigen::Vector3d> corners = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
-  const Eigen::Vector3d apex(0, 0, apex_up ? 0.3 : -0.3);
-  g.mesh.vertices = corners;
-  g.mesh.vertices.push_back(apex);
+  const std::array<Eigen::Vector3d, 4> corners = PyramidBaseCorners();
+  const Eigen::Vector3d apex(0, 0, apex_up ? kPyramidHeight : -kPyramidHeight);
   // Four triangles, counter-clockwise seen from above, where the cameras are.
-  g.mesh.faces = {{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
+  g.mesh = PyramidSides(apex.z());
   g.initial_mesh = PyramidBaseSquare();
-  g.fixed_points = corners;
+  g.fixed_points.assign(corners.begin(), corners.end());
 
   gl::SurfaceMaterial material;
   material.color = {0.62f, 0.56f, 0.48f};
@@ -179,7 +171,7 @@ SynthGeometry MakePyramidScene(bool apex_up, const SynthLayout& layout) {
   }
   // Each view zooms to fit the pyramid (a shared focal length would leave the oblique views'
   // images mostly empty at this short distance).
-  std::vector<Eigen::Vector3d> extent = corners;
+  std::vector<Eigen::Vector3d> extent(corners.begin(), corners.end());
   extent.push_back(apex);
   for (View& view : g.views) {
     view.intrinsics.fx = view.intrinsics.fy = FitFocalLength({view}, extent, 0.06);

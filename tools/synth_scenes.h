@@ -10,6 +10,7 @@
 #include "gl/mesh_renderer.h"
 #include "mesh/mesh.h"
 #include "scene/camera.h"
+#include "sweep/pyramid_geometry.h"  // the pyramid scenes' geometry, PyramidBaseSquare
 
 namespace ms {
 
@@ -36,9 +37,10 @@ struct SynthLayout {
   uint64_t seed = 1;
 };
 
-// Square-based pyramid, base 2 m x 2 m at z = 0 without its base facet, height 0.3 m, apex at
-// z = -0.3 (down) or +0.3 (up); cameras above (z > 0) on a cap around the vertical axis at
-// 1.2 m from the centre; each view's focal length frames the whole pyramid.
+// Square-based pyramid (sweep/pyramid_geometry.h), base 2 m x 2 m at z = 0 without its base
+// facet, height 0.3 m, apex at z = -0.3 (down) or +0.3 (up); cameras above (z > 0) on a cap
+// around the vertical axis at 1.2 m from the centre; each view's focal length frames the whole
+// pyramid.
 SynthGeometry MakePyramidScene(bool apex_up, const SynthLayout& layout);
 // Closed bumpy blob of radius ~1 (shape from the seed), cameras on two interleaved rings.
 SynthGeometry MakeBlobScene(const SynthLayout& layout);
@@ -56,8 +58,5 @@ View LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target, const 
 // inside every view with `margin` (share of the half-size) left free. Points must be in front.
 double FitFocalLength(const std::vector<View>& views, const std::vector<Eigen::Vector3d>& points,
                       double margin);
-
-// The paper's initial manifold for the pyramids: the base square (2 triangles) at z = 0.
-Mesh PyramidBaseSquare();
 
 }  // namespace ms

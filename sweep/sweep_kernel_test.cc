@@ -1,0 +1,89 @@
+// What both kernels share (sweep/sweep_kernel.h): a tile winner's point and the prepared stats.
+// The preparation itself is tested with the reference (reference_sweep_test.cc).
+#include "sweep/sweep_kernel.h"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace ms {
+namespace {
+
+PreparedSweep ThreeNeighbours() {
+  PreparedSweep prep;
+  prep.camera.id = 7;
+  for (int32_t id : {11, 12, 13}) {
+    SweepCamera neighbour;
+    neighbour.id = id;
+    prep.neighbours.push_back(neighbour);
+  }
+  return prep;
+}
+
+TEST(SweepKernel, MakeSweepPointCopiesTheWinner) {
+  const PreparedSweep prep = ThreeNeighbours();
+  TileWinner winner;
+  winner.ncc = 0.991f;
+  winner.offset = -3;
+  winner.neighbour = 1;
+  winner.col = 4;
+  winner.row = 2;
+  winner.face = 42;
+  winner.position = {1.5, -2, 3.25};
+  const SweepPoint point = MakeSweepPoint(winner, prep);
+  EXPECT_EQ(point.position, Eigen::Vector3d(1.5, -2, 3.25));
+  EXPECT_EQ(point.ncc, 0.991f);
+  EXPECT_EQ(point.pixel, Eigen::Vector2f(4.5f, 2.5f));  // the pixel's centre
+  EXPECT_EQ(point.offset, -3);
+  EXPECT_EQ(point.face, 42);
+  // C, then the winning neighbour.
+  EXPECT_EQ(point.cameras, (std::vector<int32_t>{7, 12}));
+}
+
+TEST(SweepKernel, MakeSweepPointListsTheOtherMatchesAfterTheWinner) {
+  const PreparedSweep prep = ThreeNeighbours();
+  TileWinner winner;
+  winner.neighbour = 2;
+  winner.col = winner.row = 0;
+  winner.matched = {0, 1};
+  EXPECT_EQ(MakeSweepPoint(winner, prep).cameras, (std::vector<int32_t>{7, 13, 11, 12}));
+}
+
+TEST(SweepKernel, MakeSweepPointGivesTheFullResolutionPixel) {
+  PreparedSweep prep = ThreeNeighbours();
+  prep.scale_x = 0.5;  // swept at half the width and a quarter of the height
+  prep.scale_y = 0.25;
+  TileWinner winner;
+  winner.neighbour = 0;
+  winner.col = 4;
+  winner.row = 2;
+  // Centre (4.5, 2.5) at the swept resolution: (9, 10) at full resolution (corner origin).
+  EXPECT_EQ(MakeSweepPoint(winner, prep).pixel, Eigen::Vector2f(9, 10));
+}
+
+TEST(SweepKernel, PreparedSweepStatsCountsTheHypotheses) {
+  PreparedSweep prep = ThreeNeighbours();
+  prep.camera.view.intrinsics.width = 320;
+  prep.camera.view.intrinsics.height = 240;
+  prep.pyramid_level = 1;
+  prep.alpha = 0.02;
+  prep.median_depth = 2.5;
+  prep.offsets = SweepOffsets(20);
+  prep.tiles = TileGrid::Make(320, 240, 100);
+  const SweepStats stats = PreparedSweepStats(prep);
+  EXPECT_EQ(stats.image_width, 320);
+  EXPECT_EQ(stats.image_height, 240);
+  EXPECT_EQ(stats.pyramid_level, 1);
+  EXPECT_EQ(stats.alpha, 0.02);
+  EXPECT_EQ(stats.median_depth, 2.5);
+  EXPECT_EQ(stats.num_offsets, 19);
+  EXPECT_EQ(stats.num_neighbours, 3);
+  EXPECT_EQ(stats.tiles_x, 3);
+  EXPECT_EQ(stats.tiles_y, 2);
+  EXPECT_EQ(stats.hypotheses, int64_t{320} * 240 * 19 * 3);
+  EXPECT_EQ(stats.valid_hypotheses, 0);
+  EXPECT_EQ(stats.total_s, 0);
+}
+
+}  // namespace
+}  // namespace ms
