@@ -13,19 +13,4 @@ namespace ms::app {
 // GPU).
 std::string MakeDefaultScene(const std::string& directory);
 
-// ---- Test-only: defined in app/pyramid_scene_files.cc, library ms_default_scene (what the
-// multi-process tests link); not in the manisweep binary. ----
-
-struct PyramidSceneFileOptions {
-  int width = 640, height = 480;  // image size of every camera
-  double noise_stddev = 0.01;     // Gaussian pixel noise (images in [0, 1])
-};
-
-// A smaller pyramid scene for the multi-process tests (the sweep's test renderer,
-// sweep/sweep_test_scene.h, three cameras): images/pyramid_<i>.png (16-bit gray), scene.h5 (3
-// views; the 4 base corners as sparse points seen by every view: the paper's start), gt.ply (the
-// true surface). Returns the path of scene.h5.
-std::string WritePyramidSceneFiles(const std::string& directory,
-                                   const PyramidSceneFileOptions& options);
-
 }  // namespace ms::app

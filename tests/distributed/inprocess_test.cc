@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <thread>
 
-#include "app/default_scene.h"
+#include "tests/distributed/pyramid_scene_files.h"
 #include "base/error.h"
 #include "base/file_util.h"
 #include "coordinator/coordinator.h"
@@ -28,10 +28,10 @@ class InProcessRun : public ::testing::Test {
   void SetUp() override {
     root_ = fs::path(::testing::TempDir()) / ("manisweep_inprocess_" + std::to_string(::getpid()));
     fs::remove_all(root_);
-    app::PyramidSceneFileOptions options;
+    testing::PyramidSceneFileOptions options;
     options.width = 160;
     options.height = 120;
-    scene_ = app::WritePyramidSceneFiles((root_ / "scene").string(), options);
+    scene_ = testing::WritePyramidSceneFiles((root_ / "scene").string(), options);
   }
   void TearDown() override {
     if (!HasFailure()) fs::remove_all(root_);

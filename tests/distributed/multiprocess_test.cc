@@ -17,7 +17,7 @@
 #include <vector>
 #include <zmq.hpp>
 
-#include "app/default_scene.h"
+#include "tests/distributed/pyramid_scene_files.h"
 #include "base/file_util.h"
 #include "coordinator/run_store.h"
 #include "mesh/mesh_checker.h"
@@ -52,10 +52,10 @@ class MultiProcessTest : public ::testing::Test {
     root_ = new fs::path(fs::path(::testing::TempDir()) /
                          ("manisweep_multiprocess_" + std::to_string(::getpid())));
     fs::remove_all(*root_);
-    app::PyramidSceneFileOptions options;
+    testing::PyramidSceneFileOptions options;
     options.width = 160;
     options.height = 120;
-    scene_ = new std::string(app::WritePyramidSceneFiles((*root_ / "scene").string(), options));
+    scene_ = new std::string(testing::WritePyramidSceneFiles((*root_ / "scene").string(), options));
   }
   static void TearDownTestSuite() {
     // Kept for inspection after a failure, or with MS_KEEP_TEST_OUTPUT set.

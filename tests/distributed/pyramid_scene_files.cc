@@ -1,10 +1,9 @@
-// WritePyramidSceneFiles (app/default_scene.h): test-only, in ms_default_scene, which only the
-// multi-process tests link.
+#include "tests/distributed/pyramid_scene_files.h"
+
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "app/default_scene.h"
 #include "base/error.h"
 #include "base/file_util.h"
 #include "mesh/mesh_io.h"
@@ -12,7 +11,7 @@
 #include "sweep/pyramid_geometry.h"
 #include "sweep/sweep_test_scene.h"
 
-namespace ms::app {
+namespace ms::testing {
 namespace fs = std::filesystem;
 
 std::string WritePyramidSceneFiles(const std::string& directory,
@@ -57,4 +56,4 @@ std::string WritePyramidSceneFiles(const std::string& directory,
   return path;
 }
 
-}  // namespace ms::app
+}  // namespace ms::testing
