@@ -3,13 +3,13 @@
 #include <CGAL/version.h>
 #include <H5public.h>
 #include <google/protobuf/stubs/common.h>
-#include <opencv2/core/version.hpp>
 #include <spdlog/version.h>
 #include <zmq.h>
 
 #include <Eigen/Core>
 #include <cstdio>
 #include <memory>
+#include <opencv2/core/version.hpp>
 
 #include "app/commands.h"
 #include "gl/context.h"
@@ -42,12 +42,11 @@ void RunInfo(const InfoOptions& options) {
   std::printf("  spdlog      %d.%d.%d\n", SPDLOG_VER_MAJOR, SPDLOG_VER_MINOR, SPDLOG_VER_PATCH);
   std::printf("  OpenGL      %s\n", gl::DescribeGl().c_str());
   if (!options.input.empty()) {
-    const SceneFormat format = options.from == "auto" ? DetectSceneFormat(options.input)
-                                                      : ParseSceneFormat(options.from);
+    const SceneFormat format =
+        options.from == "auto" ? DetectSceneFormat(options.input) : ParseSceneFormat(options.from);
     const Scene scene = ReadScene(options.input, options.read, format);
     std::printf("scene %s\n  format      %s\n  %s\n", options.input.c_str(),
-                SceneFormatName(format).c_str(),
-                scene.Summary().c_str());
+                SceneFormatName(format).c_str(), scene.Summary().c_str());
     const BoundingBox box = scene.PointBounds();
     if (!box.Empty()) {
       std::printf("  points in   [%.4g, %.4g] x [%.4g, %.4g] x [%.4g, %.4g]\n", box.min.x(),

@@ -1,6 +1,5 @@
 // manisweep: one binary, many commands. See `manisweep help`.
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -90,9 +89,9 @@ int main(int argc, char** argv) {
         std::fputs(sub->help().c_str(), stdout);
       } else {
         // App::help() would describe the selected subcommand (`help` itself): format the app.
-        std::fputs(app.get_formatter()->make_help(&app, "manisweep", CLI::AppFormatMode::Normal)
-                       .c_str(),
-                   stdout);
+        std::fputs(
+            app.get_formatter()->make_help(&app, "manisweep", CLI::AppFormatMode::Normal).c_str(),
+            stdout);
       }
     }
   } catch (const ms::app::CommandExit& e) {

@@ -39,7 +39,8 @@ void RunManifold(const ManifoldCommandOptions& options) {
   SurfaceInfo info;
   const Mesh mesh = manifold.ExtractSurface(&info);
   if (mesh.faces.empty()) {
-    throw InputError(options.input + ": the manifold is empty: no cell reached the free-space "
+    throw InputError(options.input +
+                     ": the manifold is empty: no cell reached the free-space "
                      "threshold (--manifold.free-threshold " +
                      std::to_string(options.manifold.free_threshold) + ") or none could grow");
   }
@@ -58,8 +59,8 @@ void RunManifold(const ManifoldCommandOptions& options) {
               stats.rays ? static_cast<double>(stats.ray_cell_steps) / stats.rays : 0.0,
               stats.seconds_ray_tracing);
   std::printf("  growing           %lld of %lld free cells outside, %.3f s\n",
-              static_cast<long long>(stats.outside_cells),
-              static_cast<long long>(stats.free_cells), stats.seconds_growing);
+              static_cast<long long>(stats.outside_cells), static_cast<long long>(stats.free_cells),
+              stats.seconds_growing);
   std::printf("  surface           %zu vertices (%lld Steiner), %zu faces\n", mesh.NumVertices(),
               static_cast<long long>(info.steiner_vertices), mesh.NumFaces());
   std::printf("  total             %.3f s; wrote %s\n", total, options.output.c_str());
@@ -89,8 +90,7 @@ void RegisterManifoldCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("-o,--output", options->output, "mesh to write (.ply or .obj)")->required();
   cmd->add_flag("--ascii", options->ascii, "write ASCII PLY instead of binary");
-  cmd->add_flag("!--no-check", options->check,
-                "skip the independent manifold check of the result");
+  cmd->add_flag("!--no-check", options->check, "skip the independent manifold check of the result");
   AddOptionGroup(cmd, &options->manifold);
   cmd->callback([options] { RunManifold(*options); });
 }

@@ -20,10 +20,10 @@
 #include "coordinator/coordinator.h"
 #include "gl/context.h"
 #include "mesh/mesh_io.h"
-#include "scene/scene_io.h"
-#include "tools/evaluate.h"
 #include "proto/zmq_transport.h"
+#include "scene/scene_io.h"
 #include "sweep/sweep_kernel_factory.h"
+#include "tools/evaluate.h"
 
 namespace ms::app {
 namespace {
@@ -40,14 +40,14 @@ void ReportDefaultSceneAccuracy(const std::string& output_dir, const std::string
   EvaluateOptions options;
   options.sigma = 0.06;  // the paper's Sigma
   const gl::GlContext gl;
-  const Evaluation evaluation =
-      EvaluateMeshes(gl, {{"initial (w/o sweeping)", &initial}, {"final (w/ sweeping)", &final_mesh}},
-                     ground_truth, scene, options);
-  std::printf("\nAccuracy against the ground truth from view 0 (the paper's Table 1, downward\n"
-              "pyramid: MAE 0.108 m w/o mesh sweeping, 0.013 m with it):\n%s",
-              FormatEvaluationTable(evaluation).c_str());
+  const Evaluation evaluation = EvaluateMeshes(
+      gl, {{"initial (w/o sweeping)", &initial}, {"final (w/ sweeping)", &final_mesh}},
+      ground_truth, scene, options);
+  std::printf(
+      "\nAccuracy against the ground truth from view 0 (the paper's Table 1, downward\n"
+      "pyramid: MAE 0.108 m w/o mesh sweeping, 0.013 m with it):\n%s",
+      FormatEvaluationTable(evaluation).c_str());
 }
-
 
 struct ReconstructCommandOptions {
   CoordinatorOptions coordinator;

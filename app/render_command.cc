@@ -1,8 +1,7 @@
 // `manisweep render`: shaded pictures of meshes from a camera of a scene, side by side.
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-
-#include <memory>
 #include <string>
 #include <vector>
 
@@ -58,8 +57,9 @@ void RunRender(const RenderCommandOptions& options) {
 void RegisterRenderCommand(CLI::App& app) {
   auto options = std::make_shared<RenderCommandOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "render", "Shaded pictures of meshes seen from a camera of a scene, side by side (PNG); "
-                "faces seen from behind are red");
+      "render",
+      "Shaded pictures of meshes seen from a camera of a scene, side by side (PNG); "
+      "faces seen from behind are red");
   cmd->add_option("-m,--mesh", options->meshes, "mesh(es) to render (.ply/.obj)")->required();
   cmd->add_option("-i,--input", options->input, "scene with the camera (any format)")->required();
   cmd->add_option("-c,--camera", options->camera, "view to render from")->capture_default_str();

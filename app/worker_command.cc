@@ -34,8 +34,8 @@ struct WorkerCommandOptions {
 
 void RunWorker(WorkerCommandOptions& options) {
   if (!(options.max_message_mb >= 0.0625 && options.max_message_mb <= 2048)) {
-    throw InputError(fmt::format("--max-message-mb must be in [0.0625, 2048], got {}",
-                                 options.max_message_mb));
+    throw InputError(
+        fmt::format("--max-message-mb must be in [0.0625, 2048], got {}", options.max_message_mb));
   }
   if (!(options.image_cache_mb >= 0)) {
     throw InputError(fmt::format("--image-cache-mb must be >= 0, got {}", options.image_cache_mb));

@@ -128,9 +128,8 @@ void CheckOptionValue(const T& value, const OptionSpec& spec) {
 // Check() of every group: each option against its bound, in declaration order.
 template <typename Options>
 void CheckOptionGroup(const Options& options) {
-  Options::ForEachOption(options, [](const auto& value, const OptionSpec& spec) {
-    CheckOptionValue(value, spec);
-  });
+  Options::ForEachOption(
+      options, [](const auto& value, const OptionSpec& spec) { CheckOptionValue(value, spec); });
 }
 
 // "manifold.w1=4 manifold.w2=0.5 ...": every option of the group, for fingerprints and logs.

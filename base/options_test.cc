@@ -18,12 +18,12 @@ namespace {
 using testing::ExpectInputError;
 
 // A group as the real ones are written, with its list inline.
-#define TEST_OPTIONS(X)                                                          \
-  X(int, count, 3, "count", "how many", InRange(1, 10))                          \
-  X(double, weight, 0.5, "weight", "a weight", InRangeOpenLow(0, 1))             \
-  X(double, step, 0, "step", "0 = auto", AtLeast(0))                             \
-  X(double, rate, 2, "rate", "strictly positive", Above(0))                      \
-  X(Colour, colour, Colour::kGreen, "colour", "red or green", AnyValue())        \
+#define TEST_OPTIONS(X)                                                   \
+  X(int, count, 3, "count", "how many", InRange(1, 10))                   \
+  X(double, weight, 0.5, "weight", "a weight", InRangeOpenLow(0, 1))      \
+  X(double, step, 0, "step", "0 = auto", AtLeast(0))                      \
+  X(double, rate, 2, "rate", "strictly positive", Above(0))               \
+  X(Colour, colour, Colour::kGreen, "colour", "red or green", AnyValue()) \
   X(bool, verbose, false, "verbose", "say more", AnyValue())
 
 struct TestOptions {

@@ -9,7 +9,9 @@
 
 namespace ms {
 namespace {
-bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f'; }
+bool IsSpace(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f';
+}
 }  // namespace
 
 std::string_view Trim(std::string_view s) {
@@ -107,7 +109,8 @@ double TextReader::ParseDouble(std::string_view token, const std::string& field,
   if (text.empty() || end != text.c_str() + text.size()) {
     Fail(field + ": '" + text + "' is not a number");
   }
-  if (!allow_nonfinite && !std::isfinite(value)) Fail(field + ": value '" + text + "' is not finite");
+  if (!allow_nonfinite && !std::isfinite(value))
+    Fail(field + ": value '" + text + "' is not finite");
   return value;
 }
 

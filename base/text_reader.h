@@ -36,8 +36,8 @@ class TextReader {
   // Token parsing. `field` names the value in errors. Finite doubles only unless allow_nonfinite.
   double ParseDouble(std::string_view token, const std::string& field,
                      bool allow_nonfinite = false) const;
-  int64_t ParseInt(std::string_view token, const std::string& field,
-                   int64_t min = INT64_MIN, int64_t max = INT64_MAX) const;
+  int64_t ParseInt(std::string_view token, const std::string& field, int64_t min = INT64_MIN,
+                   int64_t max = INT64_MAX) const;
 
   double NextDouble(const std::string& field) { return ParseDouble(NextToken(field), field); }
   int64_t NextInt(const std::string& field, int64_t min = INT64_MIN, int64_t max = INT64_MAX) {

@@ -48,9 +48,9 @@ int main(int argc, char** argv) {
     }
   }
   if (sizes.empty()) sizes = {10000, 100000, 1000000};
-  std::printf("%9s %8s %9s %8s %9s %11s %8s %11s %9s %8s %10s %11s\n", "points", "rays",
-              "cells", "DT s", "trace s", "rays/s", "grow s", "cells/s", "total s", "B/point",
-              "ins pts/s", "ins total s");
+  std::printf("%9s %8s %9s %8s %9s %11s %8s %11s %9s %8s %10s %11s\n", "points", "rays", "cells",
+              "DT s", "trace s", "rays/s", "grow s", "cells/s", "total s", "B/point", "ins pts/s",
+              "ins total s");
   for (int64_t n : sizes) {
     const ms::bench::ManifoldBenchScene scene = ms::bench::MakeBlobScene(n, 48, 5, 42);
     const int64_t rss_before = ms::bench::PeakRssBytes();
@@ -72,8 +72,7 @@ int main(int argc, char** argv) {
       ms::WriteMesh(manifold.ExtractSurface(), stem + "_manifold.ply");
     }
     // Incremental: new points near the surface, as sweeping would find them.
-    ms::bench::ManifoldBenchScene more =
-        ms::bench::MakeBlobScene(insert_count, 48, 3, 4242, 0.002);
+    ms::bench::ManifoldBenchScene more = ms::bench::MakeBlobScene(insert_count, 48, 3, 4242, 0.002);
     ms::bench::SortLikeTheCoordinator(scene.cameras, &more.points);
     timer.Restart();
     const ms::InsertionStats ins = manifold.Insert(more.points);
@@ -88,18 +87,21 @@ int main(int argc, char** argv) {
                 stats.seconds_ray_tracing, stats.rays / stats.seconds_ray_tracing,
                 stats.seconds_growing, stats.outside_cells / std::max(stats.seconds_growing, 1e-9),
                 total, static_cast<double>(rss) / n, insert_count / insert_total, insert_total);
-    std::printf("          %.1f cell steps per ray; %lld manifold tests, %lld full, %.1f link steps each\n",
-                static_cast<double>(stats.ray_cell_steps) / std::max<int64_t>(stats.rays, 1),
-                static_cast<long long>(stats.manifold_tests),
-                static_cast<long long>(stats.full_manifold_tests),
-                static_cast<double>(stats.link_steps) / std::max<int64_t>(stats.full_manifold_tests, 1));
-    std::printf("          incremental: %lld inserted, %lld discarded (conflict), %lld shrunk, "
-                "%lld candidate rays, %lld re-walked (%.1f cells each), insertion %.2f s + regrowing %.2f s\n",
-                static_cast<long long>(ins.inserted), static_cast<long long>(ins.discarded_conflict),
-                static_cast<long long>(ins.shrunk_cells), static_cast<long long>(ins.candidate_rays),
-                static_cast<long long>(ins.rewalked_rays),
-                static_cast<double>(ins.rewalk_steps) / std::max<int64_t>(ins.rewalked_rays, 1),
-                ins.seconds_insertion, ins.seconds_growing);
+    std::printf(
+        "          %.1f cell steps per ray; %lld manifold tests, %lld full, %.1f link steps each\n",
+        static_cast<double>(stats.ray_cell_steps) / std::max<int64_t>(stats.rays, 1),
+        static_cast<long long>(stats.manifold_tests),
+        static_cast<long long>(stats.full_manifold_tests),
+        static_cast<double>(stats.link_steps) / std::max<int64_t>(stats.full_manifold_tests, 1));
+    std::printf(
+        "          incremental: %lld inserted, %lld discarded (conflict), %lld shrunk, "
+        "%lld candidate rays, %lld re-walked (%.1f cells each), insertion %.2f s + regrowing %.2f "
+        "s\n",
+        static_cast<long long>(ins.inserted), static_cast<long long>(ins.discarded_conflict),
+        static_cast<long long>(ins.shrunk_cells), static_cast<long long>(ins.candidate_rays),
+        static_cast<long long>(ins.rewalked_rays),
+        static_cast<double>(ins.rewalk_steps) / std::max<int64_t>(ins.rewalked_rays, 1),
+        ins.seconds_insertion, ins.seconds_growing);
     std::fflush(stdout);
   }
   return 0;

@@ -36,7 +36,8 @@ const CoordinatorOptions& Checked(const CoordinatorOptions& options) {
 // Random per coordinator start: results of an older session are stale.
 uint64_t NewSessionId() {
   std::random_device random;
-  const uint64_t session = (uint64_t{random()} << 32) ^ random() ^ static_cast<uint64_t>(Now() * 1e6);
+  const uint64_t session =
+      (uint64_t{random()} << 32) ^ random() ^ static_cast<uint64_t>(Now() * 1e6);
   return session == 0 ? 1 : session;
 }
 
@@ -82,8 +83,8 @@ void CoordinatorOptions::CheckGroups() const {
 
 std::string OptionsFingerprint(const CoordinatorOptions& o) {
   // The groups that change the result; the run's own options and the scheduler's do not.
-  const std::string text = OptionGroupText(o.manifold) + " " + OptionGroupText(o.neighbours) +
-                           " " + OptionGroupText(o.visible) + " " + OptionGroupText(o.sweep);
+  const std::string text = OptionGroupText(o.manifold) + " " + OptionGroupText(o.neighbours) + " " +
+                           OptionGroupText(o.visible) + " " + OptionGroupText(o.sweep);
   return HashHex(HashBytes(text));
 }
 
@@ -312,7 +313,7 @@ class Coordinator::Impl {
         wire::Envelope reply = stamper_.New();
         if (const ImageCatalog* catalog = run_.catalog()) {
           catalog->Serve(request.content_hash(), request.offset(), request.max_bytes(),
-                          limits_.image_chunk_bytes, reply.mutable_image_response());
+                         limits_.image_chunk_bytes, reply.mutable_image_response());
         } else {
           reply.mutable_image_response()->set_content_hash(request.content_hash());
           reply.mutable_image_response()->set_error("the coordinator is still starting");

@@ -14,8 +14,8 @@
 #include <memory>
 #include <string>
 
-#include "coordinator/job_scheduler.h"
 #include "base/options.h"
+#include "coordinator/job_scheduler.h"
 #include "manifold/manifold_options.h"
 #include "mesh/visible_mesh.h"
 #include "proto/transport.h"
@@ -52,7 +52,7 @@ struct CoordinatorOptions {
   VisibleMeshOptions visible;
   SweepOptions sweep;  // sent with every job
   SchedulerOptions scheduler;
-  void Check() const;  // throws InputError naming the flag
+  void Check() const;        // throws InputError naming the flag
   void CheckGroups() const;  // Check() without --input and --output
   WireLimits Limits() const { return WireLimitsFromMiB(run.max_message_mb); }
 };

@@ -94,7 +94,8 @@ TEST(InsertionBatch, ResultsThatDoNotFitTheirJobAreRefusedWithTheReason) {
   std::vector<FoundPoint> points;
   wire::Result wrong_first;
   AddPoint(&wrong_first, 1, 1, 1, {1, 2});
-  EXPECT_EQ(ValidateResultPoints(wrong_first, 2, 4, &points), "point 0 does not list camera 2 first");
+  EXPECT_EQ(ValidateResultPoints(wrong_first, 2, 4, &points),
+            "point 0 does not list camera 2 first");
   wire::Result twice;
   AddPoint(&twice, 1, 1, 1, {2, 3, 3});
   EXPECT_EQ(ValidateResultPoints(twice, 2, 4, &points),

@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-
 #include "base/error.h"
 #include "proto/content_hash.h"
 #include "proto/options_codec.h"

@@ -139,7 +139,8 @@ TEST(RunLifecycle, AnExistingRunIsNeverOverwrittenOrResumedWithOtherOptions) {
   const CoordinatorOptions options = Options(scene, dir / "run");
   RunLifecycle(options, 1).Prepare();
 
-  ExpectInputError([&] { RunLifecycle(options, 2).Prepare(); }, {"holds a run already", "--resume"});
+  ExpectInputError([&] { RunLifecycle(options, 2).Prepare(); },
+                   {"holds a run already", "--resume"});
   CoordinatorOptions other = options;
   other.run.resume = true;
   other.manifold.w1 = 5;

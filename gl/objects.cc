@@ -90,7 +90,6 @@ std::string AnnotateLog(const std::string& log, const ShaderSource& source) {
   return out;
 }
 
-
 GLenum UsageEnum(BufferUsage usage) {
   switch (usage) {
     case BufferUsage::kStaticDraw:

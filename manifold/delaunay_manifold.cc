@@ -90,8 +90,8 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   return stats;
 }
 
-void DelaunayManifold::Impl::CheckAndBound(const std::vector<RayPoint>& points,
-                                           Eigen::Vector3d* lo, Eigen::Vector3d* hi) const {
+void DelaunayManifold::Impl::CheckAndBound(const std::vector<RayPoint>& points, Eigen::Vector3d* lo,
+                                           Eigen::Vector3d* hi) const {
   *lo = Eigen::Vector3d::Constant(INFINITY);
   *hi = -*lo;
   for (size_t i = 0; i < points.size(); ++i) {
@@ -386,8 +386,8 @@ void DelaunayManifold::Impl::MarkRaysNear(InsertionBatch* batch, InsertionStats*
   const Eigen::Vector3d slack = Eigen::Vector3d::Constant(batch->box_slack);
   for (const RayRef& ray : candidates) {
     double entry;
-    if (SegmentMeetsBox(cameras_[ray.camera].center, positions_[ray.point], lo - slack,
-                        hi + slack, &entry)) {
+    if (SegmentMeetsBox(cameras_[ray.camera].center, positions_[ray.point], lo - slack, hi + slack,
+                        &entry)) {
       float& reach = batch->ray_reach[ray.id];
       // Rounded down (float), so the walk starts no later than the box.
       reach = std::min(reach, static_cast<float>(entry) - 1e-6f);

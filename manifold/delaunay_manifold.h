@@ -38,8 +38,8 @@ struct RayPoint {
 };
 
 struct BuildStats {
-  int64_t points = 0;            // input points
-  int64_t merged_duplicates = 0; // points at the position of an earlier point
+  int64_t points = 0;             // input points
+  int64_t merged_duplicates = 0;  // points at the position of an earlier point
   int64_t steiner_points = 0;
   int64_t graded_steiner_points = 0;  // of which in the empty space (steiner_points.h)
   int64_t vertices = 0, cells = 0;
@@ -59,12 +59,13 @@ struct InsertionStats {
   int64_t discarded_duplicate = 0;  // at (or within the merge tolerance of) an existing vertex
   int64_t gained_rays = 0;          // cameras of those duplicates their vertex did not have
   int64_t discarded_outside = 0;    // outside the Steiner box
-  int64_t shrunk_cells = 0;         // cells removed from O while shrinking (for inserted and discarded points)
-  int64_t candidate_rays = 0;       // rays found near conflict regions (with repeats)
-  int64_t rewalked_rays = 0;        // old rays walked again to count them on new cells
-  int64_t rewalk_steps = 0;         // cells those walks crossed (from their first hole box on)
+  int64_t shrunk_cells =
+      0;  // cells removed from O while shrinking (for inserted and discarded points)
+  int64_t candidate_rays = 0;  // rays found near conflict regions (with repeats)
+  int64_t rewalked_rays = 0;   // old rays walked again to count them on new cells
+  int64_t rewalk_steps = 0;    // cells those walks crossed (from their first hole box on)
   int64_t new_rays = 0;
-  int64_t outside_cells = 0;        // |O| after regrowing
+  int64_t outside_cells = 0;  // |O| after regrowing
   double seconds_insertion = 0, seconds_growing = 0;
 };
 
@@ -109,14 +110,14 @@ class DelaunayManifold {
   // counts of every cell equal a recomputation from scratch. Returns "" if valid.
   std::string Validate(bool check_weights = true) const;
 
-  int64_t num_points() const;       // input points so far (ids 0..num_points-1)
-  int64_t num_vertices() const;     // finite vertices incl. Steiner
-  int64_t num_cells() const;        // finite cells
+  int64_t num_points() const;    // input points so far (ids 0..num_points-1)
+  int64_t num_vertices() const;  // finite vertices incl. Steiner
+  int64_t num_cells() const;     // finite cells
   int64_t num_outside_cells() const;
   // Free cells not in O (refused by the manifold test or unreachable). Scans every cell, so
   // Insert, whose cost should follow the batch, does not report it; Build does.
   int64_t num_free_cells_inside() const;
-  size_t MemoryBytes() const;       // estimate of the triangulation + ray data
+  size_t MemoryBytes() const;  // estimate of the triangulation + ray data
 
  private:
   class Impl;

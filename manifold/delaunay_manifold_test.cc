@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -107,8 +106,8 @@ TEST(RayWalk, MatchesBruteForceIncludingDegenerateSegments) {
       for (int k = 0; k < 4; ++k) grid.emplace_back(i, j, k);
   int degenerate_checked = 0;
   // Cameras on lines through grid points so segments hit vertices and edges exactly.
-  const std::vector<Eigen::Vector3d> cameras = {{1.5, 1.5, 7}, {0, 0, -3}, {3, 3, 6}, {1, 1, 5},
-                                                {-2, 1, 1},     {1.5, -2, 1.5}};
+  const std::vector<Eigen::Vector3d> cameras = {{1.5, 1.5, 7}, {0, 0, -3}, {3, 3, 6},
+                                                {1, 1, 5},     {-2, 1, 1}, {1.5, -2, 1.5}};
   for (const Eigen::Vector3d& camera : cameras) {
     for (int32_t target = 0; target < static_cast<int32_t>(grid.size()); target += 3) {
       std::vector<CellVertices> walked, brute;
@@ -124,8 +123,8 @@ TEST(RayWalk, MatchesBruteForceIncludingDegenerateSegments) {
 // Figure 1 of the paper, on the boundary of a set of tetrahedra around a vertex.
 TEST(VertexRegularity, PaperFigureOneCases) {
   // An octahedron around the origin: eight cells share vertex 0.
-  const std::vector<Eigen::Vector3d> points = {
-      {0, 0, 0}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  const std::vector<Eigen::Vector3d> points = {{0, 0, 0},  {1, 0, 0}, {-1, 0, 0}, {0, 1, 0},
+                                               {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   const std::vector<CellVertices> cells = manifold_internal::DelaunayCells(points);
   ASSERT_EQ(cells.size(), 8u);
   const auto cell_with = [&](std::set<int> corner) {
@@ -141,11 +140,10 @@ TEST(VertexRegularity, PaperFigureOneCases) {
   // (a) One cell: the link of vertex 0 is a single triangle cycle -> regular.
   EXPECT_TRUE(manifold_internal::IsVertexRegular(points, {cell_with({0, 1, 3, 5})}, 0));
   // Four cells forming a half-space: link is a closed square -> regular.
-  EXPECT_TRUE(manifold_internal::IsVertexRegular(
-      points,
-      {cell_with({0, 1, 3, 5}), cell_with({0, 2, 3, 5}), cell_with({0, 1, 4, 5}),
-       cell_with({0, 2, 4, 5})},
-      0));
+  EXPECT_TRUE(manifold_internal::IsVertexRegular(points,
+                                                 {cell_with({0, 1, 3, 5}), cell_with({0, 2, 3, 5}),
+                                                  cell_with({0, 1, 4, 5}), cell_with({0, 2, 4, 5})},
+                                                 0));
   // (c) Two cells sharing only the vertex: two cycles -> not regular.
   EXPECT_FALSE(manifold_internal::IsVertexRegular(
       points, {cell_with({0, 1, 3, 5}), cell_with({0, 2, 4, 6})}, 0));
@@ -183,9 +181,9 @@ RandomScene SphereScene(int num_points, int num_cameras, uint32_t seed, double r
   RandomScene scene;
   for (int c = 0; c < num_cameras; ++c) {
     const double angle = 2 * M_PI * c / num_cameras;
-    scene.cameras.push_back(LookAt(Eigen::Vector3d(4 * std::cos(angle), 4 * std::sin(angle),
-                                                   (c % 3 - 1) * 1.5),
-                                   Eigen::Vector3d::Zero()));
+    scene.cameras.push_back(
+        LookAt(Eigen::Vector3d(4 * std::cos(angle), 4 * std::sin(angle), (c % 3 - 1) * 1.5),
+               Eigen::Vector3d::Zero()));
   }
   std::mt19937 rng(seed);
   std::normal_distribution<double> g(0, 1);
@@ -220,7 +218,8 @@ TEST(DelaunayManifold, SphereIsReconstructedAsAClosedManifold) {
   for (int32_t id : info.vertex_ids) on_surface += id >= 0;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const auto& t = mesh.faces[f];
-    if (info.vertex_ids[t[0]] < 0 || info.vertex_ids[t[1]] < 0 || info.vertex_ids[t[2]] < 0) continue;
+    if (info.vertex_ids[t[0]] < 0 || info.vertex_ids[t[1]] < 0 || info.vertex_ids[t[2]] < 0)
+      continue;
     ++sphere_faces;
     const Eigen::Vector3d centroid =
         (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3;

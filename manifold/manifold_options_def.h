@@ -4,8 +4,7 @@
 
 // Ray tracing: every cell crossed by a camera->point segment gets w1, and its face neighbours
 // get w2 (per crossing). A cell is free space when its weight reaches t_w. Paper: 4.0, 0.5, 4.0.
-MS_OPTION(double, w1, 4.0, "w1", "w_1: weight a viewing ray adds to each cell it crosses",
-          Above(0))
+MS_OPTION(double, w1, 4.0, "w1", "w_1: weight a viewing ray adds to each cell it crosses", Above(0))
 MS_OPTION(double, w2, 0.5, "w2", "w_2: weight added to each face neighbour of a crossed cell",
           AtLeast(0))
 MS_OPTION(double, free_threshold, 4.0, "free-threshold",

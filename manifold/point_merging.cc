@@ -27,7 +27,8 @@ double DuplicateDistance(const Eigen::Vector3d& p, const std::vector<int32_t>& c
   for (int32_t c : cameras) {
     const ManifoldCamera& camera = all_cameras[c];
     const double depth = camera.R.row(2).dot(p - camera.center);
-    if (depth > 0 && camera.pixel_angle > 0) footprint = std::min(footprint, depth * camera.pixel_angle);
+    if (depth > 0 && camera.pixel_angle > 0)
+      footprint = std::min(footprint, depth * camera.pixel_angle);
   }
   const double d = std::isfinite(footprint) ? tolerance.pixel_fraction * footprint : 0.0;
   return std::max(d, tolerance.floor);

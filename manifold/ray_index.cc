@@ -125,8 +125,8 @@ void RayIndex::Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
       continue;
     }
     const auto clamp_index = [&](double value, double lo, double step) {
-      return static_cast<int>(std::clamp(std::floor((value - lo) / step), -1.0,
-                                         static_cast<double>(grid_)));
+      return static_cast<int>(
+          std::clamp(std::floor((value - lo) / step), -1.0, static_cast<double>(grid_)));
     };
     // The box lies in front of the camera: its projection is the convex hull of its corners'
     // (a central projection keeps segments straight there), so a ray meeting it leaves the
@@ -134,8 +134,10 @@ void RayIndex::Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
     // coordinates and rounding in the projection.
     const double u_slack = 1e-6 * std::max({1.0, std::abs(u_lo), std::abs(u_hi)});
     const double v_slack = 1e-6 * std::max({1.0, std::abs(v_lo), std::abs(v_hi)});
-    const float fu_lo = static_cast<float>(u_lo - u_slack), fu_hi = static_cast<float>(u_hi + u_slack);
-    const float fv_lo = static_cast<float>(v_lo - v_slack), fv_hi = static_cast<float>(v_hi + v_slack);
+    const float fu_lo = static_cast<float>(u_lo - u_slack),
+                fu_hi = static_cast<float>(u_hi + u_slack);
+    const float fv_lo = static_cast<float>(v_lo - v_slack),
+                fv_hi = static_cast<float>(v_hi + v_slack);
     const auto inside = [&](const Entry& e) {
       return e.depth >= reach && e.u >= fu_lo && e.u <= fu_hi && e.v >= fv_lo && e.v <= fv_hi;
     };

@@ -42,7 +42,8 @@ class RayIndex {
   int32_t Add(int32_t camera, int32_t point, const Eigen::Vector3d& position);
   void Flush();
   // Appends to `out` every ray that may intersect the closed box [min, max].
-  void Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max, std::vector<RayRef>* out) const;
+  void Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
+             std::vector<RayRef>* out) const;
   // Calls visit(ray) for every ray, camera by camera and, within a camera, by direction
   // (buckets in Morton order): consecutive rays leave the same camera side by side, so walks
   // along them in this order cross mostly the same cells, which stay in cache.

@@ -127,8 +127,8 @@ SteinerPoints MakeSteinerPoints(const Eigen::Vector3d& min, const Eigen::Vector3
   const int grid = std::max(options.grid, 2);
   const Eigen::Vector3d extent = (max - min).cwiseMax(1e-12);
   // Enlarge by margin x diagonal, at least 1% of the largest side per axis (flat inputs).
-  const Eigen::Vector3d pad = Eigen::Vector3d::Constant(
-      std::max(options.margin * extent.norm(), 0.01 * extent.maxCoeff()));
+  const Eigen::Vector3d pad =
+      Eigen::Vector3d::Constant(std::max(options.margin * extent.norm(), 0.01 * extent.maxCoeff()));
   result.box_min = min - pad;
   result.box_max = max + pad;
   AddBoxGrid(result.box_min, result.box_max, pad, grid, &result.points);

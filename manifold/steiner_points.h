@@ -17,11 +17,11 @@
 namespace ms {
 
 struct SteinerOptions {
-  double margin = 0.5;  // box enlargement, x its diagonal
-  int grid = 3;         // points per box edge (>= 2)
-  bool graded = false;  // add the graded points of (2)
-  double clearance = 3.0;          // a leaf of half-size h has no input point within clearance*h
-  double min_spacing_factor = 6;   // smallest leaf half-size = this x the median point spacing
+  double margin = 0.5;            // box enlargement, x its diagonal
+  int grid = 3;                   // points per box edge (>= 2)
+  bool graded = false;            // add the graded points of (2)
+  double clearance = 3.0;         // a leaf of half-size h has no input point within clearance*h
+  double min_spacing_factor = 6;  // smallest leaf half-size = this x the median point spacing
 };
 
 struct SteinerPoints {
@@ -48,8 +48,8 @@ class PointKdTree {
  private:
   bool AnyInBox(size_t begin, size_t end, int depth, const Eigen::Vector3d& lo,
                 const Eigen::Vector3d& hi) const;
-  void Nearest(size_t begin, size_t end, int depth, const Eigen::Vector3d& query,
-               int64_t exclude, double* best2) const;
+  void Nearest(size_t begin, size_t end, int depth, const Eigen::Vector3d& query, int64_t exclude,
+               double* best2) const;
   std::vector<Eigen::Vector3d> points_;  // in k-d order (median of each range at its middle)
   std::vector<int64_t> ids_;             // original index of each
 };

@@ -59,8 +59,8 @@ TEST(PointKdTree, NearestAndBoxQueriesMatchBruteForce) {
 TEST(SteinerPoints, BoxGridEnclosesEverythingAndIsTheOnlyPointsByDefault) {
   const std::vector<Eigen::Vector3d> data = SpherePoints(4000);
   SteinerOptions options;  // grid 3: 3^3 - 1 = 26 points on the box surface
-  const SteinerPoints made = MakeSteinerPoints(Eigen::Vector3d::Constant(-1),
-                                               Eigen::Vector3d::Constant(1), data, options);
+  const SteinerPoints made =
+      MakeSteinerPoints(Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1), data, options);
   EXPECT_EQ(made.graded, 0);
   EXPECT_EQ(made.points.size(), 26u);
   EXPECT_TRUE((made.box_min.array() < -1).all() && (made.box_max.array() > 1).all());
@@ -81,8 +81,8 @@ TEST(SteinerPoints, GradedPointsKeepTheirClearanceAndAreDeterministic) {
   SteinerOptions options;
   options.graded = true;
   options.min_spacing_factor = 2;
-  const SteinerPoints made = MakeSteinerPoints(Eigen::Vector3d::Constant(-1),
-                                               Eigen::Vector3d::Constant(1), data, options);
+  const SteinerPoints made =
+      MakeSteinerPoints(Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1), data, options);
   ASSERT_GT(made.graded, 50);  // the empty space around the sphere gets points
   // A leaf of half-size h >= min_half has no point in its box of radius clearance*h; the
   // point is jittered by <= 0.1 h per axis, so it stays (clearance - 0.1) * min_half away.
@@ -95,8 +95,8 @@ TEST(SteinerPoints, GradedPointsKeepTheirClearanceAndAreDeterministic) {
     EXPECT_TRUE((p.array() > made.box_min.array()).all() &&
                 (p.array() < made.box_max.array()).all());
   }
-  const SteinerPoints again = MakeSteinerPoints(Eigen::Vector3d::Constant(-1),
-                                                Eigen::Vector3d::Constant(1), data, options);
+  const SteinerPoints again =
+      MakeSteinerPoints(Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1), data, options);
   ASSERT_EQ(again.points.size(), made.points.size());
   for (size_t i = 0; i < made.points.size(); ++i) EXPECT_EQ(again.points[i], made.points[i]);
 }

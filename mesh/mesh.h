@@ -10,7 +10,7 @@ namespace ms {
 
 struct Mesh {
   std::vector<Eigen::Vector3d> vertices;
-  std::vector<std::array<int32_t, 3>> faces;        // counter-clockwise seen from outside
+  std::vector<std::array<int32_t, 3>> faces;          // counter-clockwise seen from outside
   std::vector<std::array<uint8_t, 3>> vertex_colors;  // empty, or one per vertex
 
   size_t NumVertices() const { return vertices.size(); }
@@ -27,9 +27,9 @@ struct Mesh {
 // A point cloud with optional normals and colours (what sweeping finds, what synth samples).
 struct PointCloud {
   std::vector<Eigen::Vector3d> points;
-  std::vector<Eigen::Vector3d> normals;             // empty, or one per point
-  std::vector<std::array<uint8_t, 3>> colors;       // empty, or one per point
-  std::vector<float> scalars;                        // empty, or one per point (e.g. NCC)
+  std::vector<Eigen::Vector3d> normals;        // empty, or one per point
+  std::vector<std::array<uint8_t, 3>> colors;  // empty, or one per point
+  std::vector<float> scalars;                  // empty, or one per point (e.g. NCC)
 };
 
 }  // namespace ms

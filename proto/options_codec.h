@@ -54,14 +54,22 @@ void OptionsToWire(const Options& options, google::protobuf::Message* out) {
   Options::ForEachOption(options, [&](const auto& value, const OptionSpec& spec) {
     using T = std::decay_t<decltype(value)>;
     const auto* f = Field<T>(*out, spec);
-    if constexpr (std::is_same_v<T, bool>) r->SetBool(out, f, value);
-    else if constexpr (std::is_same_v<T, int32_t>) r->SetInt32(out, f, value);
-    else if constexpr (std::is_same_v<T, int64_t>) r->SetInt64(out, f, value);
-    else if constexpr (std::is_same_v<T, uint32_t>) r->SetUInt32(out, f, value);
-    else if constexpr (std::is_same_v<T, uint64_t>) r->SetUInt64(out, f, value);
-    else if constexpr (std::is_same_v<T, double>) r->SetDouble(out, f, value);
-    else if constexpr (std::is_same_v<T, float>) r->SetFloat(out, f, value);
-    else r->SetString(out, f, value);
+    if constexpr (std::is_same_v<T, bool>)
+      r->SetBool(out, f, value);
+    else if constexpr (std::is_same_v<T, int32_t>)
+      r->SetInt32(out, f, value);
+    else if constexpr (std::is_same_v<T, int64_t>)
+      r->SetInt64(out, f, value);
+    else if constexpr (std::is_same_v<T, uint32_t>)
+      r->SetUInt32(out, f, value);
+    else if constexpr (std::is_same_v<T, uint64_t>)
+      r->SetUInt64(out, f, value);
+    else if constexpr (std::is_same_v<T, double>)
+      r->SetDouble(out, f, value);
+    else if constexpr (std::is_same_v<T, float>)
+      r->SetFloat(out, f, value);
+    else
+      r->SetString(out, f, value);
   });
 }
 
@@ -74,14 +82,22 @@ Options OptionsFromWire(const google::protobuf::Message& message) {
   Options::ForEachOption(options, [&](auto& value, const OptionSpec& spec) {
     using T = std::decay_t<decltype(value)>;
     const auto* f = Field<T>(message, spec);
-    if constexpr (std::is_same_v<T, bool>) value = r->GetBool(message, f);
-    else if constexpr (std::is_same_v<T, int32_t>) value = r->GetInt32(message, f);
-    else if constexpr (std::is_same_v<T, int64_t>) value = r->GetInt64(message, f);
-    else if constexpr (std::is_same_v<T, uint32_t>) value = r->GetUInt32(message, f);
-    else if constexpr (std::is_same_v<T, uint64_t>) value = r->GetUInt64(message, f);
-    else if constexpr (std::is_same_v<T, double>) value = r->GetDouble(message, f);
-    else if constexpr (std::is_same_v<T, float>) value = r->GetFloat(message, f);
-    else value = r->GetString(message, f);
+    if constexpr (std::is_same_v<T, bool>)
+      value = r->GetBool(message, f);
+    else if constexpr (std::is_same_v<T, int32_t>)
+      value = r->GetInt32(message, f);
+    else if constexpr (std::is_same_v<T, int64_t>)
+      value = r->GetInt64(message, f);
+    else if constexpr (std::is_same_v<T, uint32_t>)
+      value = r->GetUInt32(message, f);
+    else if constexpr (std::is_same_v<T, uint64_t>)
+      value = r->GetUInt64(message, f);
+    else if constexpr (std::is_same_v<T, double>)
+      value = r->GetDouble(message, f);
+    else if constexpr (std::is_same_v<T, float>)
+      value = r->GetFloat(message, f);
+    else
+      value = r->GetString(message, f);
   });
   return options;
 }

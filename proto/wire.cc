@@ -52,8 +52,8 @@ void WireLimits::Check() const {
 WireLimits WireLimitsFromMiB(double max_message_mb) {
   WireLimits limits;
   limits.max_message_bytes = static_cast<uint64_t>(std::llround(max_message_mb * 1048576));
-  limits.image_chunk_bytes = std::min<uint64_t>(limits.image_chunk_bytes,
-                                                limits.max_message_bytes / 2);
+  limits.image_chunk_bytes =
+      std::min<uint64_t>(limits.image_chunk_bytes, limits.max_message_bytes / 2);
   return limits;
 }
 

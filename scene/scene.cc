@@ -54,9 +54,10 @@ void Scene::NormalizeObservations() {
     auto& obs = p.observations;
     std::stable_sort(obs.begin(), obs.end(),
                      [](const Observation& a, const Observation& b) { return a.view < b.view; });
-    obs.erase(std::unique(obs.begin(), obs.end(),
-                          [](const Observation& a, const Observation& b) { return a.view == b.view; }),
-              obs.end());
+    obs.erase(
+        std::unique(obs.begin(), obs.end(),
+                    [](const Observation& a, const Observation& b) { return a.view == b.view; }),
+        obs.end());
   }
 }
 

@@ -14,8 +14,8 @@
 #include "scene/middlebury_io.h"
 #include "scene/nvm_io.h"
 #include "scene/openmvg_io.h"
-#include "scene/strecha_io.h"
 #include "scene/scene_h5.h"
+#include "scene/strecha_io.h"
 
 namespace fs = std::filesystem;
 

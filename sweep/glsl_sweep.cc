@@ -30,7 +30,6 @@ constexpr char kUnrolledMarker[] = "// @MS_UNROLLED_TAPS@";
 
 // ---- Shader sources ----
 
-
 // The tap loop of sweep_blur.glsl fully unrolled, on one line (so line numbers do not move):
 // every sample loaded once, then each output's 2 radius + 1 taps.
 std::string UnrolledTaps(int radius, int block) {

@@ -5,14 +5,13 @@
 
 #include <gtest/gtest.h>
 
-#include <thread>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <thread>
 
 #include "base/error.h"
 #include "base/testing.h"

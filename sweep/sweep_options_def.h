@@ -15,8 +15,7 @@ MS_OPTION(double, alpha, 0, "alpha",
 // One automatic step moves a point at the job's median depth by this many pixels of parallax in
 // the neighbour images (pixels of the swept resolution).
 MS_OPTION(double, alpha_parallax_px, 1.0, "alpha-parallax-px",
-          "auto alpha: pixels of parallax in the neighbours per step at the median depth",
-          Above(0))
+          "auto alpha: pixels of parallax in the neighbours per step at the median depth", Above(0))
 // t_NCC: a tile's best pixel becomes a point only if its NCC is strictly above this.
 MS_OPTION(double, ncc_threshold, 0.98, "ncc-threshold", "t_NCC: keep tile winners above this",
           InRange(-1, 1))

@@ -19,9 +19,9 @@ struct PyramidSceneOptions {
   double focal_px = 150;          // at 160 px wide; scaled with width
   // Apex height above the ground (base: [-1, 1]^2 at z = 0; sweep/pyramid_geometry.h).
   double pyramid_height = kPyramidHeight;
-  double texture_contrast = 1;    // texture = 0.5 + contrast * (noise - 0.5); 0 = blank
-  int supersample = 2;            // rays per pixel per axis
-  double noise_stddev = 0;        // independent Gaussian noise per camera (fixed seeds)
+  double texture_contrast = 1;  // texture = 0.5 + contrast * (noise - 0.5); 0 = blank
+  int supersample = 2;          // rays per pixel per axis
+  double noise_stddev = 0;      // independent Gaussian noise per camera (fixed seeds)
 };
 
 struct PyramidScene {

@@ -32,7 +32,8 @@ Output RunManisweep(const std::string& args) {
   if (pipe == nullptr) return out;
   std::array<char, 4096> buffer;
   size_t n;
-  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) out.text.append(buffer.data(), n);
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    out.text.append(buffer.data(), n);
   out.status = ::pclose(pipe);
   return out;
 }
@@ -40,9 +41,8 @@ Output RunManisweep(const std::string& args) {
 template <typename Options>
 std::vector<std::string> Flags() {
   std::vector<std::string> flags;
-  Options::ForEachOption(Options{}, [&](const auto&, const OptionSpec& spec) {
-    flags.push_back(spec.Flag());
-  });
+  Options::ForEachOption(
+      Options{}, [&](const auto&, const OptionSpec& spec) { flags.push_back(spec.Flag()); });
   return flags;
 }
 
@@ -67,15 +67,15 @@ void ExpectHelpListsEveryFlag(const std::string& command, const std::vector<std:
 }
 
 TEST(CommandOptions, ReconstructTakesEveryOptionOfARun) {
-  ExpectHelpListsEveryFlag("reconstruct", FlagsOf<RunOptions, ManifoldOptions, NeighbourOptions,
-                                                   VisibleMeshOptions, SchedulerOptions,
-                                                   SweepOptions>());
+  ExpectHelpListsEveryFlag(
+      "reconstruct", FlagsOf<RunOptions, ManifoldOptions, NeighbourOptions, VisibleMeshOptions,
+                             SchedulerOptions, SweepOptions>());
 }
 
 TEST(CommandOptions, CoordinatorTakesEveryOptionOfARun) {
-  ExpectHelpListsEveryFlag("coordinator", FlagsOf<RunOptions, ManifoldOptions, NeighbourOptions,
-                                                   VisibleMeshOptions, SchedulerOptions,
-                                                   SweepOptions>());
+  ExpectHelpListsEveryFlag(
+      "coordinator", FlagsOf<RunOptions, ManifoldOptions, NeighbourOptions, VisibleMeshOptions,
+                             SchedulerOptions, SweepOptions>());
 }
 
 TEST(CommandOptions, ManifoldTakesEveryManifoldOption) {
@@ -109,7 +109,8 @@ TEST(CommandOptions, BadValuesAreReportedWithTheFlagTheUserTyped) {
 TEST(CommandOptions, AConfigFileSetsOptionsByTheirDottedNames) {
   const testing::TempDir dir("config");
   std::ofstream(dir / "run.toml") << "[manifold]\nmanifold.steiner-grid = 1\n";
-  const Output out = RunManisweep("--config " + dir / "run.toml" + " manifold --input x --output y");
+  const Output out =
+      RunManisweep("--config " + dir / "run.toml" + " manifold --input x --output y");
   EXPECT_EQ(WEXITSTATUS(out.status), 2) << out.text;
   EXPECT_NE(out.text.find("--manifold.steiner-grid must be in [2, 64], got 1"), std::string::npos)
       << out.text;

@@ -2,9 +2,9 @@
 // by the independent mesh checker and measured by depth-map evaluation (llvmpipe in CI).
 #include <gtest/gtest.h>
 
+#include "gl/context.h"
 #include "manifold/delaunay_manifold.h"
 #include "manifold/scene_rays.h"
-#include "gl/context.h"
 #include "mesh/mesh_checker.h"
 #include "tools/evaluate.h"
 #include "tools/synth.h"

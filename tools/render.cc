@@ -55,8 +55,9 @@ cv::Mat RenderShaded(const gl::GlContext& context, const Mesh& mesh, const View&
       const double facing = -normals[f].dot(ray);
       const double shade = 0.18 + 0.82 * std::min(1.0, std::abs(facing));
       const uint8_t v = static_cast<uint8_t>(std::lround(255 * shade));
-      out[col] = facing >= 0 ? cv::Vec3b(v, v, v)
-                             : cv::Vec3b(static_cast<uint8_t>(v / 3), static_cast<uint8_t>(v / 3), v);
+      out[col] = facing >= 0
+                     ? cv::Vec3b(v, v, v)
+                     : cv::Vec3b(static_cast<uint8_t>(v / 3), static_cast<uint8_t>(v / 3), v);
     }
   }
   return image;

@@ -10,7 +10,8 @@ namespace ms {
 namespace {
 
 TEST(JobCodec, SweepOptionsAndTheirWireMessageAgreeFieldByField) {
-  const std::vector<std::string> problems = OptionGroupMismatches<SweepOptions>(wire::SweepOptions());
+  const std::vector<std::string> problems =
+      OptionGroupMismatches<SweepOptions>(wire::SweepOptions());
   EXPECT_TRUE(problems.empty()) << problems.front();
 }
 

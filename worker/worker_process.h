@@ -10,11 +10,11 @@
 #include <memory>
 #include <string>
 
+#include "base/options.h"
 #include "proto/transport.h"
 #include "proto/wire.h"
-#include "base/options.h"
-#include "worker/image_cache.h"
 #include "sweep/sweep_kernel.h"
+#include "worker/image_cache.h"
 
 namespace ms {
 

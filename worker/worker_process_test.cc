@@ -14,11 +14,11 @@
 #include "base/error.h"
 #include "base/file_util.h"
 #include "proto/content_hash.h"
-#include "proto/wire.h"
-#include "worker/image_cache.h"
 #include "proto/options_codec.h"
-#include "worker/job_codec.h"
+#include "proto/wire.h"
 #include "sweep/sweep_kernel_factory.h"
+#include "worker/image_cache.h"
+#include "worker/job_codec.h"
 
 namespace ms {
 namespace {

@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <thread>
 
-#include "tests/distributed/pyramid_scene_files.h"
 #include "base/error.h"
 #include "base/file_util.h"
 #include "coordinator/coordinator.h"
@@ -14,8 +13,9 @@
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
 #include "proto/transport.h"
-#include "worker/job_codec.h"
 #include "sweep/sweep_kernel_factory.h"
+#include "tests/distributed/pyramid_scene_files.h"
+#include "worker/job_codec.h"
 #include "worker/worker_process.h"
 
 namespace ms {

@@ -17,7 +17,6 @@
 #include <vector>
 #include <zmq.hpp>
 
-#include "tests/distributed/pyramid_scene_files.h"
 #include "base/file_util.h"
 #include "coordinator/run_store.h"
 #include "mesh/mesh_checker.h"
@@ -25,6 +24,7 @@
 #include "proto/wire.h"
 #include "proto/zmq_transport.h"
 #include "tests/distributed/child_process.h"
+#include "tests/distributed/pyramid_scene_files.h"
 
 namespace ms {
 namespace {

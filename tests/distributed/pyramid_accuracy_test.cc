@@ -51,8 +51,8 @@ Outcome Reconstruct(const std::string& scene_name, const gl::GlContext& gl) {
   const std::string endpoint = "tcp://127.0.0.1:" + std::to_string(port);
   ChildProcess coordinator(
       MS_BINARY,
-      Split("coordinator --input " + (root / "data" / "scene.h5").string() + " --bind " +
-            endpoint + " --output " + out + " --max-iterations 5 --progress-interval 5"),
+      Split("coordinator --input " + (root / "data" / "scene.h5").string() + " --bind " + endpoint +
+            " --output " + out + " --max-iterations 5 --progress-interval 5"),
       out + "/coordinator.log");
   std::vector<std::unique_ptr<ChildProcess>> workers;
   for (const char* id : {"w1", "w2"}) {
@@ -75,9 +75,9 @@ Outcome Reconstruct(const std::string& scene_name, const gl::GlContext& gl) {
   const Mesh ground_truth = ReadMesh((root / "data" / "gt.ply").string());
   EvaluateOptions options;
   options.sigma = 0.06;
-  const Evaluation e = EvaluateMeshes(
-      gl, {{"initial", &initial}, {"surface", &surface}, {"closed", &closed}}, ground_truth,
-      scene, options);
+  const Evaluation e =
+      EvaluateMeshes(gl, {{"initial", &initial}, {"surface", &surface}, {"closed", &closed}},
+                     ground_truth, scene, options);
   std::printf("%s\n%s", scene_name.c_str(), FormatEvaluationTable(e).c_str());
   outcome.initial = e.meshes[0].total;
   outcome.surface = e.meshes[1].total;
@@ -101,7 +101,7 @@ TEST(PyramidAccuracy, UpwardPyramidReproducesTable1) {
   const gl::GlContext gl;
   const Outcome o = Reconstruct("pyramid-up", gl);
   EXPECT_TRUE(o.check.is_closed_manifold) << o.check.ToTable();
-  EXPECT_GT(o.initial.mae, 0.09);  // paper: 0.135
+  EXPECT_GT(o.initial.mae, 0.09);   // paper: 0.135
   EXPECT_LE(o.surface.mae, 0.028);  // paper: 0.028
   EXPECT_GE(o.surface.coverage, 0.85);
   EXPECT_LE(o.closed.mae, 0.028);

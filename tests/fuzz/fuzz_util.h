@@ -2,12 +2,12 @@
 // splitter for inputs that stand for several files.
 #pragma once
 
+#include <spdlog/spdlog.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <spdlog/spdlog.h>
 
 #include "base/file_util.h"
 
