@@ -52,22 +52,33 @@ std::vector<int32_t> NearDuplicateRepresentatives(const std::vector<RayPoint>& p
                    static_cast<int64_t>(std::floor(p.y() / cell)),
                    static_cast<int64_t>(std::floor(p.z() / cell))};
   };
-  // Points that stay, by cell; each point looks for an earlier one in the 27 cells around it.
-  std::unordered_map<CellKey, std::vector<int32_t>, CellHash> kept;
-  kept.reserve(n);
+  // Points that stay, by cell; each point looks for an earlier one in its cell and the cells
+  // its distance reaches (a duplicate is closer than the smaller distance, so this finds all).
+  // The kept points of a cell as a chain through `next` (one allocation for all cells).
+  std::unordered_map<CellKey, int32_t, CellHash> first_kept;
+  first_kept.reserve(n);
+  std::vector<int32_t> next(n, -1);
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d& p = points[i].position;
     const CellKey k = key(p);
+    // Only the neighbour cells that p's duplicate distance reaches into (usually none).
+    int64_t from[3], to[3];
+    const int64_t cell_index[3] = {k.x, k.y, k.z};
+    for (int a = 0; a < 3; ++a) {
+      from[a] = std::floor((p[a] - distance[i]) / cell) < cell_index[a] ? -1 : 0;
+      to[a] = std::floor((p[a] + distance[i]) / cell) > cell_index[a] ? 1 : 0;
+    }
+    // The earliest kept point it duplicates (the order does not depend on the grid).
     int32_t found = -1;
-    for (int64_t dx = -1; dx <= 1 && found < 0; ++dx) {
-      for (int64_t dy = -1; dy <= 1 && found < 0; ++dy) {
-        for (int64_t dz = -1; dz <= 1 && found < 0; ++dz) {
-          auto it = kept.find({k.x + dx, k.y + dy, k.z + dz});
-          if (it == kept.end()) continue;
-          for (int32_t j : it->second) {
-            if ((points[j].position - p).norm() < std::min(distance[i], distance[j])) {
+    for (int64_t dx = from[0]; dx <= to[0]; ++dx) {
+      for (int64_t dy = from[1]; dy <= to[1]; ++dy) {
+        for (int64_t dz = from[2]; dz <= to[2]; ++dz) {
+          auto it = first_kept.find({k.x + dx, k.y + dy, k.z + dz});
+          if (it == first_kept.end()) continue;
+          for (int32_t j = it->second; j >= 0; j = next[j]) {
+            if ((found < 0 || j < found) &&
+                (points[j].position - p).norm() < std::min(distance[i], distance[j])) {
               found = j;
-              break;
             }
           }
         }
@@ -76,7 +87,11 @@ std::vector<int32_t> NearDuplicateRepresentatives(const std::vector<RayPoint>& p
     if (found >= 0) {
       representative[i] = found;
     } else {
-      kept[k].push_back(static_cast<int32_t>(i));
+      auto [it, added] = first_kept.try_emplace(k, static_cast<int32_t>(i));
+      if (!added) {
+        next[i] = it->second;
+        it->second = static_cast<int32_t>(i);
+      }
     }
   }
   return representative;
