@@ -1,8 +1,8 @@
 // Option groups declared once. Each group (ManifoldOptions, SweepOptions, ...) lists its options
 // in a *_options_def.h file, one MS_OPTION(type, name, default, flag, help, bound) line each, in
-// the style of Ray's ray_config_def.h. The group's header includes that list twice: once to
-// declare the struct's fields, once to define ForEachOption, which hands every field to a
-// visitor with its OptionSpec. Everything else is derived from that one list:
+// the style of Ray's ray_config_def.h. base/option_group_members.h expands that list inside the
+// group's struct twice: once to declare the fields, once to define ForEachOption, which hands
+// every field to a visitor with its OptionSpec. Everything else is derived from that one list:
 //   - Check() (CheckOptionGroup below): bounds, in the user's words ("--sweep.ncc-threshold must
 //     be in [-1, 1], got 1.5", the form of Ceres' OPTION_GE);
 //   - the command-line and TOML registration (app/option_registration.h);
@@ -144,20 +144,14 @@ std::string OptionGroupText(const Options& options) {
 
 }  // namespace ms
 
-// The two expansions of a group's list (see the group headers, e.g. sweep/sweep_options.h):
+// A group's struct (e.g. sweep/sweep_options.h):
 //   struct SweepOptions {
 //     static constexpr const char* kOptionGroup = "sweep";
-//   #define MS_OPTION MS_OPTION_FIELD
-//   #include "sweep/sweep_options_def.h"
-//   #undef MS_OPTION
-//     template <typename Self, typename Visitor>
-//     static void ForEachOption(Self&& self, Visitor&& visit) {
-//   #define MS_OPTION MS_OPTION_VISIT
-//   #include "sweep/sweep_options_def.h"
-//   #undef MS_OPTION
-//     }
+//   #define MS_OPTION_LIST "sweep/sweep_options_def.h"
+//   #include "base/option_group_members.h"
 //     void Check() const { CheckOptionGroup(*this); }
 //   };
+// option_group_members.h expands the list twice with these:
 #define MS_OPTION_FIELD(type, name, default_value, flag, help, bound) type name = default_value;
 #define MS_OPTION_VISIT(type, name, default_value, flag, help, bound) \
   visit(self.name, ::ms::OptionSpec{kOptionGroup, #name, flag, help, bound});

@@ -28,17 +28,8 @@ namespace ms {
 // The run's own options (--max-iterations, --resume, ...).
 struct RunOptions {
   static constexpr const char* kOptionGroup = "";
-#define MS_OPTION MS_OPTION_FIELD
-#include "coordinator/run_options_def.h"
-#undef MS_OPTION
-
-  // visit(value, spec) for every option, in declaration order.
-  template <typename Self, typename Visitor>
-  static void ForEachOption(Self&& self, Visitor&& visit) {
-#define MS_OPTION MS_OPTION_VISIT
-#include "coordinator/run_options_def.h"
-#undef MS_OPTION
-  }
+#define MS_OPTION_LIST "coordinator/run_options_def.h"
+#include "base/option_group_members.h"
   void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
 };
 

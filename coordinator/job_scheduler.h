@@ -26,17 +26,8 @@ namespace ms {
 
 struct SchedulerOptions {
   static constexpr const char* kOptionGroup = "";
-#define MS_OPTION MS_OPTION_FIELD
-#include "coordinator/scheduler_options_def.h"
-#undef MS_OPTION
-
-  // visit(value, spec) for every option, in declaration order.
-  template <typename Self, typename Visitor>
-  static void ForEachOption(Self&& self, Visitor&& visit) {
-#define MS_OPTION MS_OPTION_VISIT
-#include "coordinator/scheduler_options_def.h"
-#undef MS_OPTION
-  }
+#define MS_OPTION_LIST "coordinator/scheduler_options_def.h"
+#include "base/option_group_members.h"
   void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
 };
 

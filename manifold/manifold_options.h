@@ -27,17 +27,8 @@ const std::vector<std::pair<const char*, GradedSteiner>>& OptionChoices(GradedSt
 
 struct ManifoldOptions {
   static constexpr const char* kOptionGroup = "manifold";
-#define MS_OPTION MS_OPTION_FIELD
-#include "manifold/manifold_options_def.h"
-#undef MS_OPTION
-
-  // visit(value, spec) for every option, in declaration order.
-  template <typename Self, typename Visitor>
-  static void ForEachOption(Self&& self, Visitor&& visit) {
-#define MS_OPTION MS_OPTION_VISIT
-#include "manifold/manifold_options_def.h"
-#undef MS_OPTION
-  }
+#define MS_OPTION_LIST "manifold/manifold_options_def.h"
+#include "base/option_group_members.h"
   void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
 };
 

@@ -15,17 +15,8 @@ namespace ms {
 
 struct VisibleMeshOptions {
   static constexpr const char* kOptionGroup = "visible";
-#define MS_OPTION MS_OPTION_FIELD
-#include "mesh/visible_mesh_options_def.h"
-#undef MS_OPTION
-
-  // visit(value, spec) for every option, in declaration order.
-  template <typename Self, typename Visitor>
-  static void ForEachOption(Self&& self, Visitor&& visit) {
-#define MS_OPTION MS_OPTION_VISIT
-#include "mesh/visible_mesh_options_def.h"
-#undef MS_OPTION
-  }
+#define MS_OPTION_LIST "mesh/visible_mesh_options_def.h"
+#include "base/option_group_members.h"
   void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
 };
 

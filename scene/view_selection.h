@@ -12,17 +12,8 @@ namespace ms {
 
 struct NeighbourOptions {
   static constexpr const char* kOptionGroup = "neighbours";
-#define MS_OPTION MS_OPTION_FIELD
-#include "scene/neighbour_options_def.h"
-#undef MS_OPTION
-
-  // visit(value, spec) for every option, in declaration order.
-  template <typename Self, typename Visitor>
-  static void ForEachOption(Self&& self, Visitor&& visit) {
-#define MS_OPTION MS_OPTION_VISIT
-#include "scene/neighbour_options_def.h"
-#undef MS_OPTION
-  }
+#define MS_OPTION_LIST "scene/neighbour_options_def.h"
+#include "base/option_group_members.h"
   void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
 };
 

@@ -9,17 +9,8 @@ namespace ms {
 
 struct SweepOptions {
   static constexpr const char* kOptionGroup = "sweep";
-#define MS_OPTION MS_OPTION_FIELD
-#include "sweep/sweep_options_def.h"
-#undef MS_OPTION
-
-  // visit(value, spec) for every option, in declaration order.
-  template <typename Self, typename Visitor>
-  static void ForEachOption(Self&& self, Visitor&& visit) {
-#define MS_OPTION MS_OPTION_VISIT
-#include "sweep/sweep_options_def.h"
-#undef MS_OPTION
-  }
+#define MS_OPTION_LIST "sweep/sweep_options_def.h"
+#include "base/option_group_members.h"
   void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
 };
 

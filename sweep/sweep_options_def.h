@@ -1,7 +1,7 @@
 // The options of the mesh sweep (paper section 2.2, docs/sweep.md), one line each:
 //   MS_OPTION(type, name, default, flag, help, bound)
-// Included by sweep/sweep_options.h only (no include guard on purpose); the wire message
-// ms.wire.SweepOptions in proto/manisweep.proto has one field of the same name per line.
+// Expanded by base/option_group_members.h in sweep/sweep_options.h (no include guard); the wire
+// message ms.wire.SweepOptions in proto/manisweep.proto has one field of the same name per line.
 
 // N: sweep positions k with -N/2 < k < N/2 (N = 20 gives k = -9..9, 19 swept meshes).
 MS_OPTION(int, num_offsets, 20, "num-offsets", "N: sweep offsets k with -N/2 < k < N/2",

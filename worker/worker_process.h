@@ -20,20 +20,12 @@ namespace ms {
 
 struct WorkerOptions {
   static constexpr const char* kOptionGroup = "";
-#define MS_OPTION MS_OPTION_FIELD
-#include "worker/worker_options_def.h"
-#undef MS_OPTION
-  // Set from --cache-dir, --image-cache-mb and --max-message-mb by the command.
+#define MS_OPTION_LIST "worker/worker_options_def.h"
+#include "base/option_group_members.h"
+  // Set from --cache-dir, --image-cache-mb and --max-message-mb by the command; not options of
+  // the group (ForEachOption does not visit them).
   ImageCacheOptions cache;
   WireLimits limits;
-
-  // visit(value, spec) for the declared options (not cache, limits).
-  template <typename Self, typename Visitor>
-  static void ForEachOption(Self&& self, Visitor&& visit) {
-#define MS_OPTION MS_OPTION_VISIT
-#include "worker/worker_options_def.h"
-#undef MS_OPTION
-  }
   void Check() const;  // throws InputError naming the flag
 };
 
