@@ -24,6 +24,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <sstream>
 #include <thread>
 #include <unordered_map>
 
@@ -259,6 +260,25 @@ bool ParseFraction(const std::string& line, const std::string& prefix, int64_t* 
   return y > 0;
 }
 
+// CPU time (clock ticks, every thread) a process has used so far; -1 if it cannot be read.
+int64_t CpuTicks(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  const std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t name_end = stat.rfind(')');
+  if (name_end == std::string::npos) return -1;
+  std::istringstream fields(stat.substr(name_end + 1));
+  std::string field;
+  int64_t ticks = 0;
+  for (int i = 3; i <= 15 && fields >> field; ++i) {
+    if (i >= 14) ticks += std::atoll(field.c_str());  // utime, stime
+  }
+  return ticks;
+}
+
+// colmap can deadlock (seen once in feature_extractor on a truncated PNG: every thread waiting
+// on a futex). A stage that uses no CPU and writes nothing this long is killed and run once more.
+constexpr double kStallSeconds = 120;
+
 class ColmapRunner {
  public:
   ColmapRunner(std::string executable, fs::path log_path, bool log_kept)
@@ -310,25 +330,30 @@ class ColmapRunner {
     envp.push_back(nullptr);
     const std::string log_name = log_path_.string();
 
-    const pid_t parent = ::getpid();
-    const pid_t pid = ::fork();
-    if (pid < 0) throw InternalError(std::string("cannot start colmap: fork: ") + strerror(errno));
-    if (pid == 0) {
-      // Child: only async-signal-safe calls until exec.
-      const int fd = ::open(log_name.c_str(), O_WRONLY | O_APPEND);
-      const int null_fd = ::open("/dev/null", O_RDONLY);
-      if (fd < 0) ::_exit(127);
-      // colmap dies with us (e.g. when manisweep is killed by a timeout).
-      ::prctl(PR_SET_PDEATHSIG, SIGTERM);
-      if (::getppid() != parent) ::_exit(127);
-      ::dup2(fd, STDOUT_FILENO);
-      ::dup2(fd, STDERR_FILENO);
-      if (null_fd >= 0) ::dup2(null_fd, STDIN_FILENO);
-      ::execve(argv[0], argv.data(), envp.data());
-      const char message[] = "manisweep: exec of colmap failed\n";
-      (void)!::write(STDERR_FILENO, message, sizeof(message) - 1);
-      ::_exit(127);
-    }
+    const auto launch = [&] {
+      const pid_t parent = ::getpid();
+      pid_t pid = ::fork();
+      if (pid < 0)
+        throw InternalError(std::string("cannot start colmap: fork: ") + strerror(errno));
+      if (pid == 0) {
+        // Child: only async-signal-safe calls until exec.
+        const int fd = ::open(log_name.c_str(), O_WRONLY | O_APPEND);
+        const int null_fd = ::open("/dev/null", O_RDONLY);
+        if (fd < 0) ::_exit(127);
+        // colmap dies with us (e.g. when manisweep is killed by a timeout).
+        ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+        if (::getppid() != parent) ::_exit(127);
+        ::dup2(fd, STDOUT_FILENO);
+        ::dup2(fd, STDERR_FILENO);
+        if (null_fd >= 0) ::dup2(null_fd, STDIN_FILENO);
+        ::execve(argv[0], argv.data(), envp.data());
+        const char message[] = "manisweep: exec of colmap failed\n";
+        (void)!::write(STDERR_FILENO, message, sizeof(message) - 1);
+        ::_exit(127);
+      }
+      return pid;
+    };
+    pid_t pid = launch();
 
     InterruptScope interrupt_scope;
     StageMonitor monitor(stage, parser);
@@ -343,9 +368,38 @@ class ColmapRunner {
       output += chunk;
     };
     int status = 0;
+    int64_t last_ticks = CpuTicks(pid);
+    uint64_t last_offset = offset;
+    Timer idle;
+    bool retried = false;
     while (true) {
       const pid_t done = ::waitpid(pid, &status, WNOHANG);
       if (done == pid) break;
+      const int64_t ticks = CpuTicks(pid);
+      if (ticks != last_ticks || offset != last_offset) {
+        last_ticks = ticks;
+        last_offset = offset;
+        idle.Restart();
+      } else if (idle.Seconds() > kStallSeconds) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, &status, 0);
+        if (retried) {
+          throw InternalError(fmt::format(
+              "colmap {} made no progress (no CPU time, no output) for {:.0f} s, twice; killed "
+              "(log: {})",
+              stage, kStallSeconds, log_path_.string()));
+        }
+        spdlog::warn(
+            "colmap {} made no progress for {:.0f} s (deadlocked?): killed, running it "
+            "once more",
+            stage, kStallSeconds);
+        retried = true;
+        output.clear();
+        pid = launch();
+        last_ticks = CpuTicks(pid);
+        idle.Restart();
+        continue;
+      }
       if (done < 0 && errno != EINTR) {
         throw InternalError(std::string("waiting for colmap: ") + strerror(errno));
       }
