@@ -455,12 +455,7 @@ void DelaunayManifold::Impl::GainCameras(const Vertex_handle& vertex,
   if (id < 0) return;
   const std::vector<int32_t>& has = point_cameras_[id];
   for (int32_t c : cameras) {
-    const std::pair<int32_t, int32_t> ray(id, c);
-    if (!std::binary_search(has.begin(), has.end(), c) &&
-        std::find(batch->gained_rays.begin(), batch->gained_rays.end(), ray) ==
-            batch->gained_rays.end()) {
-      batch->gained_rays.push_back(ray);
-    }
+    if (!std::binary_search(has.begin(), has.end(), c)) batch->gained_rays.emplace_back(id, c);
   }
 }
 
@@ -468,7 +463,11 @@ void DelaunayManifold::Impl::GainCameras(const Vertex_handle& vertex,
 // counted everywhere, then join the index.
 void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats* stats) {
   const auto count = [&](const Cell_handle& c, unsigned mask) { labels_.CountCrossing(c, mask); };
-  for (const auto& [id, c] : batch->gained_rays) {
+  // Several duplicates of one vertex may bring the same camera: each ray once.
+  std::vector<std::pair<int32_t, int32_t>>& gained = batch->gained_rays;
+  std::sort(gained.begin(), gained.end());
+  gained.erase(std::unique(gained.begin(), gained.end()), gained.end());
+  for (const auto& [id, c] : gained) {
     const Vertex_handle target = vertex_of_point_[id];
     walker_.WalkFromCamera(c, target, count);
     ray_index_->Add(c, id, positions_[id]);

@@ -39,7 +39,7 @@ struct RayPoint {
 
 struct BuildStats {
   int64_t points = 0;             // input points
-  int64_t merged_duplicates = 0;  // points at the position of an earlier point
+  int64_t merged_duplicates = 0;  // at, or nearer than the merge tolerance to, an earlier point
   int64_t steiner_points = 0;
   int64_t graded_steiner_points = 0;  // of which in the empty space (steiner_points.h)
   int64_t vertices = 0, cells = 0;

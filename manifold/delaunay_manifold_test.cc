@@ -313,6 +313,65 @@ TEST(DelaunayManifold, RandomInsertionsKeepTheSurfaceManifold) {
   }
 }
 
+// Input points 1e-7 from others (far below the default floor, 2e-6 of the scene's diagonal)
+// are merged into them: never a vertex, their rays counted at the kept vertex.
+TEST(DelaunayManifold, NearDuplicateInputPointsAreMergedKeepingTheirRays) {
+  RandomScene scene = SphereScene(300, 8, 5);
+  for (int i = 0; i < 20; ++i) {
+    RayPoint twin = scene.points[i];
+    twin.position += Eigen::Vector3d(1e-7, -1e-7, 0);
+    twin.cameras = {(scene.points[i].cameras.front() + 1) % 8};
+    scene.points.push_back(twin);
+  }
+  DelaunayManifold manifold(scene.cameras, ManifoldOptions{});
+  const BuildStats stats = manifold.Build(scene.points);
+  EXPECT_EQ(stats.merged_duplicates, 20);
+  EXPECT_EQ(manifold.Validate(true), "");  // the twins' rays are in the weights
+  SurfaceInfo info;
+  const Mesh mesh = manifold.ExtractSurface(&info);
+  EXPECT_EQ(SurfaceProblems(mesh), "");
+  for (int32_t id : info.vertex_ids) EXPECT_LT(id, 300) << "a merged twin became a vertex";
+
+  ManifoldOptions exact_only;
+  exact_only.merge_floor = 0;
+  exact_only.merge_pixels = 0;
+  DelaunayManifold unmerged(scene.cameras, exact_only);
+  EXPECT_EQ(unmerged.Build(scene.points).merged_duplicates, 0);
+}
+
+// With --manifold.merge-new-points, a new point 1e-7 from a vertex is a duplicate whose cameras
+// the vertex gains (traced with the batch's new rays); without it the rule is exact duplicates.
+TEST(DelaunayManifold, NearDuplicateNewPointsGiveTheirCamerasToTheVertex) {
+  const RandomScene scene = SphereScene(300, 8, 5);
+  std::vector<RayPoint> twins;
+  for (int i = 0; i < 20; ++i) {
+    RayPoint twin;
+    twin.position = scene.points[i].position + Eigen::Vector3d(0, 1e-7, -1e-7);
+    twin.cameras = scene.points[i].cameras;
+    twin.cameras.push_back((scene.points[i].cameras.back() + 1) % 8);
+    twins.push_back(twin);
+  }
+  ManifoldOptions merging;
+  merging.merge_new_points = true;
+  DelaunayManifold manifold(scene.cameras, merging);
+  manifold.Build(scene.points);
+  const InsertionStats stats = manifold.Insert(twins);
+  EXPECT_EQ(stats.discarded_duplicate, 20);
+  EXPECT_EQ(stats.inserted, 0);
+  EXPECT_GT(stats.gained_rays, 0);
+  EXPECT_EQ(manifold.num_points(), 300);
+  EXPECT_EQ(manifold.Validate(true), "");  // gained rays counted exactly once
+  EXPECT_EQ(SurfaceProblems(manifold.ExtractSurface()), "");
+  // Twice the same batch: the cameras are there already.
+  EXPECT_EQ(manifold.Insert(twins).gained_rays, 0);
+
+  DelaunayManifold exact(scene.cameras, ManifoldOptions{});
+  exact.Build(scene.points);
+  const InsertionStats plain = exact.Insert(twins);
+  EXPECT_EQ(plain.discarded_duplicate, 0);
+  EXPECT_EQ(plain.gained_rays, 0);
+}
+
 TEST(DelaunayManifold, RejectsBadInput) {
   RandomScene scene = SphereScene(10, 3, 1);
   scene.points[2].cameras.push_back(7);

@@ -48,10 +48,8 @@ class InProcessRun : public ::testing::Test {
     options.run.max_iterations = 2;
     options.scheduler.heartbeat_interval_s = 0.05;
     options.scheduler.liveness = 4;
-    SweepOptions sweep;
-    sweep.tile_size_px = 10;
-    sweep.gaussian_sigma_px = 4;
-    options.sweep = sweep;
+    options.sweep.tile_size_px = 10;
+    options.sweep.gaussian_sigma_px = 4;
     auto rogue = network->Connect();
     for (const std::string& message : junk) rogue->Send(message);
     // Workers end with the coordinator's Shutdown; the flag only unblocks a broken test.
