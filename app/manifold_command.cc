@@ -8,6 +8,7 @@
 #include "base/error.h"
 #include "base/log.h"
 #include "manifold/delaunay_manifold.h"
+#include "manifold/output_meshes.h"
 #include "manifold/scene_rays.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
@@ -37,13 +38,15 @@ void RunManifold(const ManifoldCommandOptions& options) {
   DelaunayManifold manifold(ManifoldCamerasFromScene(scene), options.manifold);
   const BuildStats stats = manifold.Build(RayPointsFromScene(scene));
   SurfaceInfo info;
-  const Mesh mesh = manifold.ExtractSurface(&info);
-  if (mesh.faces.empty()) {
+  const Mesh extracted = manifold.ExtractSurface(&info);
+  if (extracted.faces.empty()) {
     throw InputError(options.input +
                      ": the manifold is empty: no cell reached the free-space "
                      "threshold (--manifold.free-threshold " +
                      std::to_string(options.manifold.free_threshold) + ") or none could grow");
   }
+  const OutputMeshes output = MakeOutputMeshes(extracted, info, options.manifold.float_cleanup);
+  const Mesh& mesh = output.closed;
   const double total = timer.Seconds();
   MeshWriteOptions write_options;
   write_options.binary = !options.ascii;
@@ -63,6 +66,12 @@ void RunManifold(const ManifoldCommandOptions& options) {
               stats.seconds_growing);
   std::printf("  surface           %zu vertices (%lld Steiner), %zu faces\n", mesh.NumVertices(),
               static_cast<long long>(info.steiner_vertices), mesh.NumFaces());
+  if (options.manifold.float_cleanup) {
+    const FloatCleanupStats& c = output.cleanup;
+    std::printf("  float cleanup     %lld problems -> %lld: %lld collapses, %lld splits, %.3f s\n",
+                static_cast<long long>(c.problems_before), static_cast<long long>(c.problems_after),
+                static_cast<long long>(c.collapses), static_cast<long long>(c.splits), c.seconds);
+  }
   std::printf("  total             %.3f s; wrote %s\n", total, options.output.c_str());
   if (options.check) {
     MeshCheckOptions check_options;

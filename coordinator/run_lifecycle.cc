@@ -126,23 +126,20 @@ void RunLifecycle::WriteInitial(const BuildStats& stats, double build_s) {
                      "free-space threshold (check the points' visibility and "
                      "--manifold.free-threshold)");
   }
-  WriteMesh(mesh_, Path("initial.ply"));
-  WriteMesh(surface_, Path("initial_surface.ply"));
   IterationStats row;
+  const OutputMeshes written = WriteOutputMeshes("initial", true, &row);
   row.iteration = 0;
   row.points_found = static_cast<int64_t>(scene.points.size());
   row.points_inserted = stats.points - stats.merged_duplicates;
   row.discarded_duplicate = stats.merged_duplicates;
-  row.vertices = static_cast<int64_t>(mesh_.NumVertices());
-  row.faces = static_cast<int64_t>(mesh_.NumFaces());
   row.outside_cells = stats.outside_cells;
   row.seconds_insert = build_s;
   row.seconds_extract = extract.Seconds();
   row.seconds_total = build_s + row.seconds_extract;
   record_.iterations.push_back(row);
   Checkpoint();
-  spdlog::info("initial mesh: {} vertices, {} faces -> {}", mesh_.NumVertices(), mesh_.NumFaces(),
-               Path("initial.ply"));
+  spdlog::info("initial mesh: {} vertices, {} faces -> {}", written.closed.NumVertices(),
+               written.closed.NumFaces(), Path("initial.ply"));
 }
 
 StepOutcome RunLifecycle::Integrate(const InsertionBatch& found, const SweepRound& round) {
@@ -153,9 +150,6 @@ StepOutcome RunLifecycle::Integrate(const InsertionBatch& found, const SweepRoun
   const double insert_s = insert.Seconds();
   Timer extract;
   Extract();
-  if (options_.run.save_iteration_meshes) {
-    WriteMesh(mesh_, Path(fmt::format("iteration_{:02d}.ply", iteration)));
-  }
   IterationStats row;
   row.iteration = static_cast<int32_t>(iteration);
   row.jobs = round.jobs;
@@ -169,6 +163,9 @@ StepOutcome RunLifecycle::Integrate(const InsertionBatch& found, const SweepRoun
   row.discarded_outside = s.discarded_outside;
   row.vertices = static_cast<int64_t>(mesh_.NumVertices());
   row.faces = static_cast<int64_t>(mesh_.NumFaces());
+  if (options_.run.save_iteration_meshes) {
+    WriteOutputMeshes(fmt::format("iteration_{:02d}", iteration), false, &row);
+  }
   row.outside_cells = s.outside_cells;
   row.seconds_jobs = round.seconds_jobs;
   row.seconds_sweep = round.seconds_sweep;
@@ -204,9 +201,21 @@ StepOutcome RunLifecycle::Integrate(const InsertionBatch& found, const SweepRoun
 }
 
 void RunLifecycle::Extract() {
-  SurfaceInfo info;
-  mesh_ = manifold_->ExtractSurface(&info);
-  surface_ = SurfaceWithoutSteinerFaces(mesh_, info);
+  mesh_ = manifold_->ExtractSurface(&surface_info_);
+  surface_ = SurfaceWithoutSteinerFaces(mesh_, surface_info_);
+}
+
+OutputMeshes RunLifecycle::WriteOutputMeshes(const std::string& name, bool with_surface,
+                                             IterationStats* row) {
+  OutputMeshes out = MakeOutputMeshes(mesh_, surface_info_, options_.manifold.float_cleanup);
+  WriteMesh(out.closed, Path(name + ".ply"));
+  if (with_surface) WriteMesh(out.surface, Path(name + "_surface.ply"));
+  row->vertices = static_cast<int64_t>(out.closed.NumVertices());
+  row->faces = static_cast<int64_t>(out.closed.NumFaces());
+  row->cleanup_collapses = out.cleanup.collapses;
+  row->cleanup_splits = out.cleanup.splits;
+  row->float_problems_left = out.cleanup.problems_after;
+  return out;
 }
 
 // Writes run.h5 and summary.json; the time it took goes into the last row (and reaches the file
@@ -264,11 +273,10 @@ StepOutcome RunLifecycle::NextOrStop() {
 
 void RunLifecycle::Finish(const std::string& reason) {
   const std::string path = Path("final.ply");
-  WriteMesh(mesh_, path);
-  WriteMesh(surface_, Path("final_surface.ply"));
+  const OutputMeshes written = WriteOutputMeshes("final", true, &record_.iterations.back());
   MeshCheckOptions check;
   check.check_self_intersections = false;  // exact but slow on large meshes
-  const MeshReport report = CheckMesh(mesh_, check);
+  const MeshReport report = CheckMesh(written.closed, check);
   const std::vector<std::string> problems = report.Problems();
   final_check_ = report.is_closed_manifold
                      ? "closed, oriented 2-manifold (self-intersections not checked)"
@@ -276,8 +284,8 @@ void RunLifecycle::Finish(const std::string& reason) {
   final_.status = "finished";
   final_.stop_reason = reason;
   final_.final_mesh = path;
-  final_.vertices = static_cast<int64_t>(mesh_.NumVertices());
-  final_.faces = static_cast<int64_t>(mesh_.NumFaces());
+  final_.vertices = static_cast<int64_t>(written.closed.NumVertices());
+  final_.faces = static_cast<int64_t>(written.closed.NumFaces());
   final_.final_is_closed_manifold = report.is_closed_manifold;
   record_.stop_reason = reason;
   Checkpoint();

@@ -18,6 +18,7 @@
 #include "coordinator/job_builder.h"
 #include "coordinator/run_store.h"
 #include "manifold/delaunay_manifold.h"
+#include "manifold/output_meshes.h"
 #include "mesh/mesh.h"
 
 namespace ms {
@@ -74,6 +75,9 @@ class RunLifecycle {
   void BuildOrReplay(bool resuming, const std::string& run_file);
   void WriteInitial(const BuildStats& stats, double build_s);
   void Extract();
+  // Writes NAME.ply (and NAME_surface.ply with `with_surface`): the meshes users get, made
+  // robust in floating point; their size and the cleanup's counts go into `row`.
+  OutputMeshes WriteOutputMeshes(const std::string& name, bool with_surface, IterationStats* row);
   void Checkpoint();
   StepOutcome NextOrStop();
   void Finish(const std::string& reason);
@@ -95,6 +99,7 @@ class RunLifecycle {
   // the sweep jobs are built from (docs/manifold.md).
   Mesh mesh_;
   Mesh surface_;
+  SurfaceInfo surface_info_;  // of mesh_
   CoordinatorResult final_;
   std::string final_check_;
 };

@@ -55,6 +55,9 @@ std::vector<Column<IterationStats>> IterationColumns() {
           Field("vertices", &S::vertices),
           Field("faces", &S::faces),
           Field("outside_cells", &S::outside_cells),
+          Field("cleanup_collapses", &S::cleanup_collapses),
+          Field("cleanup_splits", &S::cleanup_splits),
+          Field("float_problems_left", &S::float_problems_left),
           Field("seconds_jobs", &S::seconds_jobs),
           Field("seconds_sweep", &S::seconds_sweep),
           Field("seconds_kernel", &S::seconds_kernel),
@@ -218,6 +221,9 @@ RunRecord ReadRunFile(const std::string& path) {
     ReadColumnInto(file, t, "vertices", &S::vertices, &rows);
     ReadColumnInto(file, t, "faces", &S::faces, &rows);
     ReadColumnInto(file, t, "outside_cells", &S::outside_cells, &rows);
+    ReadColumnInto(file, t, "cleanup_collapses", &S::cleanup_collapses, &rows);
+    ReadColumnInto(file, t, "cleanup_splits", &S::cleanup_splits, &rows);
+    ReadColumnInto(file, t, "float_problems_left", &S::float_problems_left, &rows);
     ReadColumnInto(file, t, "seconds_jobs", &S::seconds_jobs, &rows);
     ReadColumnInto(file, t, "seconds_sweep", &S::seconds_sweep, &rows);
     ReadColumnInto(file, t, "seconds_kernel", &S::seconds_kernel, &rows);
@@ -268,8 +274,12 @@ void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
          {"points_found", s.points_found},
          {"points_inserted", s.points_inserted},
          {"points_discarded", s.discarded_conflict + s.discarded_duplicate + s.discarded_outside},
+         {"points_duplicate", s.discarded_duplicate},
          {"vertices", s.vertices},
          {"faces", s.faces},
+         {"cleanup_collapses", s.cleanup_collapses},
+         {"cleanup_splits", s.cleanup_splits},
+         {"float_problems_left", s.float_problems_left},
          {"seconds_jobs", s.seconds_jobs},
          {"seconds_sweep", s.seconds_sweep},
          {"seconds_kernel", s.seconds_kernel},

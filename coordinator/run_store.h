@@ -36,9 +36,14 @@ struct IterationStats {
   int64_t discarded_conflict = 0;
   int64_t discarded_duplicate = 0;
   int64_t discarded_outside = 0;
-  int64_t vertices = 0;  // of the surface mesh after the iteration
+  int64_t vertices = 0;  // of the surface after the iteration (as written, where it was)
   int64_t faces = 0;
   int64_t outside_cells = 0;
+  // The float cleanup of the mesh written after this iteration (manifold/output_meshes.h): 0
+  // when none was written; float_problems_left > 0 when it could not clean everything.
+  int64_t cleanup_collapses = 0;
+  int64_t cleanup_splits = 0;
+  int64_t float_problems_left = 0;
   double seconds_jobs = 0;        // building this iteration's jobs (visible meshes)
   double seconds_sweep = 0;       // first job sent -> last result in
   double seconds_kernel = 0;      // sum of the workers' kernel times

@@ -61,9 +61,12 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   Timer timer;
   Eigen::Vector3d lo, hi;
   CheckAndBound(points, &lo, &hi);
-  merge_.pixel_fraction = options_.merge_pixels;
-  merge_.floor = options_.merge_floor * (hi - lo).norm();
   const SteinerPoints steiner = PlaceSteinerPoints(points, lo, hi, &stats);
+  // Relative to the box every vertex lies in, hence to every mesh's diagonal.
+  merge_.floor = options_.merge_floor * (box_max_ - box_min_).norm();
+  merge_.pixel_fraction = options_.merge_pixels;
+  new_point_merge_.floor = merge_.floor;
+  new_point_merge_.pixel_fraction = options_.merge_new_pixels;
   Triangulate(points, steiner.points, &stats);
   stats.seconds_triangulation = timer.Seconds();
   spdlog::info(
@@ -325,24 +328,22 @@ bool DelaunayManifold::Impl::FindConflictRegion(const RayPoint& point, const Poi
   *located = dt_.locate(p, type, li, lj, batch->hint);
   if (type == Delaunay::VERTEX) {
     ++stats->discarded_duplicate;
-    if (options_.merge_new_points) GainCameras((*located)->vertex(li), point.cameras, batch);
+    GainCameras((*located)->vertex(li), point.cameras, batch);
     return false;
   }
   if (type == Delaunay::OUTSIDE_CONVEX_HULL || type == Delaunay::OUTSIDE_AFFINE_HULL) {
     ++stats->discarded_outside;
     return false;
   }
-  if (options_.merge_new_points) {
-    // Nearer an existing vertex than the merge tolerance: that vertex gains the point's cameras
-    // (its visibility is kept, not its position).
-    const Vertex_handle nearest = dt_.nearest_vertex(p, *located);
-    if ((ToEigen(nearest->point()) - position).norm() <
-        DuplicateDistance(position, point.cameras, cameras_, merge_)) {
-      ++stats->discarded_duplicate;
-      GainCameras(nearest, point.cameras, batch);
-      batch->hint = *located;
-      return false;
-    }
+  // Nearer an existing vertex than the merge tolerance: that vertex gains the point's cameras
+  // (its visibility is kept, not its position).
+  const Vertex_handle nearest = dt_.nearest_vertex(p, *located);
+  if ((ToEigen(nearest->point()) - position).norm() <
+      DuplicateDistance(position, point.cameras, cameras_, new_point_merge_)) {
+    ++stats->discarded_duplicate;
+    GainCameras(nearest, point.cameras, batch);
+    batch->hint = *located;
+    return false;
   }
   batch->conflicts.clear();
   batch->boundary.clear();
@@ -549,16 +550,13 @@ Mesh DelaunayManifold::Impl::ExtractSurface(SurfaceInfo* info) const {
 
 Mesh SurfaceWithoutSteinerFaces(const Mesh& mesh, const SurfaceInfo& info) {
   MS_CHECK(info.vertex_ids.size() == mesh.vertices.size()) << "SurfaceInfo of another mesh";
-  Mesh surface;
-  surface.vertices = mesh.vertices;
-  surface.vertex_colors = mesh.vertex_colors;
-  for (const auto& f : mesh.faces) {
-    if (info.vertex_ids[f[0]] >= 0 && info.vertex_ids[f[1]] >= 0 && info.vertex_ids[f[2]] >= 0) {
-      surface.faces.push_back(f);
-    }
-  }
-  surface.RemoveUnreferencedVertices();
-  return surface;
+  return FacesWithoutFlaggedVertices(mesh, SteinerFlags(info));
+}
+
+std::vector<uint8_t> SteinerFlags(const SurfaceInfo& info) {
+  std::vector<uint8_t> steiner(info.vertex_ids.size());
+  for (size_t v = 0; v < steiner.size(); ++v) steiner[v] = info.vertex_ids[v] < 0;
+  return steiner;
 }
 
 DelaunayManifold::DelaunayManifold(std::vector<ManifoldCamera> cameras,

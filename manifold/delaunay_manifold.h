@@ -81,6 +81,8 @@ struct SurfaceInfo {
 // the surface around the free space the cameras saw; they are not an estimate of the scene, so
 // they are neither swept nor evaluated. The result is a manifold with boundary.
 Mesh SurfaceWithoutSteinerFaces(const Mesh& mesh, const SurfaceInfo& info);
+// One flag per mesh vertex: 1 for a Steiner point.
+std::vector<uint8_t> SteinerFlags(const SurfaceInfo& info);
 
 class DelaunayManifold {
  public:

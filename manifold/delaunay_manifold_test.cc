@@ -339,8 +339,8 @@ TEST(DelaunayManifold, NearDuplicateInputPointsAreMergedKeepingTheirRays) {
   EXPECT_EQ(unmerged.Build(scene.points).merged_duplicates, 0);
 }
 
-// With --manifold.merge-new-points, a new point 1e-7 from a vertex is a duplicate whose cameras
-// the vertex gains (traced with the batch's new rays); without it the rule is exact duplicates.
+// A new point 1e-7 from a vertex (under the merge floor) is a duplicate whose cameras the
+// vertex gains (traced with the batch's new rays); with no floor the rule is exact duplicates.
 TEST(DelaunayManifold, NearDuplicateNewPointsGiveTheirCamerasToTheVertex) {
   const RandomScene scene = SphereScene(300, 8, 5);
   std::vector<RayPoint> twins;
@@ -351,9 +351,7 @@ TEST(DelaunayManifold, NearDuplicateNewPointsGiveTheirCamerasToTheVertex) {
     twin.cameras.push_back((scene.points[i].cameras.back() + 1) % 8);
     twins.push_back(twin);
   }
-  ManifoldOptions merging;
-  merging.merge_new_points = true;
-  DelaunayManifold manifold(scene.cameras, merging);
+  DelaunayManifold manifold(scene.cameras, ManifoldOptions{});
   manifold.Build(scene.points);
   const InsertionStats stats = manifold.Insert(twins);
   EXPECT_EQ(stats.discarded_duplicate, 20);
@@ -365,7 +363,9 @@ TEST(DelaunayManifold, NearDuplicateNewPointsGiveTheirCamerasToTheVertex) {
   // Twice the same batch: the cameras are there already.
   EXPECT_EQ(manifold.Insert(twins).gained_rays, 0);
 
-  DelaunayManifold exact(scene.cameras, ManifoldOptions{});
+  ManifoldOptions exact_only;
+  exact_only.merge_floor = 0;
+  DelaunayManifold exact(scene.cameras, exact_only);
   exact.Build(scene.points);
   const InsertionStats plain = exact.Insert(twins);
   EXPECT_EQ(plain.discarded_duplicate, 0);

@@ -153,7 +153,8 @@ class DelaunayManifold::Impl {
   std::vector<std::vector<int32_t>> point_cameras_;
   std::vector<Vertex_handle> vertex_of_point_;
   Eigen::Vector3d box_min_, box_max_;  // Steiner box: points outside are discarded
-  MergeTolerance merge_;               // near-duplicate points (set by Build)
+  MergeTolerance merge_;               // near-duplicate input points (set by Build)
+  MergeTolerance new_point_merge_;     // near-duplicate new points (set by Build)
   uint32_t batch_ = 0;                 // insertion batches so far
   bool built_ = false;
 };

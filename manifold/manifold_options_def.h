@@ -37,23 +37,33 @@ MS_OPTION(double, steiner_clearance, 1.5, "steiner-clearance",
           "graded Steiner points keep this x their size away from every point", AtLeast(1))
 MS_OPTION(double, steiner_min_spacing, 6.0, "steiner-min-spacing",
           "smallest graded Steiner cell, in median point spacings", Above(0))
-// Near-duplicate points (manifold/point_merging.h): closer than merge_pixels of a pixel's
-// footprint at their depth in the cameras that see them, or than merge_floor x the diagonal of
-// the points' and cameras' bounding box, two points are one. Input points merge (their
-// visibility united); with merge_new_points, a new point that near a vertex is a duplicate.
-// Without merging, SfM tracks triangulated 1e-8 apart and swept points on top of vertices make
-// faces that floating-point tools see as self-intersecting (docs/manifold.md).
+// Near-duplicate points (manifold/point_merging.h). Two input points closer than merge_pixels
+// of a pixel's footprint at their depth in the cameras that see them, or than merge_floor x the
+// Steiner box's diagonal, are one point (their visibility united). A new (swept) point nearer a
+// vertex than merge_new_pixels of a footprint, or than the same floor, is a duplicate whose
+// cameras the vertex gains. The floor is twice the
+// checker's default float tolerance (1e-6 of a mesh's diagonal, and every mesh lies in the box), so
+// no merged pair is one the checker flags. Without merging, SfM tracks triangulated 1e-8 apart and
+// swept points on top of vertices make faces that floating-point tools see as self-intersecting
+// (docs/manifold.md).
 MS_OPTION(double, merge_pixels, 0.5, "merge-pixels",
-          "points closer than this fraction of a pixel's footprint at their depth are one point",
+          "input points closer than this fraction of a pixel's footprint at their depth are one "
+          "point",
           AtLeast(0))
 MS_OPTION(double, merge_floor, 2e-6, "merge-floor",
-          "...and points closer than this fraction of the scene's bounding-box diagonal",
+          "...and points closer than this fraction of the Steiner box's diagonal (input and new)",
           AtLeast(0))
-// Off by default for now: on the embedded pyramid it makes the final mesh clean for Open3D but
-// less accurate (closed-mesh MAE 0.031 against 0.018; docs/manifold.md), which issue 13 forbids.
-MS_OPTION(bool, merge_new_points, false, "merge-new-points",
-          "a new (swept) point within the merge tolerance of a vertex is a duplicate: the vertex "
-          "gains its cameras (experimental: costs accuracy on the pyramid)",
+// 0 by default: the sweep refines depth below a pixel on purpose.
+MS_OPTION(double, merge_new_pixels, 0.0, "merge-new-pixels",
+          "a new (swept) point closer to a vertex than this fraction of a pixel's footprint (or "
+          "the floor) is a duplicate: the vertex gains its cameras",
+          AtLeast(0))
+// Written meshes (manifold/output_meshes.h): needles, folds and size jumps that floating-point
+// tools see as self-intersections are removed by edge collapses and splits that keep the mesh a
+// closed 2-manifold (mesh/float_cleanup.h). The triangulation itself is not changed.
+MS_OPTION(bool, float_cleanup, true, "float-cleanup",
+          "make written meshes robust in floating point (Open3D, MeshLab): collapse and split "
+          "edges until check-mesh's float report passes",
           AnyValue())
 // Incremental insertion: E, the cells shrunk out of O before inserting a point, is the conflict
 // region D plus its face neighbours (0) or every cell sharing a vertex with D (1).

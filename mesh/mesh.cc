@@ -41,4 +41,15 @@ void Mesh::RemoveUnreferencedVertices() {
   vertex_colors = std::move(kept_colors);
 }
 
+Mesh FacesWithoutFlaggedVertices(const Mesh& mesh, const std::vector<uint8_t>& flagged) {
+  Mesh out;
+  out.vertices = mesh.vertices;
+  out.vertex_colors = mesh.vertex_colors;
+  for (const auto& f : mesh.faces) {
+    if (!flagged[f[0]] && !flagged[f[1]] && !flagged[f[2]]) out.faces.push_back(f);
+  }
+  out.RemoveUnreferencedVertices();
+  return out;
+}
+
 }  // namespace ms

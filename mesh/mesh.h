@@ -24,6 +24,10 @@ struct Mesh {
   void RemoveUnreferencedVertices();
 };
 
+// The faces of `mesh` none of whose vertices is flagged (one flag per vertex), unreferenced
+// vertices removed.
+Mesh FacesWithoutFlaggedVertices(const Mesh& mesh, const std::vector<uint8_t>& flagged);
+
 // A point cloud with optional normals and colours (what sweeping finds, what synth samples).
 struct PointCloud {
   std::vector<Eigen::Vector3d> points;

@@ -1,0 +1,29 @@
+#include "manifold/output_meshes.h"
+
+#include <spdlog/spdlog.h>
+
+#include "base/check.h"
+
+namespace ms {
+
+OutputMeshes MakeOutputMeshes(const Mesh& surface, const SurfaceInfo& info, bool float_cleanup) {
+  MS_CHECK(info.vertex_ids.size() == surface.vertices.size()) << "SurfaceInfo of another mesh";
+  OutputMeshes out;
+  out.closed = surface;
+  std::vector<uint8_t> steiner = SteinerFlags(info);
+  if (float_cleanup && !surface.faces.empty()) {
+    out.cleanup = CleanForFloatingPoint(&out.closed, &steiner);
+    const FloatCleanupStats& c = out.cleanup;
+    if (c.problems_before > 0) {
+      spdlog::log(c.problems_after > 0 ? spdlog::level::warn : spdlog::level::info,
+                  "float cleanup: {} floating-point problems (pairs within {:.3g} or crossing in "
+                  "double precision) -> {}: {} edge collapses, {} splits, {} rounds, {:.2f} s",
+                  c.problems_before, c.tolerance, c.problems_after, c.collapses, c.splits, c.rounds,
+                  c.seconds);
+    }
+  }
+  out.surface = FacesWithoutFlaggedVertices(out.closed, steiner);
+  return out;
+}
+
+}  // namespace ms

@@ -1,0 +1,21 @@
+// The meshes a run writes, from the manifold's surface: the closed 2-manifold, made robust in
+// floating point (mesh/float_cleanup.h) unless --manifold.float-cleanup is off, and the surface
+// proper (its faces with no Steiner vertex).
+#pragma once
+
+#include "manifold/delaunay_manifold.h"
+#include "mesh/float_cleanup.h"
+#include "mesh/mesh.h"
+
+namespace ms {
+
+struct OutputMeshes {
+  Mesh closed;
+  Mesh surface;               // the faces of `closed` with no Steiner vertex
+  FloatCleanupStats cleanup;  // all zero when not cleaned
+};
+
+// `surface` and `info` from DelaunayManifold::ExtractSurface.
+OutputMeshes MakeOutputMeshes(const Mesh& surface, const SurfaceInfo& info, bool float_cleanup);
+
+}  // namespace ms

@@ -1,0 +1,493 @@
+#include "mesh/float_cleanup.h"
+
+#include <spdlog/spdlog.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <set>
+#include <utility>
+
+#include "base/check.h"
+#include "base/log.h"
+
+namespace ms {
+namespace {
+
+using Eigen::Vector3d;
+using float_robustness_internal::SegmentCrossesTriangle;
+using float_robustness_internal::Triangle;
+using float_robustness_internal::TriangleDistance;
+using float_robustness_internal::TrianglesIntersectLikeOpen3d;
+using Face = std::array<int32_t, 3>;
+
+struct Box3 {
+  Vector3d lo = Vector3d::Constant(INFINITY), hi = Vector3d::Constant(-INFINITY);
+  void Add(const Vector3d& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  void Add(const Box3& b) {
+    lo = lo.cwiseMin(b.lo);
+    hi = hi.cwiseMax(b.hi);
+  }
+  Box3 Grown(double d) const { return {lo.array() - d, hi.array() + d}; }
+  bool Overlaps(const Box3& b) const {
+    return (lo.array() <= b.hi.array()).all() && (b.lo.array() <= hi.array()).all();
+  }
+};
+
+// A bounding-volume hierarchy over the faces alive when it is built (median splits on the
+// longest axis); faces made later are scanned by the caller.
+class FaceTree {
+ public:
+  void Build(const std::vector<Box3>& boxes, std::vector<int32_t> faces) {
+    boxes_ = &boxes;
+    order_ = std::move(faces);
+    nodes_.clear();
+    if (!order_.empty()) BuildNode(0, static_cast<int32_t>(order_.size()));
+  }
+
+  template <typename Visit>
+  void Query(const Box3& box, Visit&& visit) const {
+    if (nodes_.empty()) return;
+    std::vector<int32_t> stack{0};
+    while (!stack.empty()) {
+      const Node& node = nodes_[stack.back()];
+      stack.pop_back();
+      if (!node.box.Overlaps(box)) continue;
+      if (node.left < 0) {
+        for (int32_t i = node.begin; i < node.end; ++i) {
+          if ((*boxes_)[order_[i]].Overlaps(box)) visit(order_[i]);
+        }
+      } else {
+        stack.push_back(node.left);
+        stack.push_back(node.right);
+      }
+    }
+  }
+
+ private:
+  struct Node {
+    Box3 box;
+    int32_t begin = 0, end = 0, left = -1, right = -1;
+  };
+
+  int32_t BuildNode(int32_t begin, int32_t end) {
+    const int32_t index = static_cast<int32_t>(nodes_.size());
+    nodes_.push_back({});
+    Box3 box, centres;
+    for (int32_t i = begin; i < end; ++i) {
+      const Box3& b = (*boxes_)[order_[i]];
+      box.Add(b);
+      centres.Add(Vector3d((b.lo + b.hi) / 2));
+    }
+    nodes_[index].box = box;
+    nodes_[index].begin = begin;
+    nodes_[index].end = end;
+    if (end - begin <= 8) return index;
+    int axis;
+    (centres.hi - centres.lo).maxCoeff(&axis);
+    const int32_t mid = begin + (end - begin) / 2;
+    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                     [&](int32_t a, int32_t b) {
+                       const Box3& x = (*boxes_)[a];
+                       const Box3& y = (*boxes_)[b];
+                       return x.lo[axis] + x.hi[axis] < y.lo[axis] + y.hi[axis];
+                     });
+    const int32_t left = BuildNode(begin, mid);
+    const int32_t right = BuildNode(mid, end);
+    nodes_[index].left = left;
+    nodes_[index].right = right;
+    return index;
+  }
+
+  const std::vector<Box3>* boxes_ = nullptr;
+  std::vector<int32_t> order_;
+  std::vector<Node> nodes_;
+};
+
+// The mesh under local edits: faces are never changed in place, only killed and appended, so
+// the tree built at the start of a round stays valid for the faces it holds.
+class Cleaner {
+ public:
+  Cleaner(Mesh* mesh, std::vector<uint8_t>* scaffold, double tolerance, double max_collapse)
+      : mesh_(*mesh),
+        scaffold_(*scaffold),
+        tolerance_(tolerance),
+        max_collapse_(max_collapse),
+        faces_of_(mesh->vertices.size()) {
+    alive_.assign(mesh_.faces.size(), 1);
+    for (size_t f = 0; f < mesh_.faces.size(); ++f) {
+      box_.push_back(FaceBox(mesh_.faces[f]));
+      for (int32_t v : mesh_.faces[f]) faces_of_[v].push_back(static_cast<int32_t>(f));
+    }
+  }
+
+  int64_t collapses() const { return collapses_; }
+  int64_t splits() const { return splits_; }
+
+  // One pass over the problems of `report` (every pair listed); returns the operations done.
+  int64_t Round(const FloatRobustnessReport& report) {
+    std::vector<int32_t> alive;
+    for (size_t f = 0; f < mesh_.faces.size(); ++f) {
+      if (alive_[f]) alive.push_back(static_cast<int32_t>(f));
+    }
+    tree_.Build(box_, std::move(alive));
+    recent_.clear();
+    touched_.assign(mesh_.faces.size(), 0);
+    const int64_t before = collapses_ + splits_;
+    for (const auto& pair : report.near_vertex_examples) {
+      CollapseAround({pair[0], pair[1]});
+    }
+    std::set<std::pair<int64_t, int64_t>> face_pairs;
+    for (const auto& p : report.close_face_pair_examples) face_pairs.insert({p[0], p[1]});
+    for (const auto& p : report.float_intersection_examples) face_pairs.insert({p[0], p[1]});
+    for (const auto& [f, g] : face_pairs) {
+      if (Touched(f) || Touched(g)) continue;  // changed this round: checked again next round
+      const Face& a = mesh_.faces[f];
+      const Face& b = mesh_.faces[g];
+      if (TriangleDistance(Corners(a), Corners(b)) > tolerance_) {
+        SplitLongestEdge(f, g);  // far apart: only Möller's relative snapping sees them touch
+      } else {
+        CollapseAround({a[0], a[1], a[2], b[0], b[1], b[2]});
+      }
+    }
+    return collapses_ + splits_ - before;
+  }
+
+  // Drops dead faces and unreferenced vertices, renumbering `scaffold` along; the cleaner is
+  // spent after it.
+  void Compact() {
+    std::vector<Face> faces;
+    for (size_t f = 0; f < mesh_.faces.size(); ++f) {
+      if (alive_[f]) faces.push_back(mesh_.faces[f]);
+    }
+    std::vector<int32_t> index(mesh_.vertices.size(), -1);
+    for (const Face& f : faces) {
+      for (int32_t v : f) index[v] = 0;
+    }
+    Mesh out;
+    std::vector<uint8_t> scaffold;
+    for (size_t v = 0; v < index.size(); ++v) {
+      if (index[v] < 0) continue;
+      index[v] = static_cast<int32_t>(out.vertices.size());
+      out.vertices.push_back(mesh_.vertices[v]);
+      if (mesh_.HasColors()) out.vertex_colors.push_back(mesh_.vertex_colors[v]);
+      scaffold.push_back(scaffold_[v]);
+    }
+    for (Face f : faces) {
+      for (int32_t& v : f) v = index[v];
+      out.faces.push_back(f);
+    }
+    mesh_ = std::move(out);
+    scaffold_ = std::move(scaffold);
+  }
+
+ private:
+  Triangle Corners(const Face& f) const {
+    return {mesh_.vertices[f[0]], mesh_.vertices[f[1]], mesh_.vertices[f[2]]};
+  }
+  Box3 FaceBox(const Face& f) const {
+    Box3 b;
+    for (int32_t v : f) b.Add(mesh_.vertices[v]);
+    return b;
+  }
+  bool Touched(int64_t f) const {
+    return !alive_[f] || (static_cast<size_t>(f) < touched_.size() && touched_[f]);
+  }
+
+  std::vector<int32_t> Neighbours(int32_t v) const {
+    std::vector<int32_t> out;
+    for (int32_t f : faces_of_[v]) {
+      for (int32_t w : mesh_.faces[f]) {
+        if (w != v) out.push_back(w);
+      }
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  }
+
+  // Tries to remove one of `vertices` by collapsing one of its edges (shortest first), so that
+  // every face around the problem is replaced by faces checked clean.
+  void CollapseAround(std::vector<int32_t> vertices) {
+    std::sort(vertices.begin(), vertices.end());
+    vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+    for (int32_t v : vertices) {
+      if (faces_of_[v].empty()) return;  // removed this round
+      for (int32_t f : faces_of_[v]) {
+        if (touched_[f]) return;
+      }
+    }
+    struct Candidate {
+      double length;
+      int32_t removed, kept;
+    };
+    std::vector<Candidate> candidates;
+    for (int32_t u : vertices) {
+      for (int32_t w : Neighbours(u)) {
+        const double length = (mesh_.vertices[u] - mesh_.vertices[w]).norm();
+        if (length > max_collapse_) continue;
+        // A scaffold vertex never takes the place of a surface one.
+        if (scaffold_[w] && !scaffold_[u]) continue;
+        candidates.push_back({length, u, w});
+      }
+    }
+    std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+      return std::tie(a.length, a.removed, a.kept) < std::tie(b.length, b.removed, b.kept);
+    });
+    for (const Candidate& c : candidates) {
+      if (TryCollapse(c.removed, c.kept)) return;
+    }
+  }
+
+  bool TryCollapse(int32_t u, int32_t v) {
+    // The link condition: u and v share exactly the two vertices opposite their edge.
+    const std::vector<int32_t> nu = Neighbours(u), nv = Neighbours(v);
+    std::vector<int32_t> common;
+    std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
+    if (common.size() != 2) return false;
+    int64_t live_vertices = 0;
+    for (const auto& faces : faces_of_) live_vertices += !faces.empty();
+    if (live_vertices <= 4) return false;
+    std::vector<int32_t> removed, kept_faces;
+    std::vector<Face> made;
+    for (int32_t f : faces_of_[u]) {
+      Face face = mesh_.faces[f];
+      removed.push_back(f);
+      if (std::find(face.begin(), face.end(), v) != face.end()) continue;
+      const Vector3d old_normal = Normal(face);
+      for (int32_t& w : face) {
+        if (w == u) w = v;
+      }
+      if (!FlipFree(old_normal, face)) return false;
+      made.push_back(face);
+    }
+    if (!Improves(removed, made)) return false;
+    Apply(removed, made);
+    faces_of_[u].clear();
+    ++collapses_;
+    return true;
+  }
+
+  void SplitLongestEdge(int64_t f, int64_t g) {
+    int32_t a = -1, b = -1;
+    double longest = 0;
+    for (int64_t h : {f, g}) {
+      const Face& face = mesh_.faces[h];
+      for (int i = 0; i < 3; ++i) {
+        const double length = (mesh_.vertices[face[i]] - mesh_.vertices[face[(i + 1) % 3]]).norm();
+        if (length > longest) {
+          longest = length;
+          a = face[i];
+          b = face[(i + 1) % 3];
+        }
+      }
+    }
+    if (a < 0 || longest < 4 * tolerance_) return;
+    // The two faces of edge ab: (a, b, c) and (b, a, d) in their cyclic orders.
+    std::vector<int32_t> removed;
+    std::vector<Face> made;
+    const int32_t m = static_cast<int32_t>(mesh_.vertices.size());
+    for (int32_t h : faces_of_[a]) {
+      const Face& face = mesh_.faces[h];
+      for (int i = 0; i < 3; ++i) {
+        const int32_t x = face[i], y = face[(i + 1) % 3], z = face[(i + 2) % 3];
+        if (!((x == a && y == b) || (x == b && y == a))) continue;
+        if (touched_[h]) return;
+        removed.push_back(h);
+        made.push_back({x, m, z});
+        made.push_back({m, y, z});
+      }
+    }
+    if (removed.size() != 2) return;
+    mesh_.vertices.push_back((mesh_.vertices[a] + mesh_.vertices[b]) / 2);
+    if (mesh_.HasColors()) mesh_.vertex_colors.push_back(mesh_.vertex_colors[a]);
+    scaffold_.push_back(scaffold_[a] || scaffold_[b]);
+    faces_of_.emplace_back();
+    Apply(removed, made);
+    ++splits_;
+  }
+
+  Vector3d Normal(const Face& f) const {
+    const Vector3d& p = mesh_.vertices[f[0]];
+    return (mesh_.vertices[f[1]] - p).cross(mesh_.vertices[f[2]] - p);
+  }
+
+  // The face keeps its side (where its old normal is meaningful) and is no needle.
+  bool FlipFree(const Vector3d& old_normal, const Face& face) const {
+    const Vector3d n = Normal(face);
+    double longest = 0;
+    for (int i = 0; i < 3; ++i) {
+      longest =
+          std::max(longest, (mesh_.vertices[face[i]] - mesh_.vertices[face[(i + 1) % 3]]).norm());
+    }
+    if (n.norm() <= tolerance_ * longest) return false;  // height under the tolerance
+    if (old_normal.norm() <= tolerance_ * longest) return true;
+    return n.normalized().dot(old_normal.normalized()) > 0.2;
+  }
+
+  // An edge of x with no vertex of y crosses y (touching included).
+  bool OppositeEdgeCrosses(const Face& x, const Face& y) const {
+    const Triangle ty = Corners(y);
+    for (int i = 0; i < 3; ++i) {
+      const int32_t p = x[i], q = x[(i + 1) % 3];
+      if (std::count(y.begin(), y.end(), p) > 0 || std::count(y.begin(), y.end(), q) > 0) continue;
+      if (SegmentCrossesTriangle(mesh_.vertices[p], mesh_.vertices[q], ty)) return true;
+    }
+    return false;
+  }
+
+  enum class PairState { kClean, kFloatProblem, kForbidden };
+
+  // Faces sharing no vertex: a float problem within the tolerance or when Open3D's test (either
+  // order) calls them intersecting, forbidden so near that they may cross in exact arithmetic.
+  // Faces sharing one vertex: forbidden when they cross (not coplanar, that is when an edge
+  // opposite the shared vertex crosses the other face). Faces sharing an edge: forbidden when
+  // folded onto each other.
+  PairState Classify(const Face& a, const Face& b) const {
+    int shared = 0;
+    for (int32_t x : a) shared += std::count(b.begin(), b.end(), x) > 0;
+    if (shared == 0) {
+      const Triangle ta = Corners(a), tb = Corners(b);
+      const double distance = TriangleDistance(ta, tb);
+      if (distance <= 0.01 * tolerance_) return PairState::kForbidden;
+      if (distance <= tolerance_ || TrianglesIntersectLikeOpen3d(ta, tb) ||
+          TrianglesIntersectLikeOpen3d(tb, ta)) {
+        return PairState::kFloatProblem;
+      }
+      return PairState::kClean;
+    }
+    if (shared == 1) {
+      return OppositeEdgeCrosses(a, b) || OppositeEdgeCrosses(b, a) ? PairState::kForbidden
+                                                                    : PairState::kClean;
+    }
+    const Vector3d na = Normal(a), nb = Normal(b);
+    const bool folded =
+        na.norm() > 0 && nb.norm() > 0 && na.normalized().dot(nb.normalized()) < -0.999;
+    return folded ? PairState::kForbidden : PairState::kClean;
+  }
+
+  // The problem pairs between `faces` and the alive faces near them (those in `skip` excepted)
+  // and among `faces`; -1 when `forbid` and a pair is forbidden (else such a pair counts as a
+  // problem).
+  int64_t CountProblems(const std::vector<Face>& faces, const std::vector<int32_t>& skip,
+                        bool forbid) const {
+    int64_t problems = 0;
+    bool forbidden = false;
+    auto add = [&](PairState state) {
+      if (state == PairState::kForbidden && forbid) forbidden = true;
+      problems += state != PairState::kClean;
+    };
+    for (size_t i = 0; i < faces.size() && !forbidden; ++i) {
+      const Box3 box = FaceBox(faces[i]).Grown(tolerance_);
+      auto visit = [&](int32_t f) {
+        if (forbidden || !alive_[f]) return;
+        if (std::find(skip.begin(), skip.end(), f) != skip.end()) return;
+        add(Classify(faces[i], mesh_.faces[f]));
+      };
+      tree_.Query(box, visit);
+      for (int32_t f : recent_) {
+        if (box_[f].Overlaps(box)) visit(f);
+      }
+      for (size_t j = 0; j < i && !forbidden; ++j) add(Classify(faces[i], faces[j]));
+    }
+    return forbidden ? -1 : problems;
+  }
+
+  // Replacing `removed` by `made` is worth it: nothing forbidden, and fewer problem pairs.
+  bool Improves(const std::vector<int32_t>& removed, const std::vector<Face>& made) const {
+    const int64_t after = CountProblems(made, removed, true);
+    if (after < 0) return false;
+    if (after == 0) return true;
+    std::vector<Face> old;
+    for (int32_t f : removed) old.push_back(mesh_.faces[f]);
+    return after < CountProblems(old, removed, false);
+  }
+
+  void Apply(const std::vector<int32_t>& removed, const std::vector<Face>& made) {
+    for (int32_t f : removed) {
+      alive_[f] = 0;
+      touched_[f] = 1;
+      for (int32_t v : mesh_.faces[f]) {
+        auto& list = faces_of_[v];
+        list.erase(std::remove(list.begin(), list.end(), f), list.end());
+      }
+    }
+    for (const Face& face : made) {
+      const int32_t f = static_cast<int32_t>(mesh_.faces.size());
+      mesh_.faces.push_back(face);
+      alive_.push_back(1);
+      touched_.push_back(1);
+      box_.push_back(FaceBox(face));
+      recent_.push_back(f);
+      for (int32_t v : face) faces_of_[v].push_back(f);
+    }
+  }
+
+  Mesh& mesh_;
+  std::vector<uint8_t>& scaffold_;
+  const double tolerance_, max_collapse_;
+  std::vector<std::vector<int32_t>> faces_of_;  // per vertex: its alive faces
+  std::vector<uint8_t> alive_;                  // per face
+  std::vector<Box3> box_;                       // per face
+  std::vector<uint8_t> touched_;                // per face: removed or made this round
+  std::vector<int32_t> recent_;                 // faces made this round (not in tree_)
+  FaceTree tree_;                               // faces alive at the round's start
+  int64_t collapses_ = 0, splits_ = 0;
+};
+
+int64_t ProblemCount(const FloatRobustnessReport& r) {
+  return r.num_near_vertex_pairs + r.num_close_face_pairs + r.num_float_intersections;
+}
+
+}  // namespace
+
+FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffold,
+                                        const FloatCleanupOptions& options) {
+  Timer timer;
+  options.check.Check();
+  std::vector<uint8_t> no_scaffold;
+  if (scaffold == nullptr) {
+    no_scaffold.assign(mesh->vertices.size(), 0);
+    scaffold = &no_scaffold;
+  }
+  MS_CHECK(scaffold->size() == mesh->vertices.size()) << "one scaffold flag per vertex";
+  FloatCleanupStats stats;
+  const std::vector<uint8_t> usable(mesh->faces.size(), 1);
+  FloatRobustnessReport report = CheckFloatRobustness(*mesh, usable, options.check);
+  stats.tolerance = options.margin * report.tolerance;
+  FloatRobustnessOptions check = options.check;
+  check.absolute_tolerance = stats.tolerance;
+  check.max_examples = static_cast<int>(std::min<int64_t>(check.max_pairs, 1 << 30));
+  report = CheckFloatRobustness(*mesh, usable, check);
+  stats.problems_before = ProblemCount(report);
+  const double max_collapse = options.max_collapse_fraction * report.diagonal;
+  // Splits help only in numbers, and clusters of near vertices can defeat the collapses: a
+  // cleanup that ends with no fewer problems leaves the mesh as it was.
+  const Mesh original = *mesh;
+  const std::vector<uint8_t> original_scaffold = *scaffold;
+  while (!report.IsRobust() && stats.rounds < options.max_rounds) {
+    ++stats.rounds;
+    Cleaner cleaner(mesh, scaffold, stats.tolerance, max_collapse);
+    const int64_t operations = cleaner.Round(report);
+    cleaner.Compact();
+    stats.collapses += cleaner.collapses();
+    stats.splits += cleaner.splits();
+    if (operations == 0) break;
+    report = CheckFloatRobustness(*mesh, std::vector<uint8_t>(mesh->faces.size(), 1), check);
+  }
+  stats.problems_after = ProblemCount(report);
+  if (stats.problems_after > 0 && stats.problems_after >= stats.problems_before) {
+    *mesh = original;
+    *scaffold = original_scaffold;
+    stats.problems_after = stats.problems_before;
+    stats.collapses = stats.splits = 0;
+  }
+  stats.seconds = timer.Seconds();
+  return stats;
+}
+
+}  // namespace ms

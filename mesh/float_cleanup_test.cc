@@ -1,0 +1,186 @@
+#include "mesh/float_cleanup.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+
+#include "mesh/mesh_checker.h"
+#include "mesh/test_meshes.h"
+
+namespace ms {
+namespace {
+
+using namespace test_meshes;  // NOLINT: small shapes only
+
+// check-mesh's verdict with every test on: exact (closed 2-manifold, no self-intersection)
+// and in floating point.
+void ExpectValidAndRobust(const Mesh& mesh) {
+  const MeshReport r = CheckMesh(mesh, MeshCheckOptions{});
+  EXPECT_TRUE(r.is_valid) << r.ToTable();
+  EXPECT_TRUE(r.is_float_robust) << r.ToTable();
+}
+
+bool HasVertex(const Mesh& mesh, const V& p) {
+  return std::find(mesh.vertices.begin(), mesh.vertices.end(), p) != mesh.vertices.end();
+}
+
+// Face f split in three around a point `offset` away from its first corner: the new vertex
+// and that corner are near-coincident, and the faces around them needles.
+Mesh SplitNearCorner(Mesh mesh, size_t f, double offset) {
+  const auto t = mesh.faces[f];
+  const V centre = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3;
+  const V corner = mesh.vertices[t[0]];
+  const auto p = static_cast<int32_t>(mesh.vertices.size());
+  mesh.vertices.push_back(corner + offset * (centre - corner).normalized());
+  mesh.faces[f] = {t[0], t[1], p};
+  mesh.faces.push_back({t[1], t[2], p});
+  mesh.faces.push_back({t[2], t[0], p});
+  return mesh;
+}
+
+TEST(FloatCleanup, CleanMeshesAreLeftAlone) {
+  for (const Mesh& original : {Icosahedron(), Cube()}) {
+    Mesh mesh = original;
+    const FloatCleanupStats stats = CleanForFloatingPoint(&mesh);
+    EXPECT_EQ(stats.problems_before, 0);
+    EXPECT_EQ(stats.collapses + stats.splits, 0);
+    EXPECT_EQ(mesh.vertices, original.vertices);
+    EXPECT_EQ(mesh.faces, original.faces);
+  }
+}
+
+TEST(FloatCleanup, NearCoincidentVertexIsCollapsedOntoItsTwin) {
+  const Mesh original = Icosahedron();
+  Mesh mesh = SplitNearCorner(original, 3, 1e-9);
+  ASSERT_FALSE(CheckMesh(mesh, MeshCheckOptions{}).is_float_robust);
+  std::vector<uint8_t> scaffold(mesh.vertices.size(), 0);
+  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh, &scaffold);
+  EXPECT_GT(stats.problems_before, 0);
+  EXPECT_EQ(stats.problems_after, 0);
+  EXPECT_EQ(stats.collapses, 1);
+  EXPECT_EQ(stats.splits, 0);
+  ExpectValidAndRobust(mesh);
+  // Back to the icosahedron: one of the twins is gone, every position is an original one.
+  EXPECT_EQ(mesh.vertices.size(), original.vertices.size());
+  EXPECT_EQ(mesh.faces.size(), original.faces.size());
+  EXPECT_EQ(scaffold.size(), mesh.vertices.size());
+  for (const V& p : mesh.vertices) {
+    EXPECT_TRUE(HasVertex(original, p) ||
+                (p - original.vertices[original.faces[3][0]]).norm() < 1e-8);
+  }
+}
+
+TEST(FloatCleanup, CollapseKeepsTheSurfaceVertexOverTheScaffold) {
+  Mesh mesh = SplitNearCorner(Icosahedron(), 3, 1e-9);
+  const V corner = mesh.vertices[Icosahedron().faces[3][0]];
+  const V twin = mesh.vertices.back();
+  // The corner is scaffolding (a Steiner point), its twin a real point: the twin stays.
+  std::vector<uint8_t> scaffold(mesh.vertices.size(), 0);
+  scaffold[Icosahedron().faces[3][0]] = 1;
+  CleanForFloatingPoint(&mesh, &scaffold);
+  EXPECT_TRUE(HasVertex(mesh, twin));
+  EXPECT_FALSE(HasVertex(mesh, corner));
+  EXPECT_EQ(std::count(scaffold.begin(), scaffold.end(), 1), 0);
+}
+
+// Edge (a, b) split 1e-9 from a: two needles around a near-coincident pair.
+Mesh SplitEdgeNearEnd(Mesh mesh, int32_t a, int32_t b, double offset) {
+  const auto m = static_cast<int32_t>(mesh.vertices.size());
+  mesh.vertices.push_back(mesh.vertices[a] + offset * (mesh.vertices[b] - mesh.vertices[a]));
+  std::vector<std::array<int32_t, 3>> faces;
+  for (const auto& t : mesh.faces) {
+    bool split = false;
+    for (int i = 0; i < 3 && !split; ++i) {
+      const int32_t x = t[i], y = t[(i + 1) % 3], z = t[(i + 2) % 3];
+      if ((x == a && y == b) || (x == b && y == a)) {
+        faces.push_back({x, m, z});
+        faces.push_back({m, y, z});
+        split = true;
+      }
+    }
+    if (!split) faces.push_back(t);
+  }
+  mesh.faces = faces;
+  return mesh;
+}
+
+TEST(FloatCleanup, NeedlesAreCollapsed) {
+  const Mesh original = Icosahedron();
+  Mesh mesh = SplitEdgeNearEnd(original, original.faces[0][0], original.faces[0][1], 1e-9);
+  for (V& p : mesh.vertices) p = Rotation() * p;
+  ASSERT_FALSE(CheckMesh(mesh, MeshCheckOptions{}).is_float_robust);
+  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh);
+  EXPECT_EQ(stats.problems_after, 0);
+  EXPECT_EQ(stats.collapses, 1);
+  ExpectValidAndRobust(mesh);
+  EXPECT_EQ(mesh.faces.size(), original.faces.size());
+}
+
+// A bipyramid with a needle cannot lose an edge and stay a 2-manifold (the link condition
+// fails everywhere): the mesh is left as it was, and the problems are reported.
+TEST(FloatCleanup, WhatCannotBeCleanedIsLeftValidAndReported) {
+  Mesh mesh = Bipyramid(1e-8);
+  for (V& p : mesh.vertices) p = Rotation() * p;
+  const Mesh original = mesh;
+  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh);
+  EXPECT_GT(stats.problems_before, 0);
+  EXPECT_EQ(stats.problems_after, stats.problems_before);
+  EXPECT_EQ(stats.collapses + stats.splits, 0);
+  EXPECT_EQ(mesh.vertices, original.vertices);
+  EXPECT_EQ(mesh.faces, original.faces);
+}
+
+// A tiny tetrahedron (vertices 4-7) 1e-3 above the middle of a face 100 long and 0.01 wide
+// (vertices 0-3): farther apart than the tolerance (2e-4 here), yet Open3D's test calls them
+// intersecting: its plane distances, scaled by the pair's extent, snap to 0 under 1e-6.
+Mesh TinyCornerOverASkinnyFace() {
+  Mesh skinny;
+  skinny.vertices = {{0, 0, 0}, {100, 0, 0}, {50, 0.01, 0}, {50, 0.005, -10}};
+  skinny.faces = {{0, 1, 2}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}};
+  const V centre =
+      (skinny.vertices[0] + skinny.vertices[1] + skinny.vertices[2] + skinny.vertices[3]) / 4;
+  for (size_t f = 0; f < 4; ++f) OrientAwayFrom(&skinny, f, centre);
+  Mesh mesh = Append(skinny, Corner(V(50, 0.004, 1e-3), 1e-3));
+  for (V& p : mesh.vertices) p = Rotation() * p;
+  return mesh;
+}
+
+// Splitting the large face's edges fixes it without moving the surface.
+TEST(FloatCleanup, SkinnyFaceOverATinyOneIsSplitAway) {
+  Mesh mesh = TinyCornerOverASkinnyFace();
+  const MeshReport before = CheckMesh(mesh, MeshCheckOptions{});
+  ASSERT_GT(before.float_robustness.num_float_intersections, 0) << before.ToTable();
+  ASSERT_EQ(before.float_robustness.num_close_face_pairs, 0);
+  const Mesh original = mesh;
+  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh);
+  EXPECT_EQ(stats.problems_after, 0);
+  EXPECT_EQ(stats.collapses, 0);
+  EXPECT_GT(stats.splits, 0);
+  ExpectValidAndRobust(mesh);
+  // Nothing moved: every original vertex is there, and the area is the same.
+  for (const V& p : original.vertices) EXPECT_TRUE(HasVertex(mesh, p));
+  EXPECT_NEAR(mesh.SurfaceArea(), original.SurfaceArea(), 1e-9 * original.SurfaceArea());
+}
+
+TEST(FloatCleanup, SplitVertexOfAScaffoldEdgeIsScaffold) {
+  Mesh mesh = TinyCornerOverASkinnyFace();
+  std::vector<uint8_t> scaffold(mesh.vertices.size(), 0);
+  for (int v = 0; v < 4; ++v) scaffold[v] = 1;  // the skinny tetrahedron is all scaffolding
+  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh, &scaffold);
+  ASSERT_GT(stats.splits, 0);
+  ASSERT_EQ(scaffold.size(), mesh.vertices.size());
+  EXPECT_EQ(std::count(scaffold.begin(), scaffold.end(), 0), 4);  // the tiny corner only
+}
+
+TEST(FloatCleanup, OptionsAreChecked) {
+  Mesh mesh = Icosahedron();
+  FloatCleanupOptions bad;
+  bad.check.relative_tolerance = -1;
+  EXPECT_ANY_THROW(CleanForFloatingPoint(&mesh, nullptr, bad));
+  std::vector<uint8_t> wrong_size(3, 0);
+  EXPECT_DEATH(CleanForFloatingPoint(&mesh, &wrong_size), "one scaffold flag per vertex");
+}
+
+}  // namespace
+}  // namespace ms
