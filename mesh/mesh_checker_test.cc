@@ -14,6 +14,7 @@
 #include <set>
 
 #include "base/error.h"
+#include "mesh/test_meshes.h"
 
 namespace ms {
 namespace {
@@ -22,17 +23,8 @@ using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 using Face = std::array<int32_t, 3>;
 
-// Flips faces of a convex, star-shaped-around-the-centroid mesh so their normals point out.
-void OrientOutward(Mesh* m) {
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  for (const auto& v : m->vertices) center += v;
-  center /= static_cast<double>(m->vertices.size());
-  for (size_t f = 0; f < m->faces.size(); ++f) {
-    auto& t = m->faces[f];
-    const Eigen::Vector3d mid = (m->vertices[t[0]] + m->vertices[t[1]] + m->vertices[t[2]]) / 3;
-    if (m->FaceNormal(f).dot(mid - center) < 0) std::swap(t[1], t[2]);
-  }
-}
+using test_meshes::Append;
+using test_meshes::OrientOutward;
 
 Mesh Tetrahedron(const Eigen::Vector3d& offset = Eigen::Vector3d::Zero()) {
   Mesh m;
@@ -109,13 +101,6 @@ Mesh UvSphere(int rings, int segments) {
   for (int s = 0; s < segments; ++s)
     m.faces.push_back({south, id(rings - 1, s + 1), id(rings - 1, s)});
   return m;
-}
-
-Mesh Append(Mesh a, const Mesh& b) {
-  const auto base = static_cast<int32_t>(a.vertices.size());
-  a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
-  for (auto f : b.faces) a.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
-  return a;
 }
 
 MeshReport Check(const Mesh& m, bool allow_boundary = false) {
