@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -27,24 +28,48 @@ int main(int argc, char** argv) {
   int64_t insert_count = 10000;
   std::string export_dir;
   ms::ManifoldOptions options;
+  const char* usage =
+      "usage: manifold_bench [points ...] [--insert=N] [--export=DIR] "
+      "[--graded-steiner=on|off] [--steiner-grid=N] [--steiner-min-spacing=X] "
+      "[--steiner-clearance=X]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg.rfind("--insert=", 0) == 0) {
-      insert_count = std::stoll(arg.substr(9));
-    } else if (arg.rfind("--export=", 0) == 0) {
-      export_dir = arg.substr(9);
-    } else if (arg.rfind("--steiner-min-spacing=", 0) == 0) {
-      options.steiner_min_spacing = std::stod(arg.substr(22));
-    } else if (arg.rfind("--steiner-clearance=", 0) == 0) {
-      options.steiner_clearance = std::stod(arg.substr(20));
-    } else if (arg.rfind("--steiner-grid=", 0) == 0) {
-      options.steiner_grid = std::stoi(arg.substr(15));
-    } else if (arg == "--graded-steiner=on") {
-      options.steiner_graded = ms::GradedSteiner::kOn;
-    } else if (arg == "--graded-steiner=off") {
-      options.steiner_graded = ms::GradedSteiner::kOff;
-    } else {
-      sizes.push_back(std::stoll(arg));
+    if (arg == "--help" || arg == "-h") {
+      std::printf("%s", usage);
+      return 0;
+    }
+    if (arg.rfind("--", 0) == 0 && arg.find('=') == std::string::npos) {
+      std::fprintf(stderr, "manifold_bench: unknown option %s\n%s", arg.c_str(), usage);
+      return 2;
+    }
+    try {
+      if (arg.rfind("--insert=", 0) == 0) {
+        insert_count = std::stoll(arg.substr(9));
+      } else if (arg.rfind("--export=", 0) == 0) {
+        export_dir = arg.substr(9);
+      } else if (arg.rfind("--steiner-min-spacing=", 0) == 0) {
+        options.steiner_min_spacing = std::stod(arg.substr(22));
+      } else if (arg.rfind("--steiner-clearance=", 0) == 0) {
+        options.steiner_clearance = std::stod(arg.substr(20));
+      } else if (arg.rfind("--steiner-grid=", 0) == 0) {
+        options.steiner_grid = std::stoi(arg.substr(15));
+      } else if (arg == "--graded-steiner=on") {
+        options.steiner_graded = ms::GradedSteiner::kOn;
+      } else if (arg == "--graded-steiner=off") {
+        options.steiner_graded = ms::GradedSteiner::kOff;
+      } else {
+        char* end = nullptr;
+        const long long n = std::strtoll(arg.c_str(), &end, 10);
+        if (end == arg.c_str() || *end != '\0' || n < 10) {
+          std::fprintf(stderr, "manifold_bench: %s is not a point count (>= 10)\n%s", arg.c_str(),
+                       usage);
+          return 2;
+        }
+        sizes.push_back(n);
+      }
+    } catch (const std::exception&) {
+      std::fprintf(stderr, "manifold_bench: bad value in %s\n%s", arg.c_str(), usage);
+      return 2;
     }
   }
   if (sizes.empty()) sizes = {10000, 100000, 1000000};
