@@ -2,10 +2,10 @@
 // coordinator and two sweep workers as real processes on loopback, then the independent mesh
 // checker and the depth-map evaluation from view 0 (Sigma = 0.06 m, as the paper).
 //
-// The paper: MAE 0.108 -> 0.013 m (downward pyramid), 0.135 -> 0.028 m (upward). The accuracy
-// is measured on the reconstructed surface proper (final_surface.ply: the faces with no
-// Steiner vertex; the Steiner faces only close the manifold around the cameras' free space),
-// and the closed manifold (final.ply) is checked and measured too.
+// The paper: MAE 0.108 -> 0.013 m (downward pyramid), 0.135 -> 0.028 m (upward), with
+// it_max = 15 iterations, as here. The headline is the closed manifold (final.ply, every
+// pixel); the surface proper (final_surface.ply: the faces with no Steiner vertex, the Steiner
+// faces only closing the manifold around the cameras' free space) is measured after it.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -79,7 +79,7 @@ Outcome Reconstruct(const std::string& scene_name, const gl::GlContext& gl) {
   ChildProcess coordinator(
       MS_BINARY,
       Split("coordinator --input " + (root / "data" / "scene.h5").string() + " --bind " + endpoint +
-            " --output " + out + " --max-iterations 5 --progress-interval 5"),
+            " --output " + out + " --max-iterations 15 --progress-interval 5"),
       out + "/coordinator.log");
   std::vector<std::unique_ptr<ChildProcess>> workers;
   for (const char* id : {"w1", "w2"}) {
@@ -114,15 +114,18 @@ Outcome Reconstruct(const std::string& scene_name, const gl::GlContext& gl) {
   return outcome;
 }
 
+// Regression bounds about 5% above the measured values (docs/performance.md; the runs are
+// deterministic: the points are inserted sorted by camera and pixel). The closed mesh is the
+// headline (every pixel); the surface proper covers fewer.
 TEST(PyramidAccuracy, DownwardPyramidReproducesTable1) {
   const gl::GlContext gl;
   const Outcome o = Reconstruct("pyramid-down", gl);
   EXPECT_TRUE(o.check.is_closed_manifold) << o.check.ToTable();
-  EXPECT_GT(o.initial.mae, 0.07);       // the flat base square (paper: 0.108)
-  EXPECT_LE(o.surface.mae, 0.013);      // paper: 0.013
-  EXPECT_GE(o.surface.coverage, 0.85);  // the Steiner faces cover the rest
-  EXPECT_LE(o.closed.mae, 0.015);
+  EXPECT_GT(o.initial.mae, 0.07);   // the flat base square (paper: 0.108)
+  EXPECT_LE(o.closed.mae, 0.0140);  // measured 0.0133; paper: 0.013
   EXPECT_DOUBLE_EQ(o.closed.coverage, 1.0);
+  EXPECT_LE(o.surface.mae, 0.0123);     // measured 0.0117
+  EXPECT_GE(o.surface.coverage, 0.92);  // measured 0.927
 }
 
 TEST(PyramidAccuracy, UpwardPyramidReproducesTable1) {
@@ -130,10 +133,10 @@ TEST(PyramidAccuracy, UpwardPyramidReproducesTable1) {
   const Outcome o = Reconstruct("pyramid-up", gl);
   EXPECT_TRUE(o.check.is_closed_manifold) << o.check.ToTable();
   EXPECT_GT(o.initial.mae, 0.09);   // paper: 0.135
-  EXPECT_LE(o.surface.mae, 0.028);  // paper: 0.028
-  EXPECT_GE(o.surface.coverage, 0.85);
-  EXPECT_LE(o.closed.mae, 0.028);
+  EXPECT_LE(o.closed.mae, 0.0096);  // measured 0.0091; paper: 0.028
   EXPECT_DOUBLE_EQ(o.closed.coverage, 1.0);
+  EXPECT_LE(o.surface.mae, 0.0045);     // measured 0.0042
+  EXPECT_GE(o.surface.coverage, 0.88);  // measured 0.892
 }
 
 }  // namespace
