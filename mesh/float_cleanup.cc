@@ -1,11 +1,8 @@
 #include "mesh/float_cleanup.h"
 
-#include <spdlog/spdlog.h>
-
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <set>
 #include <utility>
 
@@ -123,6 +120,7 @@ class Cleaner {
       box_.push_back(FaceBox(mesh_.faces[f]));
       for (int32_t v : mesh_.faces[f]) faces_of_[v].push_back(static_cast<int32_t>(f));
     }
+    for (const auto& faces : faces_of_) live_vertices_ += !faces.empty();
   }
 
   int64_t collapses() const { return collapses_; }
@@ -249,9 +247,7 @@ class Cleaner {
     std::vector<int32_t> common;
     std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
     if (common.size() != 2) return false;
-    int64_t live_vertices = 0;
-    for (const auto& faces : faces_of_) live_vertices += !faces.empty();
-    if (live_vertices <= 4) return false;
+    if (live_vertices_ <= 4) return false;  // a tetrahedron cannot lose a vertex
     std::vector<int32_t> removed, kept_faces;
     std::vector<Face> made;
     for (int32_t f : faces_of_[u]) {
@@ -268,6 +264,7 @@ class Cleaner {
     if (!Improves(removed, made)) return false;
     Apply(removed, made);
     faces_of_[u].clear();
+    --live_vertices_;
     ++collapses_;
     return true;
   }
@@ -307,6 +304,7 @@ class Cleaner {
     if (mesh_.HasColors()) mesh_.vertex_colors.push_back(mesh_.vertex_colors[a]);
     scaffold_.push_back(scaffold_[a] || scaffold_[b]);
     faces_of_.emplace_back();
+    ++live_vertices_;
     Apply(removed, made);
     ++splits_;
   }
@@ -436,6 +434,7 @@ class Cleaner {
   std::vector<uint8_t> touched_;                // per face: removed or made this round
   std::vector<int32_t> recent_;                 // faces made this round (not in tree_)
   FaceTree tree_;                               // faces alive at the round's start
+  int64_t live_vertices_ = 0;                   // vertices with a face
   int64_t collapses_ = 0, splits_ = 0;
 };
 
