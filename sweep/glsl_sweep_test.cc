@@ -18,6 +18,7 @@
 #include "gl/gl_testing.h"
 #include "sweep/reference_sweep.h"
 #include "sweep/sweep_kernel_factory.h"
+#include "sweep/sweep_parity_testing.h"
 #include "sweep/sweep_test_scene.h"
 
 namespace ms {
@@ -268,42 +269,7 @@ TEST_F(GlslSweepTest, StagesMatchTheReference) {
 
 // ---- End to end ----
 
-// Compares the tile winners: the same tiles, the same pixel and offset for the large majority,
-// and NCC / positions within the documented tolerances.
-void ExpectSameWinners(const SweepResult& ref, const SweepResult& gl, double depth,
-                       const std::string& label) {
-  std::map<std::pair<float, float>, const SweepPoint*> by_pixel;
-  for (const SweepPoint& p : ref.points) by_pixel[{p.pixel.x(), p.pixel.y()}] = &p;
-  int same = 0;
-  double worst_ncc = 0, worst_position = 0;
-  for (const SweepPoint& p : gl.points) {
-    auto it = by_pixel.find({p.pixel.x(), p.pixel.y()});
-    if (it == by_pixel.end() || it->second->offset != p.offset) continue;
-    const SweepPoint& r = *it->second;
-    ++same;
-    worst_ncc = std::max<double>(worst_ncc, std::abs(p.ncc - r.ncc));
-    worst_position = std::max(worst_position, (p.position - r.position).norm() / depth);
-    EXPECT_EQ(p.face, r.face);
-    EXPECT_EQ(p.cameras, r.cameras);
-  }
-  std::printf(
-      "[%s] %zu points (reference %zu), %d at the same pixel and offset; worst NCC "
-      "difference %.1e, worst position difference %.1e x depth\n",
-      label.c_str(), gl.points.size(), ref.points.size(), same, worst_ncc, worst_position);
-  const double n = static_cast<double>(ref.points.size());
-  EXPECT_NEAR(static_cast<double>(gl.points.size()), n, std::max(2.0, 0.02 * n));
-  EXPECT_GE(same, 0.95 * n);
-  EXPECT_LT(worst_ncc, 1e-3);  // see StagesMatchTheReference
-  EXPECT_LT(worst_position, 1e-5);
-  EXPECT_EQ(gl.stats.hypotheses, ref.stats.hypotheses);
-  EXPECT_EQ(gl.stats.num_offsets, ref.stats.num_offsets);
-  EXPECT_EQ(gl.stats.tiles_x, ref.stats.tiles_x);
-  EXPECT_NEAR(static_cast<double>(gl.stats.covered_pixels), ref.stats.covered_pixels,
-              0.002 * ref.stats.covered_pixels);
-  EXPECT_NEAR(static_cast<double>(gl.stats.valid_hypotheses), ref.stats.valid_hypotheses,
-              0.01 * ref.stats.valid_hypotheses);
-}
-
+// Tile winners are compared by ExpectSameWinners (sweep/sweep_parity_testing.h).
 TEST_F(GlslSweepTest, PyramidFromAFlatSquareLikeTheReference) {
   const PyramidScene& scene = NoisyPyramid();
   const SweepJob job = MakeJob(scene, MakeFlatSquare(0.15, 1.3, 8));
@@ -525,12 +491,15 @@ TEST_F(GlslSweepTest, ShaderCompileFailureIsReadable) {
 TEST_F(GlslSweepTest, FactoryMakesKernelsByName) {
   EXPECT_EQ(MakeSweepKernel("reference")->Name(), "reference");
   EXPECT_EQ(MakeSweepKernel("glsl")->Name(), "glsl");
-  EXPECT_EQ(MakeSweepKernel("auto")->Name(), "glsl");  // CI has llvmpipe
+  EXPECT_EQ(MakeSweepKernel("cpu")->Name(), "cpu");
+  std::string why;
+  EXPECT_EQ(MakeSweepKernel("auto", {}, &why)->Name(), context_->info().software ? "cpu" : "glsl");
+  EXPECT_NE(why.find(context_->info().renderer), std::string::npos) << why;
   try {
     MakeSweepKernel("cuda");
     ADD_FAILURE() << "no error for an unknown kernel";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("auto, glsl, reference"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("auto, glsl, cpu, reference"), std::string::npos);
   }
   // Bad options are the caller's error even for "auto" (no silent fallback).
   GlslSweepKernelOptions bad;

@@ -140,7 +140,6 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
   result.stats = PreparedSweepStats(prep);
   SweepStats& stats = result.stats;
   const View& view = prep.camera.view;
-  const int width = view.intrinsics.width, height = view.intrinsics.height;
   const int num_neighbours = static_cast<int>(prep.neighbours.size());
 
   const std::vector<Eigen::Vector3d> normals = FaceNormals(job.mesh);
@@ -149,14 +148,6 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
   std::vector<SoftwareRasterizer> shadow_maps;
   for (const SweepCamera& n : prep.neighbours) {
     shadow_maps.emplace_back(n.view, prep.near, /*keep_world=*/false);
-  }
-  // Per tile, which tile each column / row belongs to.
-  std::vector<int> tile_of_col(width), tile_of_row(height);
-  for (int t = 0; t < prep.tiles.tiles_x; ++t) {
-    for (int c = prep.tiles.XBegin(t); c < prep.tiles.XBegin(t + 1); ++c) tile_of_col[c] = t;
-  }
-  for (int t = 0; t < prep.tiles.tiles_y; ++t) {
-    for (int r = prep.tiles.YBegin(t); r < prep.tiles.YBegin(t + 1); ++r) tile_of_row[r] = t;
   }
   std::vector<TileWinner> best(prep.tiles.NumTiles());
   const float threshold = static_cast<float>(options.ncc_threshold);
@@ -184,34 +175,12 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
       stats.ncc_s += stage.Seconds();
     }
 
-    // Tile-best: strictly greater wins, so ties go to the smaller k, then the earlier
-    // neighbour, then the earlier pixel in row-major order.
+    // Tile-best (sweep_kernel.h): ties go to the smaller k, neighbour, pixel.
     stage.Restart();
-    for (int j = 0; j < num_neighbours; ++j) {
-      for (int row = 0; row < height; ++row) {
-        const float* values = ncc[j].ptr<float>(row);
-        for (int col = 0; col < width; ++col) {
-          const float value = values[col];
-          if (!(value > threshold)) continue;  // NaN and everything that cannot be kept
-          TileWinner& tile = best[tile_of_row[row] * prep.tiles.tiles_x + tile_of_col[col]];
-          if (!(value > tile.ncc)) continue;
-          const size_t index = camera_raster.Index(col, row);
-          tile.ncc = value;
-          tile.offset = k;
-          tile.neighbour = j;
-          tile.col = col;
-          tile.row = row;
-          tile.face = camera_raster.face()[index];
-          tile.position = camera_raster.world()[index];
-          tile.matched.clear();
-          for (int other = 0; other < num_neighbours; ++other) {
-            if (other != j && ncc[other].at<float>(row, col) > threshold) {
-              tile.matched.push_back(other);
-            }
-          }
-        }
-      }
-    }
+    std::vector<const float*> maps;
+    for (const cv::Mat& m : ncc) maps.push_back(m.ptr<float>());
+    UpdateTileWinners(prep.tiles, k, maps, camera_raster.face().data(),
+                      camera_raster.world().data(), threshold, &best);
     stats.reduce_s += stage.Seconds();
   }
 

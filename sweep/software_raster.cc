@@ -4,38 +4,12 @@
 #include <cmath>
 
 #include "base/check.h"
+#include "sweep/raster_rules.h"
 
 namespace ms {
-namespace {
-
-struct Point2 {
-  double x, y;
-};
-
-bool Before(const Point2& a, const Point2& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); }
-
-// Edge function of p against the directed edge a->b: positive on the left of a->b in y-down
-// coordinates when the triangle is oriented so that Edge(p0, p1, p2) > 0. Evaluated from the
-// lexicographically smaller endpoint, so the two triangles sharing an edge compute exactly
-// opposite values (the fill rule then decides a zero without double coverage or gaps).
-double Edge(const Point2& a, const Point2& b, const Point2& p) {
-  if (Before(b, a)) {
-    return -((a.x - b.x) * (p.y - b.y) - (a.y - b.y) * (p.x - b.x));
-  }
-  return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
-}
-
-// Top edge (horizontal, interior below) or left edge (going up) for the orientation above.
-bool TopLeft(const Point2& a, const Point2& b) {
-  const double dy = b.y - a.y;
-  return dy < 0 || (dy == 0 && b.x > a.x);
-}
-
-bool Covers(double w, const Point2& a, const Point2& b) {
-  return w > 0 || (w == 0 && TopLeft(a, b));
-}
-
-}  // namespace
+using raster::Covers;
+using raster::Edge;
+using raster::Point2;
 
 SoftwareRasterizer::SoftwareRasterizer(const View& view, double near, bool keep_world)
     : R_(view.R),

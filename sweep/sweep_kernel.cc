@@ -195,6 +195,39 @@ SweepStats PreparedSweepStats(const PreparedSweep& prep) {
   return stats;
 }
 
+void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
+                       const int32_t* face, const Eigen::Vector3d* world, float threshold,
+                       std::vector<TileWinner>* best) {
+  const int num_neighbours = static_cast<int>(ncc.size());
+  for (int ty = 0; ty < tiles.tiles_y; ++ty) {
+    for (int tx = 0; tx < tiles.tiles_x; ++tx) {
+      TileWinner& tile = (*best)[ty * tiles.tiles_x + tx];
+      for (int j = 0; j < num_neighbours; ++j) {
+        for (int row = tiles.YBegin(ty); row < tiles.YBegin(ty + 1); ++row) {
+          const size_t row_offset = static_cast<size_t>(row) * tiles.width;
+          const float* values = ncc[j] + row_offset;
+          for (int col = tiles.XBegin(tx); col < tiles.XBegin(tx + 1); ++col) {
+            const float value = values[col];
+            if (!(value > threshold) || !(value > tile.ncc)) continue;  // NaN never wins
+            const size_t index = row_offset + col;
+            tile.ncc = value;
+            tile.offset = offset;
+            tile.neighbour = j;
+            tile.col = col;
+            tile.row = row;
+            tile.face = face[index];
+            if (world != nullptr) tile.position = world[index];
+            tile.matched.clear();
+            for (int other = 0; other < num_neighbours; ++other) {
+              if (other != j && ncc[other][index] > threshold) tile.matched.push_back(other);
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
 SweepPoint MakeSweepPoint(const TileWinner& winner, const PreparedSweep& prep) {
   SweepPoint point;
   point.position = winner.position;

@@ -146,6 +146,15 @@ struct TileWinner {
   std::vector<int> matched;
 };
 
+// One offset's contribution to the tile winners, as every kernel keeps them: a pixel whose NCC
+// (ncc[j], row-major at the swept resolution, NaN where undefined) is strictly above the
+// threshold and strictly above its tile's best wins, so ties go to the smaller k (offsets in
+// ascending order), then the earlier neighbour, then the earlier pixel in row-major order.
+// `face` gives each pixel's face; `world`, when not null, its position (else left as is).
+void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
+                       const int32_t* face, const Eigen::Vector3d* world, float threshold,
+                       std::vector<TileWinner>* best);
+
 // The point of a tile winner: its pixel centre in C's full-resolution image, C's id, then the
 // winning neighbour's, then those of the other neighbours that matched (both kernels).
 SweepPoint MakeSweepPoint(const TileWinner& winner, const PreparedSweep& prep);

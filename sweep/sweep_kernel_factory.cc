@@ -1,28 +1,46 @@
 #include "sweep/sweep_kernel_factory.h"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include "base/error.h"
 #include "base/log.h"
+#include "sweep/cpu_sweep.h"
 #include "sweep/reference_sweep.h"
 
 namespace ms {
 
-std::vector<std::string> SweepKernelNames() { return {"auto", "glsl", "reference"}; }
+std::vector<std::string> SweepKernelNames() { return {"auto", "glsl", "cpu", "reference"}; }
 
 std::unique_ptr<SweepKernel> MakeSweepKernel(const std::string& name,
-                                             const GlslSweepKernelOptions& glsl) {
-  if (name == "reference") return std::make_unique<ReferenceSweepKernel>();
-  if (name == "glsl") return std::make_unique<GlslSweepKernel>(glsl);
+                                             const GlslSweepKernelOptions& glsl,
+                                             std::string* why) {
+  const auto because = [&](std::string reason) {
+    if (why != nullptr) *why = std::move(reason);
+  };
+  if (name == "reference") return because("asked for"), std::make_unique<ReferenceSweepKernel>();
+  if (name == "cpu") return because("asked for"), std::make_unique<CpuSweepKernel>();
+  if (name == "glsl") return because("asked for"), std::make_unique<GlslSweepKernel>(glsl);
   if (name == "auto") {
     glsl.Check();  // bad options are the caller's error, not a reason to fall back
+    std::unique_ptr<GlslSweepKernel> gpu;
     try {
-      return std::make_unique<GlslSweepKernel>(glsl);
+      gpu = std::make_unique<GlslSweepKernel>(glsl);
     } catch (const InternalError& e) {
-      spdlog::warn("GLSL sweep kernel unavailable, using the C++ reference (much slower): {}",
-                   e.what());
-      return std::make_unique<ReferenceSweepKernel>();
+      because(fmt::format("no usable OpenGL 4.3 context ({})", e.what()));
+      return std::make_unique<CpuSweepKernel>();
     }
+    const gl::GlInfo& info = gpu->gl_info();
+    if (info.software) {
+      // llvmpipe runs the GLSL kernel on the CPU, slower than the CPU kernel (docs/sweep.md).
+      because(fmt::format("OpenGL renderer '{}' is a software rasteriser", info.renderer));
+      return std::make_unique<CpuSweepKernel>();
+    }
+    because(fmt::format("OpenGL renderer '{}' is a GPU", info.renderer));
+    return gpu;
   }
-  throw InputError("sweep kernel '" + name + "' is not one of: auto, glsl, reference");
+  throw InputError(fmt::format("sweep kernel '{}' is not one of: {}", name,
+                               fmt::join(SweepKernelNames(), ", ")));
 }
 
 }  // namespace ms

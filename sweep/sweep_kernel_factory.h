@@ -12,10 +12,13 @@ namespace ms {
 
 // "glsl": the GLSL kernel (sweep/glsl_sweep.h) on its own GL context, current on the calling
 // thread; throws InternalError if no GL 4.3 context can be created or its shaders do not
-// compile. "reference": the C++ reference (sweep/reference_sweep.h). "auto": glsl if that works,
-// else the reference with a warning in the log. Anything else throws InputError.
+// compile. "cpu": the fast CPU kernel (sweep/cpu_sweep.h). "reference": the exact C++ reference
+// (sweep/reference_sweep.h). "auto": the fastest the machine has: glsl on a GPU, cpu where GL is
+// a software rasteriser (llvmpipe) or unavailable. Anything else throws InputError. `why`, if
+// given, receives the reason for the choice (for logs and `manisweep info`).
 std::unique_ptr<SweepKernel> MakeSweepKernel(const std::string& name,
-                                             const GlslSweepKernelOptions& glsl = {});
+                                             const GlslSweepKernelOptions& glsl = {},
+                                             std::string* why = nullptr);
 
 // The names MakeSweepKernel accepts, "auto" first: "auto", "glsl", "reference".
 std::vector<std::string> SweepKernelNames();

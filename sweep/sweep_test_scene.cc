@@ -147,10 +147,10 @@ SweepJob MakePyramidSweepJob(const PyramidScene& scene, const Mesh& mesh) {
   return job;
 }
 
-SweepJob MakeBenchmarkSweepJob(int width) {
+SweepJob MakeBenchmarkSweepJob(int width, int height) {
   PyramidSceneOptions options;
   options.width = width;
-  options.height = width * 3 / 4;
+  options.height = height > 0 ? height : width * 3 / 4;
   options.supersample = 1;  // rendering cost only; the sweep does not care
   options.noise_stddev = 0.01;
   return MakePyramidSweepJob(MakePyramidScene(options), MakeFlatSquare(0.15, 1.3, 16));

@@ -42,9 +42,9 @@ Mesh MakeFlatSquare(double z, double half_size, int cells);
 // Camera 0's sweep job: neighbours 1 and 2, the part of `mesh` camera 0 sees, default options.
 SweepJob MakePyramidSweepJob(const PyramidScene& scene, const Mesh& mesh);
 
-// The benchmarks' job: a width x (3/4 width) pyramid with image noise 0.01, swept from the flat
-// square at half its height (16 x 16 cells).
-SweepJob MakeBenchmarkSweepJob(int width);
+// The benchmarks' job: a width x height (0: 3/4 width) pyramid with image noise 0.01, swept from
+// the flat square at half its height (16 x 16 cells).
+SweepJob MakeBenchmarkSweepJob(int width, int height = 0);
 
 // A view at `center` looking at `target`, image y pointing along -world_y as seen from above.
 View LookAtView(const Eigen::Vector3d& center, const Eigen::Vector3d& target, int width, int height,

@@ -1,0 +1,275 @@
+#include "sweep/cpu_sweep.h"
+
+#include <algorithm>
+#include <cmath>
+#include <immintrin.h>
+#include <opencv2/core.hpp>
+#include <opencv2/core/utility.hpp>
+
+#include "base/log.h"
+#include "sweep/reference_sweep.h"
+#include "sweep/span_raster.h"
+#include "sweep/windowed_ncc.h"
+
+namespace ms {
+namespace {
+
+// C's camera frame to a neighbour's pixels, for reprojecting C's pixel rays.
+struct ReprojectionRow {
+  float ray0[3], ray_dx[3];  // A r(col) = ray0 + col ray_dx, A = R_n R_c^T, r = K_c^-1 (col+.5, row+.5, 1)
+  float b[3];                // t_n - A t_c
+  float fx, fy, cx, cy;
+  int width, height;  // the neighbour's image
+  float max_depth_ratio;  // 1 + occlusion tolerance
+};
+
+// I_k^j for one row of C (ReprojectNeighbour's rules, in float, without branches): J = bilinear
+// sample - 0.5 and mask 1 where valid, 0 elsewhere. The portable version; ReprojectRowAvx2
+// below is the same 8 pixels at a time.
+void ReprojectRow(
+    const ReprojectionRow& p, const float* __restrict inv_z, const float* __restrict shadow,
+    const float* __restrict image, float* __restrict J, float* __restrict mask, int n) {
+  const float u_max = p.width - 0.5f, v_max = p.height - 0.5f;
+  for (int col = 0; col < n; ++col) {
+    const float z = 1.0f / inv_z[col];  // +inf where empty
+    const float x = (p.ray0[0] + col * p.ray_dx[0]) * z + p.b[0];
+    const float y = (p.ray0[1] + col * p.ray_dx[1]) * z + p.b[1];
+    const float d = (p.ray0[2] + col * p.ray_dx[2]) * z + p.b[2];
+    const float u = p.fx * x / d + p.cx, v = p.fy * y / d + p.cy;
+    bool ok = inv_z[col] > 0 && d > 0 && u >= 0.5f && u <= u_max && v >= 0.5f && v <= v_max;
+    const float uc = ok ? u : 0.5f, vc = ok ? v : 0.5f;  // safe to index with
+    const int tu = std::min(static_cast<int>(uc), p.width - 1);
+    const int tv = std::min(static_cast<int>(vc), p.height - 1);
+    ok = ok && d * shadow[tv * p.width + tu] <= p.max_depth_ratio;
+    const float sx = uc - 0.5f, sy = vc - 0.5f;
+    const int x0 = std::min(static_cast<int>(sx), p.width - 1);
+    const int y0 = std::min(static_cast<int>(sy), p.height - 1);
+    const int x1 = std::min(x0 + 1, p.width - 1), y1 = std::min(y0 + 1, p.height - 1);
+    const float fx = sx - x0, fy = sy - y0;
+    const float a = image[y0 * p.width + x0], b = image[y0 * p.width + x1];
+    const float c = image[y1 * p.width + x0], e = image[y1 * p.width + x1];
+    const float top = a + fx * (b - a), bottom = c + fx * (e - c);
+    J[col] = ok ? top + fy * (bottom - top) - 0.5f : 0.0f;
+    mask[col] = ok ? 1.0f : 0.0f;
+  }
+}
+
+// The same with AVX2 gathers, 8 pixels at a time; the remainder by ReprojectRow.
+__attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
+    const ReprojectionRow& p, const float* __restrict inv_z, const float* __restrict shadow,
+    const float* __restrict image, float* __restrict J, float* __restrict mask, int n) {
+  const __m256 half = _mm256_set1_ps(0.5f), one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
+  const __m256 u_max = _mm256_set1_ps(p.width - 0.5f), v_max = _mm256_set1_ps(p.height - 0.5f);
+  const __m256i last_col = _mm256_set1_epi32(p.width - 1), last_row = _mm256_set1_epi32(p.height - 1);
+  const __m256i stride = _mm256_set1_epi32(p.width), one_i = _mm256_set1_epi32(1);
+  const __m256 ratio = _mm256_set1_ps(p.max_depth_ratio);
+  const __m256 iota = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
+  int col = 0;
+  for (; col + 8 <= n; col += 8) {
+    const __m256 c = _mm256_add_ps(_mm256_set1_ps(static_cast<float>(col)), iota);
+    const __m256 iz = _mm256_loadu_ps(inv_z + col);
+    const __m256 z = _mm256_div_ps(one, iz);
+    const __m256 x = _mm256_fmadd_ps(
+        _mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[0]), _mm256_set1_ps(p.ray0[0])), z,
+        _mm256_set1_ps(p.b[0]));
+    const __m256 y = _mm256_fmadd_ps(
+        _mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[1]), _mm256_set1_ps(p.ray0[1])), z,
+        _mm256_set1_ps(p.b[1]));
+    const __m256 d = _mm256_fmadd_ps(
+        _mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[2]), _mm256_set1_ps(p.ray0[2])), z,
+        _mm256_set1_ps(p.b[2]));
+    const __m256 u = _mm256_add_ps(_mm256_div_ps(_mm256_mul_ps(_mm256_set1_ps(p.fx), x), d),
+                                   _mm256_set1_ps(p.cx));
+    const __m256 v = _mm256_add_ps(_mm256_div_ps(_mm256_mul_ps(_mm256_set1_ps(p.fy), y), d),
+                                   _mm256_set1_ps(p.cy));
+    __m256 ok = _mm256_and_ps(_mm256_cmp_ps(iz, zero, _CMP_GT_OQ), _mm256_cmp_ps(d, zero, _CMP_GT_OQ));
+    ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(u, half, _CMP_GE_OQ),
+                                         _mm256_cmp_ps(u, u_max, _CMP_LE_OQ)));
+    ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(v, half, _CMP_GE_OQ),
+                                         _mm256_cmp_ps(v, v_max, _CMP_LE_OQ)));
+    const __m256 uc = _mm256_blendv_ps(half, u, ok), vc = _mm256_blendv_ps(half, v, ok);
+    const __m256i tu = _mm256_min_epi32(_mm256_cvttps_epi32(uc), last_col);
+    const __m256i tv = _mm256_min_epi32(_mm256_cvttps_epi32(vc), last_row);
+    const __m256 depth_ratio = _mm256_mul_ps(
+        d, _mm256_i32gather_ps(shadow, _mm256_add_epi32(_mm256_mullo_epi32(tv, stride), tu), 4));
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(depth_ratio, ratio, _CMP_LE_OQ));
+    const __m256 sx = _mm256_sub_ps(uc, half), sy = _mm256_sub_ps(vc, half);
+    const __m256i x0 = _mm256_min_epi32(_mm256_cvttps_epi32(sx), last_col);
+    const __m256i y0 = _mm256_min_epi32(_mm256_cvttps_epi32(sy), last_row);
+    const __m256i x1 = _mm256_min_epi32(_mm256_add_epi32(x0, one_i), last_col);
+    const __m256i y1 = _mm256_min_epi32(_mm256_add_epi32(y0, one_i), last_row);
+    const __m256 fx = _mm256_sub_ps(sx, _mm256_cvtepi32_ps(x0));
+    const __m256 fy = _mm256_sub_ps(sy, _mm256_cvtepi32_ps(y0));
+    const __m256i row0 = _mm256_mullo_epi32(y0, stride), row1 = _mm256_mullo_epi32(y1, stride);
+    const __m256 a = _mm256_i32gather_ps(image, _mm256_add_epi32(row0, x0), 4);
+    const __m256 b = _mm256_i32gather_ps(image, _mm256_add_epi32(row0, x1), 4);
+    const __m256 e = _mm256_i32gather_ps(image, _mm256_add_epi32(row1, x0), 4);
+    const __m256 f = _mm256_i32gather_ps(image, _mm256_add_epi32(row1, x1), 4);
+    const __m256 top = _mm256_fmadd_ps(fx, _mm256_sub_ps(b, a), a);
+    const __m256 bottom = _mm256_fmadd_ps(fx, _mm256_sub_ps(f, e), e);
+    const __m256 value = _mm256_sub_ps(_mm256_fmadd_ps(fy, _mm256_sub_ps(bottom, top), top), half);
+    _mm256_storeu_ps(J + col, _mm256_and_ps(value, ok));
+    _mm256_storeu_ps(mask + col, _mm256_and_ps(one, ok));
+  }
+  if (col < n) {
+    ReprojectionRow rest = p;
+    for (int i = 0; i < 3; ++i) rest.ray0[i] += col * rest.ray_dx[i];
+    ReprojectRow(rest, inv_z + col, shadow, image, J + col, mask + col, n - col);
+  }
+}
+
+void Reproject(const SpanRasterizer& camera, const View& c, const View& n, const cv::Mat& image,
+               const SpanRasterizer& shadow, double occlusion_tolerance, float* J, float* mask) {
+  const Eigen::Matrix3d A = n.R * c.R.transpose();
+  const Eigen::Vector3d b = n.t - A * c.t;
+  const Intrinsics& kc = c.intrinsics;
+  ReprojectionRow p;
+  for (int i = 0; i < 3; ++i) {
+    p.ray_dx[i] = static_cast<float>(A(i, 0) / kc.fx);
+    p.b[i] = static_cast<float>(b[i]);
+  }
+  p.fx = static_cast<float>(n.intrinsics.fx);
+  p.fy = static_cast<float>(n.intrinsics.fy);
+  p.cx = static_cast<float>(n.intrinsics.cx);
+  p.cy = static_cast<float>(n.intrinsics.cy);
+  p.width = image.cols;
+  p.height = image.rows;
+  p.max_depth_ratio = static_cast<float>(1 + occlusion_tolerance);
+  const int width = camera.width();
+  CV_Assert(image.isContinuous());
+  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  for (int row = 0; row < camera.height(); ++row) {
+    const Eigen::Vector3d ray0 = A * Eigen::Vector3d((0.5 - kc.cx) / kc.fx,
+                                                     (row + 0.5 - kc.cy) / kc.fy, 1.0);
+    for (int i = 0; i < 3; ++i) p.ray0[i] = static_cast<float>(ray0[i]);
+    const size_t offset = static_cast<size_t>(row) * width;
+    (avx2 ? ReprojectRowAvx2 : ReprojectRow)(p, camera.inverse_depth().data() + offset,
+                                             shadow.inverse_depth().data(), image.ptr<float>(),
+                                             J + offset, mask + offset, width);
+  }
+}
+
+// What one thread finds over its share of the offsets.
+struct ChunkResult {
+  std::vector<TileWinner> best;
+  int64_t covered_pixels = 0, valid_hypotheses = 0;
+  double raster_s = 0, reproject_s = 0, ncc_s = 0, reduce_s = 0;
+};
+
+ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep,
+                         const std::vector<Eigen::Vector3d>& normals,
+                         const std::vector<int>& offsets) {
+  const SweepOptions& options = job.options;
+  const View& view = prep.camera.view;
+  const int width = view.intrinsics.width, height = view.intrinsics.height;
+  const size_t pixels = static_cast<size_t>(width) * height;
+  const int num_neighbours = static_cast<int>(prep.neighbours.size());
+  ChunkResult out;
+  out.best.resize(prep.tiles.NumTiles());
+  SpanRasterizer camera_raster(view, prep.near, /*keep_face=*/true);
+  std::vector<SpanRasterizer> shadow_maps;
+  for (const SweepCamera& n : prep.neighbours) shadow_maps.emplace_back(n.view, prep.near, false);
+  WindowedNcc ncc(width, height, options.gaussian_sigma_px, options.min_texture_variance,
+                  options.min_window_weight);
+  ncc.SetCamera(prep.camera.image);
+  std::vector<float> J(pixels), mask(pixels);
+  std::vector<std::vector<float>> maps(num_neighbours, std::vector<float>(pixels));
+  std::vector<const float*> map_pointers;
+  for (const auto& m : maps) map_pointers.push_back(m.data());
+  const Eigen::Vector3d center = view.Center();
+  const float threshold = static_cast<float>(options.ncc_threshold);
+  Timer stage;
+  for (const int k : offsets) {
+    stage.Restart();
+    const auto soup = SweepFacets(job.mesh, normals, center, prep.alpha * k);
+    camera_raster.Clear();
+    for (auto& s : shadow_maps) s.Clear();
+    for (size_t f = 0; f < soup.size(); ++f) {
+      const auto& t = soup[f];
+      camera_raster.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
+      for (auto& s : shadow_maps) s.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
+    }
+    for (int32_t f : camera_raster.face()) out.covered_pixels += f >= 0;
+    out.raster_s += stage.Seconds();
+    for (int j = 0; j < num_neighbours; ++j) {
+      stage.Restart();
+      Reproject(camera_raster, view, prep.neighbours[j].view, prep.neighbours[j].image,
+                shadow_maps[j], options.occlusion_tolerance, J.data(), mask.data());
+      out.reproject_s += stage.Seconds();
+      stage.Restart();
+      out.valid_hypotheses += ncc.Run(J.data(), mask.data(), maps[j].data());
+      out.ncc_s += stage.Seconds();
+    }
+    stage.Restart();
+    UpdateTileWinners(prep.tiles, k, map_pointers, camera_raster.face().data(), nullptr,
+                      threshold, &out.best);
+    out.reduce_s += stage.Seconds();
+  }
+  return out;
+}
+
+// Where C's ray through the winner's pixel centre meets the plane of its swept facet.
+Eigen::Vector3d WinnerPosition(const TileWinner& w, const SweepJob& job, const PreparedSweep& prep,
+                               const std::vector<Eigen::Vector3d>& normals) {
+  const View& view = prep.camera.view;
+  const Eigen::Vector3d center = view.Center();
+  std::array<Eigen::Vector3d, 3> v;
+  for (int i = 0; i < 3; ++i) {
+    v[i] = SweepVertex(job.mesh.vertices[job.mesh.faces[w.face][i]], normals[w.face], center,
+                       prep.alpha * w.offset);
+  }
+  const Eigen::Vector3d n = (v[1] - v[0]).cross(v[2] - v[0]);
+  const Eigen::Vector3d ray = view.PixelRay(Eigen::Vector2d(w.col + 0.5, w.row + 0.5));
+  const double s = n.dot(v[0] - center) / n.dot(ray);
+  return center + s * ray;
+}
+
+}  // namespace
+
+SweepResult CpuSweepKernel::Run(const SweepJob& job) {
+  Timer total;
+  const PreparedSweep prep = PrepareSweep(job);
+  SweepResult result;
+  result.stats = PreparedSweepStats(prep);
+  SweepStats& stats = result.stats;
+  const std::vector<Eigen::Vector3d> normals = FaceNormals(job.mesh);
+  // Contiguous shares of the offsets, one per thread.
+  const int num_offsets = static_cast<int>(prep.offsets.size());
+  const int chunks = std::clamp(cv::getNumThreads(), 1, num_offsets);
+  std::vector<std::vector<int>> shares(chunks);
+  for (int i = 0; i < num_offsets; ++i) {
+    shares[static_cast<int64_t>(i) * chunks / num_offsets].push_back(prep.offsets[i]);
+  }
+  stats.prepare_s = total.Seconds();
+  std::vector<ChunkResult> found(chunks);
+  cv::parallel_for_(
+      cv::Range(0, chunks),
+      [&](const cv::Range& range) {
+        for (int c = range.start; c < range.end; ++c) {
+          found[c] = SweepOffsets(job, prep, normals, shares[c]);
+        }
+      },
+      chunks);
+  // In offset order with strict comparison: the same winners as one thread would find.
+  std::vector<TileWinner> best(prep.tiles.NumTiles());
+  for (const ChunkResult& chunk : found) {
+    for (size_t t = 0; t < best.size(); ++t) {
+      if (chunk.best[t].neighbour >= 0 && chunk.best[t].ncc > best[t].ncc) best[t] = chunk.best[t];
+    }
+    stats.covered_pixels += chunk.covered_pixels;
+    stats.valid_hypotheses += chunk.valid_hypotheses;
+    stats.raster_s += chunk.raster_s;
+    stats.reproject_s += chunk.reproject_s;
+    stats.ncc_s += chunk.ncc_s;
+    stats.reduce_s += chunk.reduce_s;
+  }
+  for (TileWinner& tile : best) {
+    if (tile.neighbour < 0) continue;
+    tile.position = WinnerPosition(tile, job, prep, normals);
+    result.points.push_back(MakeSweepPoint(tile, prep));
+  }
+  stats.total_s = total.Seconds();
+  return result;
+}
+
+}  // namespace ms

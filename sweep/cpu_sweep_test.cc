@@ -1,0 +1,248 @@
+// The fast CPU kernel (sweep/cpu_sweep.h) against the exact reference, piece by piece: the
+// recursive Gaussian against GaussianWindow, the span rasteriser against SoftwareRasterizer, the
+// recursive NCC against WeightedNcc, and end to end the same tile winners on the parity scenes
+// (the GLSL kernel's, sweep/glsl_sweep_test.cc). Tolerances are those of docs/sweep.md.
+#include "sweep/cpu_sweep.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/core.hpp>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "base/error.h"
+#include "base/testing.h"
+#include "sweep/recursive_gaussian.h"
+#include "sweep/reference_sweep.h"
+#include "sweep/software_raster.h"
+#include "sweep/span_raster.h"
+#include "sweep/sweep_parity_testing.h"
+#include "sweep/sweep_test_scene.h"
+#include "sweep/windowed_ncc.h"
+
+namespace ms {
+namespace {
+
+// ---- The recursive Gaussian ----
+
+TEST(RecursiveGaussian, TapsFollowTheTruncatedGaussian) {
+  for (double sigma : {0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 24.0}) {
+    SCOPED_TRACE(sigma);
+    const RecursiveGaussian g = RecursiveGaussian::Make(sigma);
+    const cv::Mat window = GaussianWindow(sigma);
+    ASSERT_EQ(window.rows, 2 * g.radius + 1);
+    double peak = 0, worst = 0, l1 = 0, sum = 0;
+    for (int m = -g.radius; m <= g.radius; ++m) {
+      const double exact = window.at<float>(m + g.radius);
+      peak = std::max(peak, exact);
+      worst = std::max(worst, std::abs(g.Tap(m) - exact));
+      l1 += std::abs(g.Tap(m) - exact);
+      sum += g.Tap(m);
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-12);
+    EXPECT_EQ(g.Tap(g.radius + 1), 0);
+    EXPECT_LT(worst, 6e-4 * peak);  // docs/sweep.md
+    EXPECT_LT(l1, 1e-3);
+  }
+}
+
+TEST(RecursiveGaussian, RecursionsEqualTheTruncatedConvolution) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  for (double sigma : {0.7, 3.0, 8.0}) {
+    const RecursiveGaussian g = RecursiveGaussian::Make(sigma);
+    for (int n : {1, 5, 40, 100}) {  // shorter and longer than the window
+      std::vector<double> x(n);
+      for (double& v : x) v = uniform(rng);
+      const std::vector<double> y = RecursiveGaussianFilter(g, x);
+      for (int i = 0; i < n; ++i) {
+        double direct = 0;
+        for (int m = -g.radius; m <= g.radius; ++m) {
+          if (i + m >= 0 && i + m < n) direct += g.Tap(m) * x[i + m];
+        }
+        ASSERT_NEAR(y[i], direct, 1e-12) << "sigma " << sigma << " n " << n << " i " << i;
+      }
+    }
+  }
+}
+
+// ---- The span rasteriser ----
+
+TEST(SpanRasterizer, SamePixelsAsTheSoftwareRasterizer) {
+  View view = LookAtView({0.3, -0.2, 3}, {0, 0, 0}, 97, 61, 90);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> xy(-1.6, 1.6), z(-0.5, 2.9);
+  SoftwareRasterizer reference(view, 0.05, true);
+  SpanRasterizer fast(view, 0.05, true);
+  std::vector<std::array<Eigen::Vector3d, 3>> triangles;
+  // A fan sharing edges and vertices (fill rule), random triangles, some crossing the near
+  // plane (z up to 2.9 with the camera at 3) and some seen edge on.
+  const Eigen::Vector3d hub(0.05, 0.02, 0.1);
+  for (int i = 0; i < 12; ++i) {
+    const double a = 2 * M_PI * i / 12, b = 2 * M_PI * (i + 1) / 12;
+    triangles.push_back({hub, Eigen::Vector3d(std::cos(a), std::sin(a), 0),
+                         Eigen::Vector3d(std::cos(b), std::sin(b), 0)});
+  }
+  for (int i = 0; i < 60; ++i) {
+    triangles.push_back({Eigen::Vector3d(xy(rng), xy(rng), z(rng)),
+                         Eigen::Vector3d(xy(rng), xy(rng), z(rng)),
+                         Eigen::Vector3d(xy(rng), xy(rng), z(rng))});
+  }
+  triangles.push_back({Eigen::Vector3d(0.3, -0.2, 1), Eigen::Vector3d(0.3, -0.2, 2),
+                       Eigen::Vector3d(0.5, 0.5, 1)});
+  for (size_t f = 0; f < triangles.size(); ++f) {
+    const auto& t = triangles[f];
+    reference.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
+    fast.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
+  }
+  int covered = 0, different_face = 0;
+  for (int row = 0; row < view.intrinsics.height; ++row) {
+    for (int col = 0; col < view.intrinsics.width; ++col) {
+      const size_t i = reference.Index(col, row);
+      const int32_t f = reference.face()[i];
+      ASSERT_EQ(f >= 0, fast.face()[i] >= 0) << col << "," << row;
+      if (f < 0) continue;
+      ++covered;
+      // Near-equal depths of two triangles may resolve differently in float.
+      if (fast.face()[i] != f) {
+        ++different_face;
+        continue;
+      }
+      ASSERT_NEAR(1.0 / fast.inverse_depth()[i], reference.depth()[i], 1e-5 * reference.depth()[i]);
+    }
+  }
+  EXPECT_GT(covered, 3000);
+  EXPECT_LE(different_face, covered / 1000);
+}
+
+// ---- The recursive NCC ----
+
+cv::Mat NoiseImage(int width, int height, uint64_t seed) {
+  cv::Mat image(height, width, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(image, cv::RNG::UNIFORM, 0.0, 1.0);
+  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.5);
+  return image;
+}
+
+TEST(WindowedNcc, MatchesWeightedNcc) {
+  const int width = 131, height = 77;
+  const cv::Mat I = NoiseImage(width, height, 1);
+  // J: I warped a little, plus noise, with a mask that has holes, an edge band and a
+  // ragged silhouette.
+  cv::Mat J = 0.7 * I + 0.2 + 0.05 * NoiseImage(width, height, 2);
+  cv::Mat mask(I.size(), CV_8U, cv::Scalar(255));
+  mask(cv::Rect(90, 0, 41, 77)) = 0;
+  cv::circle(mask, {40, 30}, 9, cv::Scalar(0), -1);
+  for (int row = 0; row < height; ++row) mask.at<uint8_t>(row, 60 + row % 7) = 0;
+  for (double sigma : {2.0, 4.0, 8.0}) {
+    SCOPED_TRACE(sigma);
+    cv::Mat expected;
+    const int64_t defined = WeightedNcc(I, J, mask, GaussianWindow(sigma), 1e-4, 0.5, &expected);
+    std::vector<float> j(width * height), m(width * height), ncc(width * height);
+    for (int row = 0; row < height; ++row) {
+      for (int col = 0; col < width; ++col) {
+        const bool valid = mask.at<uint8_t>(row, col) != 0;
+        j[row * width + col] = valid ? J.at<float>(row, col) - 0.5f : 0.0f;
+        m[row * width + col] = valid ? 1.0f : 0.0f;
+      }
+    }
+    WindowedNcc fast(width, height, sigma, 1e-4, 0.5);
+    fast.SetCamera(I);
+    const int64_t fast_defined = fast.Run(j.data(), m.data(), ncc.data());
+    EXPECT_NEAR(static_cast<double>(fast_defined), defined, 0.002 * defined);
+    double worst = 0;
+    int only_one = 0;
+    for (int i = 0; i < width * height; ++i) {
+      const float e = expected.ptr<float>()[i];
+      if (std::isnan(e) != std::isnan(ncc[i])) ++only_one;
+      if (!std::isnan(e) && !std::isnan(ncc[i])) worst = std::max<double>(worst, std::abs(e - ncc[i]));
+    }
+    std::printf("sigma %.0f: %lld defined, %d defined in one only, worst NCC difference %.1e\n",
+                sigma, static_cast<long long>(defined), only_one, worst);
+    EXPECT_LE(only_one, 0.002 * defined);
+    EXPECT_LT(worst, 2e-3);
+  }
+}
+
+// ---- End to end ----
+
+SweepJob MakeJob(const PyramidScene& scene, const Mesh& mesh) {
+  SweepJob job = MakePyramidSweepJob(scene, mesh);
+  job.options.gaussian_sigma_px = 4;
+  job.options.tile_size_px = 10;
+  return job;
+}
+
+const PyramidScene& NoisyPyramid() {
+  static const PyramidScene scene = [] {
+    PyramidSceneOptions options;
+    options.noise_stddev = 0.01;
+    return MakePyramidScene(options);
+  }();
+  return scene;
+}
+
+TEST(CpuSweep, PyramidFromAFlatSquareLikeTheReference) {
+  const SweepJob job = MakeJob(NoisyPyramid(), MakeFlatSquare(0.15, 1.3, 8));
+  const SweepResult ref = ReferenceSweepKernel().Run(job);
+  const SweepResult cpu = CpuSweepKernel().Run(job);
+  ExpectSameWinners(ref, cpu, ref.stats.median_depth, "cpu");
+  std::printf("  %s\n  reference: %s\n", cpu.stats.Summary().c_str(), ref.stats.Summary().c_str());
+}
+
+TEST(CpuSweep, TrueMeshWithOcclusionAndDefaultWindow) {
+  const PyramidScene& scene = NoisyPyramid();
+  Mesh mesh = scene.truth;
+  const int32_t base = static_cast<int32_t>(mesh.vertices.size());
+  mesh.vertices.insert(
+      mesh.vertices.end(),
+      {{0.35, -0.35, 0.9}, {0.75, -0.35, 0.9}, {0.75, 0.05, 0.9}, {0.35, 0.05, 0.9}});
+  mesh.faces.push_back({base, base + 1, base + 2});
+  mesh.faces.push_back({base, base + 2, base + 3});
+  SweepJob job = MakeJob(scene, mesh);
+  job.options.num_offsets = 5;
+  job.options.alpha = 0.03;
+  job.options.gaussian_sigma_px = 8;
+  const SweepResult ref = ReferenceSweepKernel().Run(job);
+  ASSERT_GT(ref.points.size(), 30u);
+  ExpectSameWinners(ref, CpuSweepKernel().Run(job), ref.stats.median_depth, "cpu, occluder");
+}
+
+TEST(CpuSweep, ThreadsDoNotChangeTheResult) {
+  const SweepJob job = MakeJob(NoisyPyramid(), MakeFlatSquare(0.12, 1.3, 4));
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);
+  const SweepResult one = CpuSweepKernel().Run(job);
+  cv::setNumThreads(4);
+  const SweepResult four = CpuSweepKernel().Run(job);
+  cv::setNumThreads(threads);
+  ASSERT_EQ(one.points.size(), four.points.size());
+  ASSERT_GT(one.points.size(), 20u);
+  for (size_t i = 0; i < one.points.size(); ++i) {
+    EXPECT_EQ(one.points[i].position, four.points[i].position);
+    EXPECT_EQ(one.points[i].ncc, four.points[i].ncc);
+    EXPECT_EQ(one.points[i].cameras, four.points[i].cameras);
+  }
+  EXPECT_EQ(one.stats.valid_hypotheses, four.stats.valid_hypotheses);
+}
+
+TEST(CpuSweep, BlankTextureAndBadJobs) {
+  PyramidSceneOptions blank;
+  blank.texture_contrast = 0;
+  const SweepResult none =
+      CpuSweepKernel().Run(MakeJob(MakePyramidScene(blank), MakeFlatSquare(0.15, 1.3, 8)));
+  EXPECT_EQ(none.points.size(), 0u);
+  EXPECT_EQ(none.stats.valid_hypotheses, 0);
+  EXPECT_GT(none.stats.covered_pixels, 0);
+  SweepJob job = MakeJob(NoisyPyramid(), MakeFlatSquare(0.15, 1.3, 2));
+  job.neighbours[1].image = cv::Mat(31, 40, CV_32F, cv::Scalar(0.5));
+  CpuSweepKernel kernel;
+  testing::ExpectInputError([&] { kernel.Run(job); }, {"image"});
+}
+
+}  // namespace
+}  // namespace ms

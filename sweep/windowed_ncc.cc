@@ -1,0 +1,304 @@
+#include "sweep/windowed_ncc.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "base/check.h"
+
+// The hot loops are compiled for AVX2+FMA and for the baseline; the loader picks one.
+#define MS_VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+
+namespace ms {
+namespace {
+
+constexpr int kLanes = WindowedNcc::kLanes;
+constexpr int kQuantities = WindowedNcc::kQuantities;
+constexpr double kVarianceFloor = 1e-5;  // as WeightedNcc: float round-off of a flat window
+
+struct FloatGaussian {
+  float pr[2], pi[2], tr[2], ti[2], wr[2], wi[2];
+  int radius;
+};
+
+FloatGaussian ToFloat(const RecursiveGaussian& g) {
+  FloatGaussian f;
+  for (int k = 0; k < 2; ++k) {
+    f.pr[k] = static_cast<float>(g.pole[k].real());
+    f.pi[k] = static_cast<float>(g.pole[k].imag());
+    f.tr[k] = static_cast<float>(g.tail[k].real());
+    f.ti[k] = static_cast<float>(g.tail[k].imag());
+    f.wr[k] = static_cast<float>(g.weight[k].real());
+    f.wi[k] = static_cast<float>(g.weight[k].imag());
+  }
+  f.radius = g.radius;
+  return f;
+}
+
+// One step of the causal recursion down a row of columns (see recursive_gaussian.h):
+// s = pole s + x - tail x_tail per pole; y = the output.
+MS_VECTOR_CLONES void CausalRow(const FloatGaussian& g, float* __restrict s0r,
+                                float* __restrict s0i, float* __restrict s1r,
+                                float* __restrict s1i, const float* __restrict x,
+                                const float* __restrict x_tail, float* __restrict y, int n) {
+  const float p0r = g.pr[0], p0i = g.pi[0], p1r = g.pr[1], p1i = g.pi[1];
+  const float t0r = g.tr[0], t0i = g.ti[0], t1r = g.tr[1], t1i = g.ti[1];
+  const float w0r = g.wr[0], w0i = g.wi[0], w1r = g.wr[1], w1i = g.wi[1];
+  for (int i = 0; i < n; ++i) {
+    const float xv = x[i], tv = x_tail[i];
+    const float a0r = p0r * s0r[i] - p0i * s0i[i] + xv - t0r * tv;
+    const float a0i = p0r * s0i[i] + p0i * s0r[i] - t0i * tv;
+    const float a1r = p1r * s1r[i] - p1i * s1i[i] + xv - t1r * tv;
+    const float a1i = p1r * s1i[i] + p1i * s1r[i] - t1i * tv;
+    s0r[i] = a0r;
+    s0i[i] = a0i;
+    s1r[i] = a1r;
+    s1i[i] = a1i;
+    y[i] = w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i;
+  }
+}
+
+// One step of the anticausal recursion: a = pole (a + x_next) - tail x_tail; out = causal + its
+// output.
+MS_VECTOR_CLONES void AnticausalRow(const FloatGaussian& g, float* __restrict s0r,
+                                    float* __restrict s0i, float* __restrict s1r,
+                                    float* __restrict s1i, const float* __restrict x_next,
+                                    const float* __restrict x_tail,
+                                    const float* __restrict causal, float* __restrict out,
+                                    int n) {
+  const float p0r = g.pr[0], p0i = g.pi[0], p1r = g.pr[1], p1i = g.pi[1];
+  const float t0r = g.tr[0], t0i = g.ti[0], t1r = g.tr[1], t1i = g.ti[1];
+  const float w0r = g.wr[0], w0i = g.wi[0], w1r = g.wr[1], w1i = g.wi[1];
+  for (int i = 0; i < n; ++i) {
+    const float tv = x_tail[i];
+    const float u0 = s0r[i] + x_next[i], u1 = s1r[i] + x_next[i];
+    const float a0r = p0r * u0 - p0i * s0i[i] - t0r * tv;
+    const float a0i = p0r * s0i[i] + p0i * u0 - t0i * tv;
+    const float a1r = p1r * u1 - p1i * s1i[i] - t1r * tv;
+    const float a1i = p1r * s1i[i] + p1i * u1 - t1i * tv;
+    s0r[i] = a0r;
+    s0i[i] = a0i;
+    s1r[i] = a1r;
+    s1i[i] = a1i;
+    out[i] = causal[i] + w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i;
+  }
+}
+
+// Eight floats (the rows of a block), held in registers. The helpers are internal and inlined,
+// so the AVX calling convention GCC warns about never crosses a library boundary.
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef float Lanes __attribute__((vector_size(32)));
+
+inline Lanes LoadLanes(const float* p) {
+  Lanes v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+
+inline void StoreLanes(float* p, Lanes v) { __builtin_memcpy(p, &v, sizeof v); }
+
+// The horizontal recursions of one quantity over a block of 8 rows ([col][lane]).
+MS_VECTOR_CLONES void HorizontalBlock(const FloatGaussian& g, const float* __restrict in,
+                                      float* __restrict out, int n) {
+  static_assert(kLanes * sizeof(float) == sizeof(Lanes));
+  const float p0r = g.pr[0], p0i = g.pi[0], p1r = g.pr[1], p1i = g.pi[1];
+  const float t0r = g.tr[0], t0i = g.ti[0], t1r = g.tr[1], t1i = g.ti[1];
+  const float w0r = g.wr[0], w0i = g.wi[0], w1r = g.wr[1], w1i = g.wi[1];
+  const int r = g.radius;
+  Lanes s0r = {}, s0i = {}, s1r = {}, s1i = {};
+  for (int col = 0; col < n; ++col) {
+    const Lanes x = LoadLanes(in + col * kLanes);
+    const Lanes t = col > r ? LoadLanes(in + (col - r - 1) * kLanes) : Lanes{};
+    const Lanes a0r = p0r * s0r - p0i * s0i + x - t0r * t;
+    const Lanes a0i = p0r * s0i + p0i * s0r - t0i * t;
+    const Lanes a1r = p1r * s1r - p1i * s1i + x - t1r * t;
+    const Lanes a1i = p1r * s1i + p1i * s1r - t1i * t;
+    s0r = a0r;
+    s0i = a0i;
+    s1r = a1r;
+    s1i = a1i;
+    StoreLanes(out + col * kLanes, w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i);
+  }
+  s0r = s0i = s1r = s1i = Lanes{};
+  for (int col = n - 1; col >= 0; --col) {
+    const Lanes x = col + 1 < n ? LoadLanes(in + (col + 1) * kLanes) : Lanes{};
+    const Lanes t = col + r + 1 < n ? LoadLanes(in + (col + r + 1) * kLanes) : Lanes{};
+    const Lanes u0 = s0r + x, u1 = s1r + x;
+    const Lanes a0r = p0r * u0 - p0i * s0i - t0r * t;
+    const Lanes a0i = p0r * s0i + p0i * u0 - t0i * t;
+    const Lanes a1r = p1r * u1 - p1i * s1i - t1r * t;
+    const Lanes a1i = p1r * s1i + p1i * u1 - t1i * t;
+    s0r = a0r;
+    s0i = a0i;
+    s1r = a1r;
+    s1i = a1i;
+    StoreLanes(out + col * kLanes,
+               LoadLanes(out + col * kLanes) + w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i);
+  }
+}
+
+MS_VECTOR_CLONES void RowProducts(const float* __restrict i, const float* __restrict ii,
+                                  const float* __restrict j, const float* __restrict m,
+                                  float* __restrict q0, float* __restrict q1,
+                                  float* __restrict q2, float* __restrict q3,
+                                  float* __restrict q4, float* __restrict q5, int n) {
+  for (int c = 0; c < n; ++c) {
+    q0[c] = m[c];
+    q1[c] = m[c] * i[c];
+    q2[c] = j[c];
+    q3[c] = m[c] * ii[c];
+    q4[c] = j[c] * j[c];
+    q5[c] = i[c] * j[c];
+  }
+}
+
+// NCC of up to 8 rows of a block from their six sums ([quantity][col][lane]): WeightedNcc's
+// formula, 8 rows at a time. Returns the number of defined pixels.
+MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
+                                  const float* __restrict mask, float* __restrict ncc, int width,
+                                  int rows, double min_texture_variance,
+                                  double min_window_weight) {
+  typedef int32_t LaneMask __attribute__((vector_size(32)));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float min_variance = static_cast<float>(min_texture_variance);
+  const float min_weight = static_cast<float>(min_window_weight);
+  const float floor = static_cast<float>(kVarianceFloor);
+  int64_t defined = 0;
+  for (int col = 0; col < width; ++col) {
+    const size_t s = static_cast<size_t>(col) * kLanes;
+    const Lanes w = LoadLanes(sums + s);
+    const Lanes inv_w = 1.0f / w;
+    const Lanes mean_i = LoadLanes(sums + plane + s) * inv_w;
+    const Lanes mean_j = LoadLanes(sums + 2 * plane + s) * inv_w;
+    const Lanes ii = LoadLanes(sums + 3 * plane + s) * inv_w;
+    const Lanes jj = LoadLanes(sums + 4 * plane + s) * inv_w;
+    const Lanes ij = LoadLanes(sums + 5 * plane + s) * inv_w;
+    const Lanes var_i = ii - mean_i * mean_i, var_j = jj - mean_j * mean_j;
+    const LaneMask ok = (w >= min_weight) & (var_i > min_variance) & (var_i > floor * ii) &
+                        (var_j > min_variance) & (var_j > floor * jj);
+    const Lanes product = var_i * var_j;
+    Lanes root;
+    for (int l = 0; l < kLanes; ++l) root[l] = __builtin_sqrtf(product[l] > 0 ? product[l] : 0);
+    Lanes value = (ij - mean_i * mean_j) / root;
+    value = value > 1.0f ? Lanes{} + 1.0f : value;
+    value = value < -1.0f ? Lanes{} - 1.0f : value;
+    for (int lane = 0; lane < rows; ++lane) {
+      const size_t index = static_cast<size_t>(lane) * width + col;
+      const bool valid = mask[index] > 0 && ok[lane];
+      ncc[index] = valid ? value[lane] : nan;
+      defined += valid;
+    }
+  }
+  return defined;
+}
+
+// Row `row`'s values of one quantity into lane `lane` of a block ([col][lane]).
+MS_VECTOR_CLONES void ToLane(const float* __restrict row, float* __restrict block, int lane,
+                             int n) {
+  for (int c = 0; c < n; ++c) block[c * kLanes + lane] = row[c];
+}
+
+}  // namespace
+
+WindowedNcc::WindowedNcc(int width, int height, double sigma_px, double min_texture_variance,
+                         double min_window_weight)
+    : width_(width),
+      height_(height),
+      gaussian_(RecursiveGaussian::Make(sigma_px)),
+      min_texture_variance_(min_texture_variance),
+      min_window_weight_(min_window_weight) {
+  MS_CHECK(width > 0 && height > 0) << "bad NCC image size";
+  const size_t n = static_cast<size_t>(width) * height;
+  i_.resize(n);
+  ii_.resize(n);
+  causal_.resize(n * kQuantities);
+  state_.resize(static_cast<size_t>(kQuantities) * 4 * width);
+  x_.resize(static_cast<size_t>(kQuantities) * width);
+  x_tail_.resize(x_.size());
+  zeros_.assign(x_.size(), 0.0f);
+  block_.resize(static_cast<size_t>(kQuantities) * width * kLanes);
+  sums_.resize(block_.size());
+}
+
+void WindowedNcc::SetCamera(const cv::Mat& image) {
+  MS_CHECK(image.type() == CV_32F && image.cols == width_ && image.rows == height_)
+      << "NCC camera image of the wrong size or type";
+  for (int row = 0; row < height_; ++row) {
+    const float* in = image.ptr<float>(row);
+    float* i = i_.data() + static_cast<size_t>(row) * width_;
+    float* ii = ii_.data() + static_cast<size_t>(row) * width_;
+    for (int c = 0; c < width_; ++c) {
+      i[c] = in[c] - 0.5f;
+      ii[c] = i[c] * i[c];
+    }
+  }
+}
+
+void WindowedNcc::Products(int row, float* out) const {
+  const size_t offset = static_cast<size_t>(row) * width_;
+  const int n = width_;
+  RowProducts(i_.data() + offset, ii_.data() + offset, J_ + offset, mask_ + offset, out,
+              out + n, out + 2 * n, out + 3 * n, out + 4 * n, out + 5 * n, n);
+}
+
+int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
+  J_ = J;
+  mask_ = mask;
+  const FloatGaussian g = ToFloat(gaussian_);
+  const int w = width_, r = gaussian_.radius;
+  const auto state = [&](int q, int k) { return state_.data() + (static_cast<size_t>(q) * 4 + k) * w; };
+
+  // Pass 1: vertical causal, top to bottom.
+  std::fill(state_.begin(), state_.end(), 0.0f);
+  for (int row = 0; row < height_; ++row) {
+    Products(row, x_.data());
+    const float* tail = zeros_.data();
+    if (row > r) {
+      Products(row - r - 1, x_tail_.data());
+      tail = x_tail_.data();
+    }
+    float* out = causal_.data() + static_cast<size_t>(row) * kQuantities * w;
+    for (int q = 0; q < kQuantities; ++q) {
+      CausalRow(g, state(q, 0), state(q, 1), state(q, 2), state(q, 3), x_.data() + q * w,
+                tail + q * w, out + q * w, w);
+    }
+  }
+
+  // Pass 2: vertical anticausal, bottom to top; horizontal and NCC every 8 rows.
+  std::fill(state_.begin(), state_.end(), 0.0f);
+  std::vector<float> row_sums(w);
+  const float* next = zeros_.data();  // products of the row below
+  int64_t defined = 0;
+  for (int row = height_ - 1; row >= 0; --row) {
+    const float* tail = zeros_.data();
+    if (row + r + 1 < height_) {
+      Products(row + r + 1, x_tail_.data());
+      tail = x_tail_.data();
+    }
+    const float* causal = causal_.data() + static_cast<size_t>(row) * kQuantities * w;
+    const int lane = row % kLanes;
+    for (int q = 0; q < kQuantities; ++q) {
+      AnticausalRow(g, state(q, 0), state(q, 1), state(q, 2), state(q, 3), next + q * w,
+                    tail + q * w, causal + q * w, row_sums.data(), w);
+      ToLane(row_sums.data(), block_.data() + static_cast<size_t>(q) * w * kLanes, lane, w);
+    }
+    Products(row, x_.data());
+    next = x_.data();
+    if (lane == 0) FinishBlock(row, ncc, &defined);
+  }
+  return defined;
+}
+
+void WindowedNcc::FinishBlock(int first_row, float* ncc, int64_t* defined) {
+  const int w = width_;
+  const int rows = std::min(kLanes, height_ - first_row);
+  for (int q = 0; q < kQuantities; ++q) {
+    HorizontalBlock(ToFloat(gaussian_), block_.data() + static_cast<size_t>(q) * w * kLanes,
+                    sums_.data() + static_cast<size_t>(q) * w * kLanes, w);
+  }
+  const size_t offset = static_cast<size_t>(first_row) * w;
+  *defined += NccBlock(sums_.data(), static_cast<size_t>(w) * kLanes, mask_ + offset,
+                       ncc + offset, w, rows, min_texture_variance_, min_window_weight_);
+}
+
+}  // namespace ms

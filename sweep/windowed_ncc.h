@@ -1,0 +1,50 @@
+// The fast CPU kernel's NCC (sweep/cpu_sweep.h): WeightedNcc's formula (sweep/reference_sweep.h)
+// with the six Gaussian-weighted sums taken by RecursiveGaussian (sweep/recursive_gaussian.h) in
+// O(1) per pixel, float32, vectorised, in two streaming passes over the image:
+//   1. top to bottom: the products of a row and the vertical causal recursion, stored;
+//   2. bottom to top: the vertical anticausal recursion, added to pass 1, and every 8 rows the
+//      horizontal recursions (8 rows in the SIMD lanes) and the NCC of those rows.
+// A workspace for one image size; reuse it across slabs (one per thread).
+#pragma once
+
+#include <cstdint>
+#include <opencv2/core/mat.hpp>
+#include <vector>
+
+#include "sweep/recursive_gaussian.h"
+
+namespace ms {
+
+class WindowedNcc {
+ public:
+  WindowedNcc(int width, int height, double sigma_px, double min_texture_variance,
+              double min_window_weight);
+
+  // I: C's image (CV_32F, width x height).
+  void SetCamera(const cv::Mat& image);
+  // J: the reprojected neighbour minus 0.5 where valid, 0 elsewhere; mask: 1 where valid, 0
+  // elsewhere (row-major, width x height). Writes NCC (NaN where undefined, as WeightedNcc)
+  // into `ncc` and returns the number of defined pixels.
+  int64_t Run(const float* J, const float* mask, float* ncc);
+
+  static constexpr int kQuantities = 6;  // m, mI, J, mI^2, J^2, IJ
+  static constexpr int kLanes = 8;       // rows per horizontal block
+
+ private:
+  void Products(int row, float* out) const;
+  void FinishBlock(int first_row, float* ncc, int64_t* defined);
+
+  int width_, height_;
+  RecursiveGaussian gaussian_;
+  double min_texture_variance_, min_window_weight_;
+  const float* J_ = nullptr;
+  const float* mask_ = nullptr;
+  std::vector<float> i_, ii_;      // I - 0.5 and its square
+  std::vector<float> causal_;      // pass 1: [row][quantity][col]
+  std::vector<float> state_;       // vertical recursions: [quantity][4][col]
+  std::vector<float> x_, x_tail_;  // products of two rows: [quantity][col]
+  std::vector<float> zeros_;
+  std::vector<float> block_, sums_;  // 8 rows: [quantity][col][lane]
+};
+
+}  // namespace ms
