@@ -10,11 +10,13 @@
 #include <cstdio>
 #include <memory>
 #include <opencv2/core/version.hpp>
+#include <string>
 
 #include "app/commands.h"
 #include "gl/context.h"
 #include "scene/scene.h"
 #include "scene/scene_io.h"
+#include "sweep/sweep_kernel_factory.h"
 
 namespace ms::app {
 namespace {
@@ -41,6 +43,10 @@ void RunInfo(const InfoOptions& options) {
   std::printf("  HDF5        %u.%u.%u\n", h5_major, h5_minor, h5_release);
   std::printf("  spdlog      %d.%d.%d\n", SPDLOG_VER_MAJOR, SPDLOG_VER_MINOR, SPDLOG_VER_PATCH);
   std::printf("  OpenGL      %s\n", gl::DescribeGl().c_str());
+  std::string why;
+  const std::unique_ptr<SweepKernel> kernel = MakeSweepKernel("auto", {}, &why);
+  std::printf("  sweep       kernel '%s' for --kernel auto: %s\n", kernel->Name().c_str(),
+              why.c_str());
   if (!options.input.empty()) {
     const SceneFormat format =
         options.from == "auto" ? DetectSceneFormat(options.input) : ParseSceneFormat(options.from);

@@ -1,6 +1,8 @@
 // `manisweep reconstruct`: the all-in-one local run. Starts a coordinator (in this process) and
 // N worker processes (this binary, `manisweep worker`) on loopback, shows progress, and stops
 // them all at the end or on Ctrl-C. Without --input it reconstructs the embedded default scene.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -128,7 +130,8 @@ void RunReconstruct(ReconstructCommandOptions& options) {
   if (options.worker_threads < 0) throw InputError("--worker-threads: must be >= 0");
   const std::vector<std::string> kernels = SweepKernelNames();
   if (std::find(kernels.begin(), kernels.end(), options.kernel) == kernels.end()) {
-    throw InputError("--kernel: '" + options.kernel + "' is not one of: auto, glsl, reference");
+    throw InputError(
+        fmt::format("--kernel: '{}' is not one of: {}", options.kernel, fmt::join(kernels, ", ")));
   }
   InitLogging("reconstruct");
   CoordinatorOptions& setup = options.coordinator;
@@ -242,7 +245,8 @@ void RegisterReconstructCommand(CLI::App& app) {
                   "kernel threads per worker (0 = cores / workers)")
       ->capture_default_str();
   cmd->add_option("--kernel", options->kernel,
-                  "sweep kernel of the workers (auto, reference, glsl)")
+                  fmt::format("sweep kernel of the workers: {} (auto = the fastest available)",
+                              fmt::join(SweepKernelNames(), ", ")))
       ->capture_default_str();
   cmd->add_option("--max-restarts", options->max_restarts,
                   "restarts of workers that die (-1 = twice the number of workers)")

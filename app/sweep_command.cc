@@ -26,7 +26,7 @@ struct SweepCommandOptions {
   std::string mesh;
   int camera = 0;
   std::string output;
-  std::string kernel = "glsl";
+  std::string kernel = "auto";
   bool reference = false;
   std::string gl_backend = "auto";
   NeighbourOptions neighbours;
@@ -39,8 +39,10 @@ void RunSweep(const SweepCommandOptions& options) {
   GlslSweepKernelOptions glsl;
   glsl.context.backend = gl::ParseGlBackend(options.gl_backend);
   // The GL context (and its shaders) before reading anything: a missing driver fails fast.
+  std::string why;
   std::unique_ptr<SweepKernel> kernel =
-      MakeSweepKernel(options.reference ? "reference" : options.kernel, glsl);
+      MakeSweepKernel(options.reference ? "reference" : options.kernel, glsl, &why);
+  spdlog::info("sweep: {} kernel ({})", kernel->Name(), why);
   if (const auto* g = dynamic_cast<const GlslSweepKernel*>(kernel.get())) {
     spdlog::info("sweep: GLSL kernel on {}", g->gl_info().Summary());
   }
@@ -96,9 +98,9 @@ void RegisterSweepCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--kernel", options->kernel,
                   "sweep kernel: glsl (OpenGL 4.3 through EGL: the GPU, else Mesa's llvmpipe), "
-                  "reference (the C++ reference, slow) or auto (glsl if a GL context can be "
-                  "created, else reference)")
-      ->check(CLI::IsMember({"auto", "glsl", "reference"}))
+                  "cpu (the fast CPU kernel), reference (the exact C++ reference, slow) or auto "
+                  "(glsl on a GPU, else cpu)")
+      ->check(CLI::IsMember(SweepKernelNames()))
       ->capture_default_str();
   cmd->add_flag("--reference", options->reference, "same as --kernel reference");
   cmd->add_option("--gl-backend", options->gl_backend,

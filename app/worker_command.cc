@@ -48,7 +48,8 @@ void RunWorker(WorkerCommandOptions& options) {
   w.cache.memory_bytes = static_cast<uint64_t>(options.image_cache_mb * 1048576);
   w.Check();
   if (options.threads > 0) cv::setNumThreads(options.threads);
-  std::unique_ptr<SweepKernel> kernel = MakeSweepKernel(options.kernel);
+  std::string why;
+  std::unique_ptr<SweepKernel> kernel = MakeSweepKernel(options.kernel, {}, &why);
   ZmqClientOptions client;
   client.connect = options.connect;
   client.max_message_bytes = w.limits.max_message_bytes;
@@ -61,11 +62,12 @@ void RunWorker(WorkerCommandOptions& options) {
   }
   if (!client.curve_secret_key_file.empty()) ReadCurveKeyFile(client.curve_secret_key_file, true);
   InstallStopSignals();
+  const std::string kernel_name = kernel->Name();  // the worker owns the kernel from here
   Worker worker(
       w, [client] { return MakeZmqClient(client); }, std::move(kernel));
   InitLogging("worker " + worker.id());
-  spdlog::info("worker {} connecting to {} (kernel {}, image cache {})", worker.id(),
-               options.connect, options.kernel,
+  spdlog::info("worker {} connecting to {} (kernel {} for --kernel {}: {}; image cache {})",
+               worker.id(), options.connect, kernel_name, options.kernel, why,
                w.cache.directory.empty() ? "default" : w.cache.directory);
   const WorkerSummary summary = worker.Run([] { return StopRequested(); });
   if (summary.exit_reason == "stopped by signal") throw CommandExit(kExitInterrupted);

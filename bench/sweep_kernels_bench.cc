@@ -147,7 +147,8 @@ int Main(int argc, char** argv) {
         std::unique_ptr<SweepKernel> owned;
         SweepKernel* kernel = glsl.get();
         if (k.name == "cpu") kernel = (owned = std::make_unique<CpuSweepKernel>()).get();
-        if (k.name == "reference") kernel = (owned = std::make_unique<ReferenceSweepKernel>()).get();
+        if (k.name == "reference")
+          kernel = (owned = std::make_unique<ReferenceSweepKernel>()).get();
         Sample s;
         Timer timer;
         const double cpu0 = ProcessCpuSeconds();
@@ -171,10 +172,11 @@ int Main(int argc, char** argv) {
       }
       const SweepStats& st = runs.back().result.stats;
       const double hyp = static_cast<double>(st.hypotheses);
-      table << width << "x" << height << "\t" << k.name << "\t" << k.threads << "\t"
-            << hyp / Median(wall) << "\t" << hyp / Median(cpu) << "\t" << Median(wall) << "\t"
-            << Median(cpu) << "\t" << st.raster_s << "\t" << st.reproject_s << "\t" << st.ncc_s
-            << "\t" << st.reduce_s << "\t" << runs.back().result.points.size() << "\t"
+      table << width << "x" << height << "\t" << k.name << "\t"
+            << (k.name == "glsl" ? "gl" : std::to_string(k.threads)) << "\t" << hyp / Median(wall)
+            << "\t" << hyp / Median(cpu) << "\t" << Median(wall) << "\t" << Median(cpu) << "\t"
+            << st.raster_s << "\t" << st.reproject_s << "\t" << st.ncc_s << "\t" << st.reduce_s
+            << "\t" << runs.back().result.points.size() << "\t"
             << (reference ? std::to_string(SameWinners(*reference, runs.back().result)) + "/" +
                                 std::to_string(reference->points.size())
                           : "-")

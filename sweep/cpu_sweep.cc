@@ -1,8 +1,9 @@
 #include "sweep/cpu_sweep.h"
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <cmath>
-#include <immintrin.h>
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
 
@@ -16,19 +17,20 @@ namespace {
 
 // C's camera frame to a neighbour's pixels, for reprojecting C's pixel rays.
 struct ReprojectionRow {
-  float ray0[3], ray_dx[3];  // A r(col) = ray0 + col ray_dx, A = R_n R_c^T, r = K_c^-1 (col+.5, row+.5, 1)
-  float b[3];                // t_n - A t_c
+  float ray0[3],
+      ray_dx[3];  // A r(col) = ray0 + col ray_dx, A = R_n R_c^T, r = K_c^-1 (col+.5, row+.5, 1)
+  float b[3];     // t_n - A t_c
   float fx, fy, cx, cy;
-  int width, height;  // the neighbour's image
+  int width, height;      // the neighbour's image
   float max_depth_ratio;  // 1 + occlusion tolerance
 };
 
 // I_k^j for one row of C (ReprojectNeighbour's rules, in float, without branches): J = bilinear
 // sample - 0.5 and mask 1 where valid, 0 elsewhere. The portable version; ReprojectRowAvx2
 // below is the same 8 pixels at a time.
-void ReprojectRow(
-    const ReprojectionRow& p, const float* __restrict inv_z, const float* __restrict shadow,
-    const float* __restrict image, float* __restrict J, float* __restrict mask, int n) {
+void ReprojectRow(const ReprojectionRow& p, const float* __restrict inv_z,
+                  const float* __restrict shadow, const float* __restrict image,
+                  float* __restrict J, float* __restrict mask, int n) {
   const float u_max = p.width - 0.5f, v_max = p.height - 0.5f;
   for (int col = 0; col < n; ++col) {
     const float z = 1.0f / inv_z[col];  // +inf where empty
@@ -60,7 +62,8 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
     const float* __restrict image, float* __restrict J, float* __restrict mask, int n) {
   const __m256 half = _mm256_set1_ps(0.5f), one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
   const __m256 u_max = _mm256_set1_ps(p.width - 0.5f), v_max = _mm256_set1_ps(p.height - 0.5f);
-  const __m256i last_col = _mm256_set1_epi32(p.width - 1), last_row = _mm256_set1_epi32(p.height - 1);
+  const __m256i last_col = _mm256_set1_epi32(p.width - 1),
+                last_row = _mm256_set1_epi32(p.height - 1);
   const __m256i stride = _mm256_set1_epi32(p.width), one_i = _mm256_set1_epi32(1);
   const __m256 ratio = _mm256_set1_ps(p.max_depth_ratio);
   const __m256 iota = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
@@ -69,24 +72,25 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
     const __m256 c = _mm256_add_ps(_mm256_set1_ps(static_cast<float>(col)), iota);
     const __m256 iz = _mm256_loadu_ps(inv_z + col);
     const __m256 z = _mm256_div_ps(one, iz);
-    const __m256 x = _mm256_fmadd_ps(
-        _mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[0]), _mm256_set1_ps(p.ray0[0])), z,
-        _mm256_set1_ps(p.b[0]));
-    const __m256 y = _mm256_fmadd_ps(
-        _mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[1]), _mm256_set1_ps(p.ray0[1])), z,
-        _mm256_set1_ps(p.b[1]));
-    const __m256 d = _mm256_fmadd_ps(
-        _mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[2]), _mm256_set1_ps(p.ray0[2])), z,
-        _mm256_set1_ps(p.b[2]));
+    const __m256 x =
+        _mm256_fmadd_ps(_mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[0]), _mm256_set1_ps(p.ray0[0])),
+                        z, _mm256_set1_ps(p.b[0]));
+    const __m256 y =
+        _mm256_fmadd_ps(_mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[1]), _mm256_set1_ps(p.ray0[1])),
+                        z, _mm256_set1_ps(p.b[1]));
+    const __m256 d =
+        _mm256_fmadd_ps(_mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[2]), _mm256_set1_ps(p.ray0[2])),
+                        z, _mm256_set1_ps(p.b[2]));
     const __m256 u = _mm256_add_ps(_mm256_div_ps(_mm256_mul_ps(_mm256_set1_ps(p.fx), x), d),
                                    _mm256_set1_ps(p.cx));
     const __m256 v = _mm256_add_ps(_mm256_div_ps(_mm256_mul_ps(_mm256_set1_ps(p.fy), y), d),
                                    _mm256_set1_ps(p.cy));
-    __m256 ok = _mm256_and_ps(_mm256_cmp_ps(iz, zero, _CMP_GT_OQ), _mm256_cmp_ps(d, zero, _CMP_GT_OQ));
-    ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(u, half, _CMP_GE_OQ),
-                                         _mm256_cmp_ps(u, u_max, _CMP_LE_OQ)));
-    ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(v, half, _CMP_GE_OQ),
-                                         _mm256_cmp_ps(v, v_max, _CMP_LE_OQ)));
+    __m256 ok =
+        _mm256_and_ps(_mm256_cmp_ps(iz, zero, _CMP_GT_OQ), _mm256_cmp_ps(d, zero, _CMP_GT_OQ));
+    ok = _mm256_and_ps(
+        ok, _mm256_and_ps(_mm256_cmp_ps(u, half, _CMP_GE_OQ), _mm256_cmp_ps(u, u_max, _CMP_LE_OQ)));
+    ok = _mm256_and_ps(
+        ok, _mm256_and_ps(_mm256_cmp_ps(v, half, _CMP_GE_OQ), _mm256_cmp_ps(v, v_max, _CMP_LE_OQ)));
     const __m256 uc = _mm256_blendv_ps(half, u, ok), vc = _mm256_blendv_ps(half, v, ok);
     const __m256i tu = _mm256_min_epi32(_mm256_cvttps_epi32(uc), last_col);
     const __m256i tv = _mm256_min_epi32(_mm256_cvttps_epi32(vc), last_row);
@@ -139,8 +143,8 @@ void Reproject(const SpanRasterizer& camera, const View& c, const View& n, const
   CV_Assert(image.isContinuous());
   static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   for (int row = 0; row < camera.height(); ++row) {
-    const Eigen::Vector3d ray0 = A * Eigen::Vector3d((0.5 - kc.cx) / kc.fx,
-                                                     (row + 0.5 - kc.cy) / kc.fy, 1.0);
+    const Eigen::Vector3d ray0 =
+        A * Eigen::Vector3d((0.5 - kc.cx) / kc.fx, (row + 0.5 - kc.cy) / kc.fy, 1.0);
     for (int i = 0; i < 3; ++i) p.ray0[i] = static_cast<float>(ray0[i]);
     const size_t offset = static_cast<size_t>(row) * width;
     (avx2 ? ReprojectRowAvx2 : ReprojectRow)(p, camera.inverse_depth().data() + offset,
@@ -201,8 +205,8 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep,
       out.ncc_s += stage.Seconds();
     }
     stage.Restart();
-    UpdateTileWinners(prep.tiles, k, map_pointers, camera_raster.face().data(), nullptr,
-                      threshold, &out.best);
+    UpdateTileWinners(prep.tiles, k, map_pointers, camera_raster.face().data(), nullptr, threshold,
+                      &out.best);
     out.reduce_s += stage.Seconds();
   }
   return out;

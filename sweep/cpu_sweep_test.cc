@@ -91,8 +91,8 @@ TEST(SpanRasterizer, SamePixelsAsTheSoftwareRasterizer) {
                          Eigen::Vector3d(xy(rng), xy(rng), z(rng)),
                          Eigen::Vector3d(xy(rng), xy(rng), z(rng))});
   }
-  triangles.push_back({Eigen::Vector3d(0.3, -0.2, 1), Eigen::Vector3d(0.3, -0.2, 2),
-                       Eigen::Vector3d(0.5, 0.5, 1)});
+  triangles.push_back(
+      {Eigen::Vector3d(0.3, -0.2, 1), Eigen::Vector3d(0.3, -0.2, 2), Eigen::Vector3d(0.5, 0.5, 1)});
   for (size_t f = 0; f < triangles.size(); ++f) {
     const auto& t = triangles[f];
     reference.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
@@ -159,7 +159,8 @@ TEST(WindowedNcc, MatchesWeightedNcc) {
     for (int i = 0; i < width * height; ++i) {
       const float e = expected.ptr<float>()[i];
       if (std::isnan(e) != std::isnan(ncc[i])) ++only_one;
-      if (!std::isnan(e) && !std::isnan(ncc[i])) worst = std::max<double>(worst, std::abs(e - ncc[i]));
+      if (!std::isnan(e) && !std::isnan(ncc[i]))
+        worst = std::max<double>(worst, std::abs(e - ncc[i]));
     }
     std::printf("sigma %.0f: %lld defined, %d defined in one only, worst NCC difference %.1e\n",
                 sigma, static_cast<long long>(defined), only_one, worst);

@@ -8,7 +8,8 @@ namespace ms {
 namespace {
 
 // Deriche's fit of exp(-x^2 / 2 sigma^2), x >= 0, in units of sigma:
-//   sum_k (a_k cos(w_k x) + b_k sin(w_k x)) exp(-l_k x) = sum_k Re((a_k - i b_k) e^{(-l_k + i w_k) x}).
+//   sum_k (a_k cos(w_k x) + b_k sin(w_k x)) exp(-l_k x) = sum_k Re((a_k - i b_k) e^{(-l_k + i w_k)
+//   x}).
 constexpr double kA[2] = {1.68, -0.6803};
 constexpr double kB[2] = {3.735, -0.2598};
 constexpr double kOmega[2] = {0.6318, 1.997};

@@ -21,7 +21,7 @@
 namespace ms {
 
 struct RecursiveGaussian {
-  int radius = 0;  // ceil(3 sigma), as GaussianWindow
+  int radius = 0;                                          // ceil(3 sigma), as GaussianWindow
   std::array<std::complex<double>, 2> pole, tail, weight;  // tail = pole^(radius + 1)
 
   static RecursiveGaussian Make(double sigma_px);
@@ -31,6 +31,7 @@ struct RecursiveGaussian {
 
 // y = h * x on one signal with zeros outside it, by the recursions above (double precision; the
 // kernel's vectorised passes do the same in float). For tests.
-std::vector<double> RecursiveGaussianFilter(const RecursiveGaussian& g, const std::vector<double>& x);
+std::vector<double> RecursiveGaussianFilter(const RecursiveGaussian& g,
+                                            const std::vector<double>& x);
 
 }  // namespace ms

@@ -23,8 +23,7 @@ struct ParityBounds {
 };
 
 inline void ExpectSameWinners(const SweepResult& ref, const SweepResult& gl, double depth,
-                       const std::string& label,
-                       const ParityBounds& bounds = {}) {
+                              const std::string& label, const ParityBounds& bounds = {}) {
   std::map<std::pair<float, float>, const SweepPoint*> by_pixel;
   for (const SweepPoint& p : ref.points) by_pixel[{p.pixel.x(), p.pixel.y()}] = &p;
   int same = 0;

@@ -38,9 +38,9 @@ FloatGaussian ToFloat(const RecursiveGaussian& g) {
 // One step of the causal recursion down a row of columns (see recursive_gaussian.h):
 // s = pole s + x - tail x_tail per pole; y = the output.
 MS_VECTOR_CLONES void CausalRow(const FloatGaussian& g, float* __restrict s0r,
-                                float* __restrict s0i, float* __restrict s1r,
-                                float* __restrict s1i, const float* __restrict x,
-                                const float* __restrict x_tail, float* __restrict y, int n) {
+                                float* __restrict s0i, float* __restrict s1r, float* __restrict s1i,
+                                const float* __restrict x, const float* __restrict x_tail,
+                                float* __restrict y, int n) {
   const float p0r = g.pr[0], p0i = g.pi[0], p1r = g.pr[1], p1i = g.pi[1];
   const float t0r = g.tr[0], t0i = g.ti[0], t1r = g.tr[1], t1i = g.ti[1];
   const float w0r = g.wr[0], w0i = g.wi[0], w1r = g.wr[1], w1i = g.wi[1];
@@ -63,9 +63,8 @@ MS_VECTOR_CLONES void CausalRow(const FloatGaussian& g, float* __restrict s0r,
 MS_VECTOR_CLONES void AnticausalRow(const FloatGaussian& g, float* __restrict s0r,
                                     float* __restrict s0i, float* __restrict s1r,
                                     float* __restrict s1i, const float* __restrict x_next,
-                                    const float* __restrict x_tail,
-                                    const float* __restrict causal, float* __restrict out,
-                                    int n) {
+                                    const float* __restrict x_tail, const float* __restrict causal,
+                                    float* __restrict out, int n) {
   const float p0r = g.pr[0], p0i = g.pi[0], p1r = g.pr[1], p1i = g.pi[1];
   const float t0r = g.tr[0], t0i = g.ti[0], t1r = g.tr[1], t1i = g.ti[1];
   const float w0r = g.wr[0], w0i = g.wi[0], w1r = g.wr[1], w1i = g.wi[1];
@@ -139,9 +138,9 @@ MS_VECTOR_CLONES void HorizontalBlock(const FloatGaussian& g, const float* __res
 
 MS_VECTOR_CLONES void RowProducts(const float* __restrict i, const float* __restrict ii,
                                   const float* __restrict j, const float* __restrict m,
-                                  float* __restrict q0, float* __restrict q1,
-                                  float* __restrict q2, float* __restrict q3,
-                                  float* __restrict q4, float* __restrict q5, int n) {
+                                  float* __restrict q0, float* __restrict q1, float* __restrict q2,
+                                  float* __restrict q3, float* __restrict q4, float* __restrict q5,
+                                  int n) {
   for (int c = 0; c < n; ++c) {
     q0[c] = m[c];
     q1[c] = m[c] * i[c];
@@ -156,8 +155,7 @@ MS_VECTOR_CLONES void RowProducts(const float* __restrict i, const float* __rest
 // formula, 8 rows at a time. Returns the number of defined pixels.
 MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
                                   const float* __restrict mask, float* __restrict ncc, int width,
-                                  int rows, double min_texture_variance,
-                                  double min_window_weight) {
+                                  int rows, double min_texture_variance, double min_window_weight) {
   typedef int32_t LaneMask __attribute__((vector_size(32)));
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float min_variance = static_cast<float>(min_texture_variance);
@@ -237,8 +235,8 @@ void WindowedNcc::SetCamera(const cv::Mat& image) {
 void WindowedNcc::Products(int row, float* out) const {
   const size_t offset = static_cast<size_t>(row) * width_;
   const int n = width_;
-  RowProducts(i_.data() + offset, ii_.data() + offset, J_ + offset, mask_ + offset, out,
-              out + n, out + 2 * n, out + 3 * n, out + 4 * n, out + 5 * n, n);
+  RowProducts(i_.data() + offset, ii_.data() + offset, J_ + offset, mask_ + offset, out, out + n,
+              out + 2 * n, out + 3 * n, out + 4 * n, out + 5 * n, n);
 }
 
 int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
@@ -246,7 +244,9 @@ int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
   mask_ = mask;
   const FloatGaussian g = ToFloat(gaussian_);
   const int w = width_, r = gaussian_.radius;
-  const auto state = [&](int q, int k) { return state_.data() + (static_cast<size_t>(q) * 4 + k) * w; };
+  const auto state = [&](int q, int k) {
+    return state_.data() + (static_cast<size_t>(q) * 4 + k) * w;
+  };
 
   // Pass 1: vertical causal, top to bottom.
   std::fill(state_.begin(), state_.end(), 0.0f);
@@ -297,8 +297,8 @@ void WindowedNcc::FinishBlock(int first_row, float* ncc, int64_t* defined) {
                     sums_.data() + static_cast<size_t>(q) * w * kLanes, w);
   }
   const size_t offset = static_cast<size_t>(first_row) * w;
-  *defined += NccBlock(sums_.data(), static_cast<size_t>(w) * kLanes, mask_ + offset,
-                       ncc + offset, w, rows, min_texture_variance_, min_window_weight_);
+  *defined += NccBlock(sums_.data(), static_cast<size_t>(w) * kLanes, mask_ + offset, ncc + offset,
+                       w, rows, min_texture_variance_, min_window_weight_);
 }
 
 }  // namespace ms
