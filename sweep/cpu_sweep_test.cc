@@ -120,20 +120,12 @@ TEST(SpanRasterizer, SamePixelsAsTheSoftwareRasterizer) {
 
 // ---- The recursive NCC ----
 
-cv::Mat NoiseImage(int width, int height, uint64_t seed) {
-  cv::Mat image(height, width, CV_32F);
-  cv::RNG rng(seed);
-  rng.fill(image, cv::RNG::UNIFORM, 0.0, 1.0);
-  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.5);
-  return image;
-}
-
 TEST(WindowedNcc, MatchesWeightedNcc) {
   const int width = 131, height = 77;
-  const cv::Mat I = NoiseImage(width, height, 1);
+  const cv::Mat I = BlurredNoiseImage(width, height, 1);
   // J: I warped a little, plus noise, with a mask that has holes, an edge band and a
   // ragged silhouette.
-  cv::Mat J = 0.7 * I + 0.2 + 0.05 * NoiseImage(width, height, 2);
+  cv::Mat J = 0.7 * I + 0.2 + 0.05 * BlurredNoiseImage(width, height, 2);
   cv::Mat mask(I.size(), CV_8U, cv::Scalar(255));
   mask(cv::Rect(90, 0, 41, 77)) = 0;
   cv::circle(mask, {40, 30}, 9, cv::Scalar(0), -1);
@@ -171,24 +163,8 @@ TEST(WindowedNcc, MatchesWeightedNcc) {
 
 // ---- End to end ----
 
-SweepJob MakeJob(const PyramidScene& scene, const Mesh& mesh) {
-  SweepJob job = MakePyramidSweepJob(scene, mesh);
-  job.options.gaussian_sigma_px = 4;
-  job.options.tile_size_px = 10;
-  return job;
-}
-
-const PyramidScene& NoisyPyramid() {
-  static const PyramidScene scene = [] {
-    PyramidSceneOptions options;
-    options.noise_stddev = 0.01;
-    return MakePyramidScene(options);
-  }();
-  return scene;
-}
-
 TEST(CpuSweep, PyramidFromAFlatSquareLikeTheReference) {
-  const SweepJob job = MakeJob(NoisyPyramid(), MakeFlatSquare(0.15, 1.3, 8));
+  const SweepJob job = MakeSmallSweepJob(NoisyPyramidScene(), MakeFlatSquare(0.15, 1.3, 8));
   const SweepResult ref = ReferenceSweepKernel().Run(job);
   const SweepResult cpu = CpuSweepKernel().Run(job);
   ExpectSameWinners(ref, cpu, ref.stats.median_depth, "cpu");
@@ -196,15 +172,8 @@ TEST(CpuSweep, PyramidFromAFlatSquareLikeTheReference) {
 }
 
 TEST(CpuSweep, TrueMeshWithOcclusionAndDefaultWindow) {
-  const PyramidScene& scene = NoisyPyramid();
-  Mesh mesh = scene.truth;
-  const int32_t base = static_cast<int32_t>(mesh.vertices.size());
-  mesh.vertices.insert(
-      mesh.vertices.end(),
-      {{0.35, -0.35, 0.9}, {0.75, -0.35, 0.9}, {0.75, 0.05, 0.9}, {0.35, 0.05, 0.9}});
-  mesh.faces.push_back({base, base + 1, base + 2});
-  mesh.faces.push_back({base, base + 2, base + 3});
-  SweepJob job = MakeJob(scene, mesh);
+  const PyramidScene& scene = NoisyPyramidScene();
+  SweepJob job = MakeSmallSweepJob(scene, TruthWithOccluder(scene));
   job.options.num_offsets = 5;
   job.options.alpha = 0.03;
   job.options.gaussian_sigma_px = 8;
@@ -214,7 +183,7 @@ TEST(CpuSweep, TrueMeshWithOcclusionAndDefaultWindow) {
 }
 
 TEST(CpuSweep, ThreadsDoNotChangeTheResult) {
-  const SweepJob job = MakeJob(NoisyPyramid(), MakeFlatSquare(0.12, 1.3, 4));
+  const SweepJob job = MakeSmallSweepJob(NoisyPyramidScene(), MakeFlatSquare(0.12, 1.3, 4));
   const int threads = cv::getNumThreads();
   cv::setNumThreads(1);
   const SweepResult one = CpuSweepKernel().Run(job);
@@ -234,12 +203,12 @@ TEST(CpuSweep, ThreadsDoNotChangeTheResult) {
 TEST(CpuSweep, BlankTextureAndBadJobs) {
   PyramidSceneOptions blank;
   blank.texture_contrast = 0;
-  const SweepResult none =
-      CpuSweepKernel().Run(MakeJob(MakePyramidScene(blank), MakeFlatSquare(0.15, 1.3, 8)));
+  const SweepResult none = CpuSweepKernel().Run(
+      MakeSmallSweepJob(MakePyramidScene(blank), MakeFlatSquare(0.15, 1.3, 8)));
   EXPECT_EQ(none.points.size(), 0u);
   EXPECT_EQ(none.stats.valid_hypotheses, 0);
   EXPECT_GT(none.stats.covered_pixels, 0);
-  SweepJob job = MakeJob(NoisyPyramid(), MakeFlatSquare(0.15, 1.3, 2));
+  SweepJob job = MakeSmallSweepJob(NoisyPyramidScene(), MakeFlatSquare(0.15, 1.3, 2));
   job.neighbours[1].image = cv::Mat(31, 40, CV_32F, cv::Scalar(0.5));
   CpuSweepKernel kernel;
   testing::ExpectInputError([&] { kernel.Run(job); }, {"image"});

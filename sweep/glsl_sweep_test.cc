@@ -51,36 +51,6 @@ class GlslSweepTest : public gl::SharedGlContextTest {
 GlslSweepKernel* GlslSweepTest::loops_ = nullptr;
 GlslSweepKernel* GlslSweepTest::unrolled_ = nullptr;
 
-// The reference test's job (reference_sweep_test.cc): small window and tiles for 160x120.
-SweepJob MakeJob(const PyramidScene& scene, const Mesh& mesh) {
-  SweepJob job = MakePyramidSweepJob(scene, mesh);
-  job.options.gaussian_sigma_px = 4;
-  job.options.tile_size_px = 10;
-  return job;
-}
-
-const PyramidScene& NoisyPyramid() {
-  static const PyramidScene scene = [] {
-    PyramidSceneOptions options;
-    options.noise_stddev = 0.01;  // sensor noise, independent per camera
-    return MakePyramidScene(options);
-  }();
-  return scene;
-}
-
-// The true surface plus a small square floating at z = 0.9 above one side: it hides ground
-// that C sees from a neighbour, so the shadow-map test matters.
-Mesh TruthWithOccluder(const PyramidScene& scene) {
-  Mesh mesh = scene.truth;
-  const int32_t base = static_cast<int32_t>(mesh.vertices.size());
-  mesh.vertices.insert(
-      mesh.vertices.end(),
-      {{0.35, -0.35, 0.9}, {0.75, -0.35, 0.9}, {0.75, 0.05, 0.9}, {0.35, 0.05, 0.9}});
-  mesh.faces.push_back({base, base + 1, base + 2});  // counter-clockwise from above
-  mesh.faces.push_back({base, base + 2, base + 3});
-  return mesh;
-}
-
 // The reference's steps for offset k (docs/sweep.md), as ReferenceSweepKernel runs them.
 struct ReferenceStages {
   PreparedSweep prep;
@@ -141,8 +111,8 @@ NccDiff CompareNcc(const cv::Mat& a, const cv::Mat& b) {
 // ---- Per stage ----
 
 TEST_F(GlslSweepTest, StagesMatchTheReference) {
-  const PyramidScene& scene = NoisyPyramid();
-  SweepJob job = MakeJob(scene, TruthWithOccluder(scene));
+  const PyramidScene& scene = NoisyPyramidScene();
+  SweepJob job = MakeSmallSweepJob(scene, TruthWithOccluder(scene));
   job.options.alpha = 0.02;
   const int k = 3;  // a swept mesh, not the input one
   const ReferenceStages ref = RunReferenceStages(job, k);
@@ -271,8 +241,8 @@ TEST_F(GlslSweepTest, StagesMatchTheReference) {
 
 // Tile winners are compared by ExpectSameWinners (sweep/sweep_parity_testing.h).
 TEST_F(GlslSweepTest, PyramidFromAFlatSquareLikeTheReference) {
-  const PyramidScene& scene = NoisyPyramid();
-  const SweepJob job = MakeJob(scene, MakeFlatSquare(0.15, 1.3, 8));
+  const PyramidScene& scene = NoisyPyramidScene();
+  const SweepJob job = MakeSmallSweepJob(scene, MakeFlatSquare(0.15, 1.3, 8));
   const SweepResult ref = ReferenceSweepKernel().Run(job);
   for (GlslSweepKernel* kernel : Kernels()) {
     SCOPED_TRACE(Label(kernel));
@@ -294,8 +264,8 @@ TEST_F(GlslSweepTest, PyramidFromAFlatSquareLikeTheReference) {
 }
 
 TEST_F(GlslSweepTest, TrueMeshWithOcclusionAndDefaultWindow) {
-  const PyramidScene& scene = NoisyPyramid();
-  SweepJob job = MakeJob(scene, TruthWithOccluder(scene));
+  const PyramidScene& scene = NoisyPyramidScene();
+  SweepJob job = MakeSmallSweepJob(scene, TruthWithOccluder(scene));
   job.options.num_offsets = 5;
   job.options.alpha = 0.03;
   job.options.gaussian_sigma_px = 8;  // the default window (radius 24)
@@ -309,7 +279,7 @@ TEST_F(GlslSweepTest, TrueMeshWithOcclusionAndDefaultWindow) {
 
 // (The loops variant where the variant does not matter: its shaders compile much faster.)
 TEST_F(GlslSweepTest, BatchingAndVariantsGiveTheSameResult) {
-  const SweepJob job = MakeJob(NoisyPyramid(), MakeFlatSquare(0.12, 1.3, 4));
+  const SweepJob job = MakeSmallSweepJob(NoisyPyramidScene(), MakeFlatSquare(0.12, 1.3, 4));
   const SweepResult whole = loops_->Run(job);
   GlslSweepKernelOptions one_at_a_time;
   one_at_a_time.blur = GlslBlurVariant::kLoops;
@@ -351,7 +321,7 @@ TEST_F(GlslSweepTest, ManyNeighboursAndPyramidLevels) {
   options.height = 72;
   options.supersample = 1;
   const PyramidScene scene = MakePyramidScene(options);
-  SweepJob job = MakeJob(scene, scene.truth);
+  SweepJob job = MakeSmallSweepJob(scene, scene.truth);
   job.neighbours.clear();
   for (int i = 0; i < 34; ++i) {
     SweepCamera n = scene.cameras[1 + i % 2];
@@ -380,10 +350,10 @@ TEST_F(GlslSweepTest, BlankAndFaintTexturesFindNothing) {
   const Mesh square = MakeFlatSquare(0.15, 1.3, 8);
   PyramidSceneOptions blank;
   blank.texture_contrast = 0;
-  const SweepJob blank_job = MakeJob(MakePyramidScene(blank), square);
+  const SweepJob blank_job = MakeSmallSweepJob(MakePyramidScene(blank), square);
   PyramidSceneOptions faint;
   faint.texture_contrast = 0.015;
-  SweepJob faint_job = MakeJob(MakePyramidScene(faint), square);
+  SweepJob faint_job = MakeSmallSweepJob(MakePyramidScene(faint), square);
   for (GlslSweepKernel* kernel : Kernels()) {
     SCOPED_TRACE(Label(kernel));
     const SweepResult none = kernel->Run(blank_job);
@@ -409,7 +379,7 @@ TEST_F(GlslSweepTest, BadJobsThrowInputErrorLikeTheReference) {
   options.height = 30;
   options.supersample = 1;
   const PyramidScene scene = MakePyramidScene(options);
-  const SweepJob good = MakeJob(scene, MakeFlatSquare(0.15, 1.3, 2));
+  const SweepJob good = MakeSmallSweepJob(scene, MakeFlatSquare(0.15, 1.3, 2));
   GlslSweepKernel& kernel = *unrolled_;
   EXPECT_NO_THROW(kernel.Run(good));
 
@@ -508,7 +478,7 @@ TEST_F(GlslSweepTest, FactoryMakesKernelsByName) {
   // A kernel made by the factory owns its context and binds it only while it runs, so it
   // works on its own thread and then on other threads in turn (the worker process runs each
   // job on a fresh thread).
-  const SweepJob job = MakeJob(NoisyPyramid(), MakeFlatSquare(0.15, 1.3, 2));
+  const SweepJob job = MakeSmallSweepJob(NoisyPyramidScene(), MakeFlatSquare(0.15, 1.3, 2));
   GlslSweepKernelOptions loops;
   loops.blur = GlslBlurVariant::kLoops;
   std::unique_ptr<SweepKernel> kernel = MakeSweepKernel("auto", loops);

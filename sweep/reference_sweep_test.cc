@@ -16,16 +16,8 @@ namespace {
 
 // ---- NCC ----
 
-cv::Mat NoiseImage(int width, int height, uint64_t seed) {
-  cv::Mat image(height, width, CV_32F);
-  cv::RNG rng(seed);
-  rng.fill(image, cv::RNG::UNIFORM, 0.0, 1.0);
-  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.5);
-  return image;
-}
-
 TEST(WeightedNcc, SelfNegativeAndAffine) {
-  const cv::Mat I = NoiseImage(64, 48, 1);
+  const cv::Mat I = BlurredNoiseImage(64, 48, 1);
   const cv::Mat mask(I.size(), CV_8U, cv::Scalar(255));
   const cv::Mat window = GaussianWindow(4);
   cv::Mat ncc;
@@ -44,17 +36,17 @@ TEST(WeightedNcc, SelfNegativeAndAffine) {
     for (int c = 0; c < I.cols; ++c) ASSERT_NEAR(ncc.at<float>(r, c), 1.0, 1e-4);
   }
   // An unrelated image correlates weakly.
-  WeightedNcc(I, NoiseImage(64, 48, 2), mask, window, 1e-4, 0.2, &ncc);
+  WeightedNcc(I, BlurredNoiseImage(64, 48, 2), mask, window, 1e-4, 0.2, &ncc);
   EXPECT_LT(std::abs(ncc.at<float>(24, 32)), 0.6);
 }
 
 TEST(WeightedNcc, MaskVarianceAndWindowWeight) {
-  const cv::Mat I = NoiseImage(64, 48, 3);
+  const cv::Mat I = BlurredNoiseImage(64, 48, 3);
   cv::Mat J = I.clone();
   cv::Mat mask(I.size(), CV_8U, cv::Scalar(255));
   // Right half of J is garbage but masked out: only valid pixels count, so NCC stays 1 on the
   // left half; masked pixels themselves are undefined.
-  J(cv::Rect(32, 0, 32, 48)) = NoiseImage(32, 48, 4);
+  J(cv::Rect(32, 0, 32, 48)) = BlurredNoiseImage(32, 48, 4);
   mask(cv::Rect(32, 0, 32, 48)) = 0;
   const cv::Mat window = GaussianWindow(3);
   cv::Mat ncc;
@@ -218,16 +210,6 @@ struct PyramidFixture {
   SweepJob job;
 };
 
-// The paper's synthetic experiment in small: the current mesh is the flat square at half the
-// pyramid's height, so it is up to 0.15 away from the true surface.
-SweepJob MakeJob(const PyramidScene& scene, const Mesh& mesh) {
-  SweepJob job = MakePyramidSweepJob(scene, mesh);
-  // Small images: smaller window and tiles than the defaults for 1-3 Mpixel images.
-  job.options.gaussian_sigma_px = 4;
-  job.options.tile_size_px = 10;
-  return job;
-}
-
 std::vector<double> SortedDistances(const PyramidScene& scene, const SweepResult& result) {
   std::vector<double> d;
   for (const SweepPoint& p : result.points) d.push_back(scene.Distance(p.position));
@@ -244,7 +226,7 @@ TEST(ReferenceSweep, PyramidFromAFlatSquare) {
   options.noise_stddev = 0.01;  // sensor noise, independent per camera
   const PyramidScene scene = MakePyramidScene(options);
   const Mesh square = MakeFlatSquare(0.15, 1.3, 8);
-  const SweepJob job = MakeJob(scene, square);
+  const SweepJob job = MakeSmallSweepJob(scene, square);
   ReferenceSweepKernel kernel;
   const SweepResult result = kernel.Run(job);
   const SweepStats& s = result.stats;
@@ -286,7 +268,7 @@ TEST(ReferenceSweep, PyramidFromAFlatSquare) {
 
 TEST(ReferenceSweep, TrueMeshMatchesAtOffsetZero) {
   const PyramidScene scene = MakePyramidScene();
-  SweepJob job = MakeJob(scene, scene.truth);
+  SweepJob job = MakeSmallSweepJob(scene, scene.truth);
   job.options.num_offsets = 3;
   job.options.alpha = 0.05;
   const SweepResult result = ReferenceSweepKernel().Run(job);
@@ -304,7 +286,7 @@ TEST(ReferenceSweep, BlankAndFaintTexturesFindNothing) {
   PyramidSceneOptions blank;
   blank.texture_contrast = 0;
   const PyramidScene blank_scene = MakePyramidScene(blank);
-  const SweepResult none = ReferenceSweepKernel().Run(MakeJob(blank_scene, square));
+  const SweepResult none = ReferenceSweepKernel().Run(MakeSmallSweepJob(blank_scene, square));
   EXPECT_EQ(none.points.size(), 0u);
   EXPECT_EQ(none.stats.valid_hypotheses, 0);
 
@@ -313,7 +295,7 @@ TEST(ReferenceSweep, BlankAndFaintTexturesFindNothing) {
   PyramidSceneOptions faint;
   faint.texture_contrast = 0.015;
   const PyramidScene faint_scene = MakePyramidScene(faint);
-  SweepJob job = MakeJob(faint_scene, square);
+  SweepJob job = MakeSmallSweepJob(faint_scene, square);
   EXPECT_EQ(ReferenceSweepKernel().Run(job).points.size(), 0u);
   job.options.min_texture_variance = 0;
   EXPECT_GT(ReferenceSweepKernel().Run(job).points.size(), 10u);
@@ -324,7 +306,7 @@ TEST(ReferenceSweep, PyramidLevelSweepsAtHalfResolution) {
   options.width = 320;
   options.height = 240;
   const PyramidScene scene = MakePyramidScene(options);
-  SweepJob job = MakeJob(scene, MakeFlatSquare(0.15, 1.3, 8));
+  SweepJob job = MakeSmallSweepJob(scene, MakeFlatSquare(0.15, 1.3, 8));
   job.options.max_image_dimension = 200;
   const SweepResult result = ReferenceSweepKernel().Run(job);
   EXPECT_EQ(result.stats.pyramid_level, 1);
@@ -343,7 +325,7 @@ TEST(ReferenceSweep, PyramidLevelSweepsAtHalfResolution) {
 
 TEST(ReferenceSweep, Deterministic) {
   const PyramidScene scene = MakePyramidScene();
-  const SweepJob job = MakeJob(scene, MakeFlatSquare(0.12, 1.3, 4));
+  const SweepJob job = MakeSmallSweepJob(scene, MakeFlatSquare(0.12, 1.3, 4));
   const SweepResult a = ReferenceSweepKernel().Run(job);
   const SweepResult b = ReferenceSweepKernel().Run(job);
   ASSERT_EQ(a.points.size(), b.points.size());
@@ -366,7 +348,7 @@ TEST(ReferenceSweep, BadJobsThrowInputError) {
   options.height = 30;
   options.supersample = 1;
   const PyramidScene scene = MakePyramidScene(options);
-  const SweepJob good = MakeJob(scene, MakeFlatSquare(0.15, 1.3, 2));
+  const SweepJob good = MakeSmallSweepJob(scene, MakeFlatSquare(0.15, 1.3, 2));
   EXPECT_NO_THROW(ReferenceSweepKernel().Run(good));
 
   SweepJob job = good;

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <limits>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "mesh/visible_mesh.h"
 #include "sweep/pyramid_geometry.h"
@@ -227,6 +228,41 @@ PyramidScene MakePyramidScene(const PyramidSceneOptions& options) {
     scene.cameras.push_back(std::move(camera));
   }
   return scene;
+}
+
+SweepJob MakeSmallSweepJob(const PyramidScene& scene, const Mesh& mesh) {
+  SweepJob job = MakePyramidSweepJob(scene, mesh);
+  job.options.gaussian_sigma_px = 4;
+  job.options.tile_size_px = 10;
+  return job;
+}
+
+const PyramidScene& NoisyPyramidScene() {
+  static const PyramidScene scene = [] {
+    PyramidSceneOptions options;
+    options.noise_stddev = 0.01;
+    return MakePyramidScene(options);
+  }();
+  return scene;
+}
+
+Mesh TruthWithOccluder(const PyramidScene& scene) {
+  Mesh mesh = scene.truth;
+  const int32_t base = static_cast<int32_t>(mesh.vertices.size());
+  mesh.vertices.insert(
+      mesh.vertices.end(),
+      {{0.35, -0.35, 0.9}, {0.75, -0.35, 0.9}, {0.75, 0.05, 0.9}, {0.35, 0.05, 0.9}});
+  mesh.faces.push_back({base, base + 1, base + 2});  // counter-clockwise from above
+  mesh.faces.push_back({base, base + 2, base + 3});
+  return mesh;
+}
+
+cv::Mat BlurredNoiseImage(int width, int height, uint64_t seed) {
+  cv::Mat image(height, width, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(image, cv::RNG::UNIFORM, 0.0, 1.0);
+  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.5);
+  return image;
 }
 
 }  // namespace ms

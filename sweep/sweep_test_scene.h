@@ -6,6 +6,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
+#include <opencv2/core/mat.hpp>
 #include <vector>
 
 #include "mesh/mesh.h"
@@ -45,6 +47,20 @@ SweepJob MakePyramidSweepJob(const PyramidScene& scene, const Mesh& mesh);
 // The benchmarks' job: a width x height (0: 3/4 width) pyramid with image noise 0.01, swept from
 // the flat square at half its height (16 x 16 cells).
 SweepJob MakeBenchmarkSweepJob(int width, int height = 0);
+
+// The parity tests' small jobs (sweep/*_sweep_test.cc): MakePyramidSweepJob with a window and
+// tiles for 160 x 120 images (sigma 4 px, 10 px tiles instead of the defaults for megapixels).
+SweepJob MakeSmallSweepJob(const PyramidScene& scene, const Mesh& mesh);
+
+// The default pyramid scene with sensor noise 0.01, independent per camera (built once).
+const PyramidScene& NoisyPyramidScene();
+
+// The true surface plus a small square floating at z = 0.9 above one side: it hides ground that
+// C sees from a neighbour, so the shadow-map test matters.
+Mesh TruthWithOccluder(const PyramidScene& scene);
+
+// Uniform noise in [0, 1] blurred by a Gaussian of sigma 1.5 px (CV_32F), for NCC tests.
+cv::Mat BlurredNoiseImage(int width, int height, uint64_t seed);
 
 // A view at `center` looking at `target`, image y pointing along -world_y as seen from above.
 View LookAtView(const Eigen::Vector3d& center, const Eigen::Vector3d& target, int width, int height,
