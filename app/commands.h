@@ -27,6 +27,7 @@ void RegisterCheckMeshCommand(CLI::App& app);
 void RegisterSweepCommand(CLI::App& app);
 void RegisterSynthCommand(CLI::App& app);
 void RegisterEvaluateCommand(CLI::App& app);
+void RegisterConsistencyCommand(CLI::App& app);
 void RegisterConvertCommand(CLI::App& app);
 void RegisterReconstructCommand(CLI::App& app);
 void RegisterCoordinatorCommand(CLI::App& app);

@@ -68,6 +68,7 @@ int main(int argc, char** argv) {
   ms::app::RegisterSweepCommand(app);
   ms::app::RegisterSynthCommand(app);
   ms::app::RegisterEvaluateCommand(app);
+  ms::app::RegisterConsistencyCommand(app);
   ms::app::RegisterRenderCommand(app);
   ms::app::RegisterConvertCommand(app);
   ms::app::RegisterReconstructCommand(app);

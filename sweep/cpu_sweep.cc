@@ -9,8 +9,6 @@
 
 #include "base/log.h"
 #include "sweep/reference_sweep.h"
-#include "sweep/span_raster.h"
-#include "sweep/windowed_ncc.h"
 
 namespace ms {
 namespace {
@@ -122,8 +120,9 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
   }
 }
 
-void Reproject(const SpanRasterizer& camera, const View& c, const View& n, const cv::Mat& image,
-               const SpanRasterizer& shadow, double occlusion_tolerance, float* J, float* mask) {
+void ReprojectThrough(const SpanRasterizer& camera, const View& c, const View& n,
+                      const cv::Mat& image, const SpanRasterizer& shadow,
+                      double occlusion_tolerance, float* J, float* mask) {
   const Eigen::Matrix3d A = n.R * c.R.transpose();
   const Eigen::Vector3d b = n.t - A * c.t;
   const Intrinsics& kc = c.intrinsics;
@@ -153,6 +152,50 @@ void Reproject(const SpanRasterizer& camera, const View& c, const View& n, const
   }
 }
 
+}  // namespace
+
+CpuSweepSlab::CpuSweepSlab(const SweepJob& job, const PreparedSweep& prep)
+    : job_(job),
+      prep_(prep),
+      normals_(FaceNormals(job.mesh)),
+      camera_raster_(prep.camera.view, prep.near, /*keep_face=*/true),
+      ncc_(prep.camera.view.intrinsics.width, prep.camera.view.intrinsics.height,
+           job.options.gaussian_sigma_px, job.options.min_texture_variance,
+           job.options.min_window_weight) {
+  for (const SweepCamera& n : prep.neighbours) shadow_maps_.emplace_back(n.view, prep.near, false);
+  ncc_.SetCamera(prep.camera.image);
+  const size_t pixels = camera_raster_.face().size();
+  J_.resize(pixels);
+  mask_.resize(pixels);
+}
+
+void CpuSweepSlab::Render(int k) {
+  const auto soup = SweepFacets(job_.mesh, normals_, prep_.camera.view.Center(), prep_.alpha * k);
+  camera_raster_.Clear();
+  for (auto& s : shadow_maps_) s.Clear();
+  for (size_t f = 0; f < soup.size(); ++f) {
+    const auto& t = soup[f];
+    camera_raster_.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
+    for (auto& s : shadow_maps_) s.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
+  }
+}
+
+int64_t CpuSweepSlab::CoveredPixels() const {
+  int64_t covered = 0;
+  for (int32_t f : camera_raster_.face()) covered += f >= 0;
+  return covered;
+}
+
+void CpuSweepSlab::Reproject(int j) {
+  ReprojectThrough(camera_raster_, prep_.camera.view, prep_.neighbours[j].view,
+                   prep_.neighbours[j].image, shadow_maps_[j], job_.options.occlusion_tolerance,
+                   J_.data(), mask_.data());
+}
+
+int64_t CpuSweepSlab::Ncc(float* out) { return ncc_.Run(J_.data(), mask_.data(), out); }
+
+namespace {
+
 // What one thread finds over its share of the offsets.
 struct ChunkResult {
   std::vector<TileWinner> best;
@@ -161,51 +204,33 @@ struct ChunkResult {
 };
 
 ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep,
-                         const std::vector<Eigen::Vector3d>& normals,
                          const std::vector<int>& offsets) {
-  const SweepOptions& options = job.options;
   const View& view = prep.camera.view;
-  const int width = view.intrinsics.width, height = view.intrinsics.height;
-  const size_t pixels = static_cast<size_t>(width) * height;
+  const size_t pixels = static_cast<size_t>(view.intrinsics.width) * view.intrinsics.height;
   const int num_neighbours = static_cast<int>(prep.neighbours.size());
   ChunkResult out;
   out.best.resize(prep.tiles.NumTiles());
-  SpanRasterizer camera_raster(view, prep.near, /*keep_face=*/true);
-  std::vector<SpanRasterizer> shadow_maps;
-  for (const SweepCamera& n : prep.neighbours) shadow_maps.emplace_back(n.view, prep.near, false);
-  WindowedNcc ncc(width, height, options.gaussian_sigma_px, options.min_texture_variance,
-                  options.min_window_weight);
-  ncc.SetCamera(prep.camera.image);
-  std::vector<float> J(pixels), mask(pixels);
+  CpuSweepSlab slab(job, prep);
   std::vector<std::vector<float>> maps(num_neighbours, std::vector<float>(pixels));
   std::vector<const float*> map_pointers;
   for (const auto& m : maps) map_pointers.push_back(m.data());
-  const Eigen::Vector3d center = view.Center();
-  const float threshold = static_cast<float>(options.ncc_threshold);
+  const float threshold = static_cast<float>(job.options.ncc_threshold);
   Timer stage;
   for (const int k : offsets) {
     stage.Restart();
-    const auto soup = SweepFacets(job.mesh, normals, center, prep.alpha * k);
-    camera_raster.Clear();
-    for (auto& s : shadow_maps) s.Clear();
-    for (size_t f = 0; f < soup.size(); ++f) {
-      const auto& t = soup[f];
-      camera_raster.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
-      for (auto& s : shadow_maps) s.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
-    }
-    for (int32_t f : camera_raster.face()) out.covered_pixels += f >= 0;
+    slab.Render(k);
+    out.covered_pixels += slab.CoveredPixels();
     out.raster_s += stage.Seconds();
     for (int j = 0; j < num_neighbours; ++j) {
       stage.Restart();
-      Reproject(camera_raster, view, prep.neighbours[j].view, prep.neighbours[j].image,
-                shadow_maps[j], options.occlusion_tolerance, J.data(), mask.data());
+      slab.Reproject(j);
       out.reproject_s += stage.Seconds();
       stage.Restart();
-      out.valid_hypotheses += ncc.Run(J.data(), mask.data(), maps[j].data());
+      out.valid_hypotheses += slab.Ncc(maps[j].data());
       out.ncc_s += stage.Seconds();
     }
     stage.Restart();
-    UpdateTileWinners(prep.tiles, k, map_pointers, camera_raster.face().data(), nullptr, threshold,
+    UpdateTileWinners(prep.tiles, k, map_pointers, slab.faces().data(), nullptr, threshold,
                       &out.best);
     out.reduce_s += stage.Seconds();
   }
@@ -250,7 +275,7 @@ SweepResult CpuSweepKernel::Run(const SweepJob& job) {
       cv::Range(0, chunks),
       [&](const cv::Range& range) {
         for (int c = range.start; c < range.end; ++c) {
-          found[c] = SweepOffsets(job, prep, normals, shares[c]);
+          found[c] = SweepOffsets(job, prep, shares[c]);
         }
       },
       chunks);

@@ -10,11 +10,43 @@
 // plane of the swept facet, which is where the reference's interpolation puts it.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
+#include "sweep/span_raster.h"
 #include "sweep/sweep_kernel.h"
+#include "sweep/windowed_ncc.h"
 
 namespace ms {
+
+// One swept mesh at a time, as the CPU kernel computes it: C's raster and the neighbours' shadow
+// maps, then per neighbour the reprojection and the NCC map. The kernel runs one per thread;
+// the photo-consistency measure (tools/consistency.h) uses offset 0, the mesh itself.
+class CpuSweepSlab {
+ public:
+  // `job` and `prep` (PrepareSweep(job)) must outlive the slab.
+  CpuSweepSlab(const SweepJob& job, const PreparedSweep& prep);
+  // Renders the job's mesh swept by offset k from C and from every neighbour.
+  void Render(int k);
+  // Reprojects neighbour j (an index into prep.neighbours) into C through the rendered surface.
+  void Reproject(int j);
+  // NCC of C's image against the last reprojection (row-major at the swept resolution, NaN where
+  // undefined); returns the number of defined pixels.
+  int64_t Ncc(float* out);
+  // C's face per pixel of the last rendering (-1: nothing drawn) and their count.
+  const std::vector<int32_t>& faces() const { return camera_raster_.face(); }
+  int64_t CoveredPixels() const;
+
+ private:
+  const SweepJob& job_;
+  const PreparedSweep& prep_;
+  std::vector<Eigen::Vector3d> normals_;
+  SpanRasterizer camera_raster_;
+  std::vector<SpanRasterizer> shadow_maps_;
+  WindowedNcc ncc_;
+  std::vector<float> J_, mask_;
+};
 
 class CpuSweepKernel : public SweepKernel {
  public:

@@ -22,22 +22,21 @@ std::unique_ptr<SweepKernel> MakeSweepKernel(const std::string& name,
   if (name == "glsl") return because("asked for"), std::make_unique<GlslSweepKernel>(glsl);
   if (name == "auto") {
     glsl.Check();  // bad options are the caller's error, not a reason to fall back
-    std::unique_ptr<GlslSweepKernel> gl;
+    std::unique_ptr<GlslSweepKernel> gpu;
     try {
-      gl = std::make_unique<GlslSweepKernel>(glsl);
+      gpu = std::make_unique<GlslSweepKernel>(glsl);
     } catch (const InternalError& e) {
-      because(fmt::format("no usable OpenGL 4.3 context ({}); the exact reference", e.what()));
-      spdlog::warn("GLSL sweep kernel unavailable, using the C++ reference (slow): {}", e.what());
-      return std::make_unique<ReferenceSweepKernel>();
+      because(fmt::format("no usable OpenGL 4.3 context ({})", e.what()));
+      return std::make_unique<CpuSweepKernel>();
     }
-    const gl::GlInfo& info = gl->gl_info();
-    // The CPU kernel is 3x faster than llvmpipe but not yet the default there: its Table 1
-    // figures differ from the exact kernels' (docs/sweep.md, "Which kernel auto picks").
-    because(info.software ? fmt::format("OpenGL renderer '{}' is a software rasteriser; "
-                                        "--kernel cpu is 3x faster (docs/sweep.md)",
-                                        info.renderer)
-                          : fmt::format("OpenGL renderer '{}' is a GPU", info.renderer));
-    return gl;
+    const gl::GlInfo& info = gpu->gl_info();
+    if (info.software) {
+      // llvmpipe runs the GLSL kernel on the CPU at a third of the CPU kernel's rate.
+      because(fmt::format("OpenGL renderer '{}' is a software rasteriser", info.renderer));
+      return std::make_unique<CpuSweepKernel>();
+    }
+    because(fmt::format("OpenGL renderer '{}' is a GPU", info.renderer));
+    return gpu;
   }
   throw InputError(fmt::format("sweep kernel '{}' is not one of: {}", name,
                                fmt::join(SweepKernelNames(), ", ")));

@@ -13,10 +13,9 @@ namespace ms {
 // "glsl": the GLSL kernel (sweep/glsl_sweep.h) on its own GL context, current on the calling
 // thread; throws InternalError if no GL 4.3 context can be created or its shaders do not
 // compile. "cpu": the fast CPU kernel (sweep/cpu_sweep.h). "reference": the exact C++ reference
-// (sweep/reference_sweep.h). "auto": glsl if a GL 4.3 context works (a GPU, or llvmpipe), else
-// the reference with a warning; the CPU kernel is not its choice yet (docs/sweep.md). Anything
-// else throws InputError. `why`, if given, receives the reason for the choice (for logs and
-// `manisweep info`).
+// (sweep/reference_sweep.h). "auto": the fastest the machine has: glsl on a GPU, cpu where GL is
+// a software rasteriser (llvmpipe) or unavailable. Anything else throws InputError. `why`, if
+// given, receives the reason for the choice (for logs and `manisweep info`).
 std::unique_ptr<SweepKernel> MakeSweepKernel(const std::string& name,
                                              const GlslSweepKernelOptions& glsl = {},
                                              std::string* why = nullptr);

@@ -86,7 +86,8 @@ Outcome Reconstruct(const std::string& scene_name, const gl::GlContext& gl) {
     workers.push_back(std::make_unique<ChildProcess>(
         MS_BINARY,
         Split(std::string("worker --connect ") + endpoint + " --id " + id +
-              " --threads 1 --give-up-after 60 --cache-dir " + (root / "cache" / id).string()),
+              " --kernel cpu --threads 1 --give-up-after 60 --cache-dir " +
+              (root / "cache" / id).string()),
         out + "/" + id + ".log"));
   }
   EXPECT_TRUE(coordinator.Wait(600)) << coordinator.Log();
@@ -115,17 +116,19 @@ Outcome Reconstruct(const std::string& scene_name, const gl::GlContext& gl) {
 }
 
 // Regression bounds about 5% above the measured values (docs/performance.md; the runs are
-// deterministic: the points are inserted sorted by camera and pixel). The closed mesh is the
-// headline (every pixel); the surface proper covers fewer.
+// deterministic: the points are inserted sorted by camera and pixel). The workers run the CPU
+// kernel, auto's choice on a CPU machine, named so that a GPU machine measures the same thing;
+// other kernels give other figures within about +-0.003 (docs/sweep.md, "Which kernel auto
+// picks"). The closed mesh is the headline (every pixel); the surface proper covers fewer.
 TEST(PyramidAccuracy, DownwardPyramidReproducesTable1) {
   const gl::GlContext gl;
   const Outcome o = Reconstruct("pyramid-down", gl);
   EXPECT_TRUE(o.check.is_closed_manifold) << o.check.ToTable();
   EXPECT_GT(o.initial.mae, 0.07);   // the flat base square (paper: 0.108)
-  EXPECT_LE(o.closed.mae, 0.0140);  // measured 0.0133; paper: 0.013
+  EXPECT_LE(o.closed.mae, 0.0147);  // measured 0.0140; paper: 0.013
   EXPECT_DOUBLE_EQ(o.closed.coverage, 1.0);
-  EXPECT_LE(o.surface.mae, 0.0123);     // measured 0.0117
-  EXPECT_GE(o.surface.coverage, 0.92);  // measured 0.927
+  EXPECT_LE(o.surface.mae, 0.0124);      // measured 0.0118
+  EXPECT_GE(o.surface.coverage, 0.915);  // measured 0.922
 }
 
 TEST(PyramidAccuracy, UpwardPyramidReproducesTable1) {
@@ -133,10 +136,10 @@ TEST(PyramidAccuracy, UpwardPyramidReproducesTable1) {
   const Outcome o = Reconstruct("pyramid-up", gl);
   EXPECT_TRUE(o.check.is_closed_manifold) << o.check.ToTable();
   EXPECT_GT(o.initial.mae, 0.09);   // paper: 0.135
-  EXPECT_LE(o.closed.mae, 0.0096);  // measured 0.0091; paper: 0.028
+  EXPECT_LE(o.closed.mae, 0.0127);  // measured 0.0121; paper: 0.028
   EXPECT_DOUBLE_EQ(o.closed.coverage, 1.0);
-  EXPECT_LE(o.surface.mae, 0.0045);     // measured 0.0042
-  EXPECT_GE(o.surface.coverage, 0.88);  // measured 0.892
+  EXPECT_LE(o.surface.mae, 0.0072);     // measured 0.0068
+  EXPECT_GE(o.surface.coverage, 0.87);  // measured 0.880
 }
 
 }  // namespace

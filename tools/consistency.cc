@@ -1,0 +1,117 @@
+#include "tools/consistency.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "base/error.h"
+#include "base/log.h"
+#include "mesh/visible_mesh.h"
+#include "sweep/cpu_sweep.h"
+#include "sweep/sweep_images.h"
+
+namespace ms {
+
+double ConsistencyReport::ConsistentShare() const {
+  return total.pixels > 0 ? static_cast<double>(total.consistent) / total.pixels : 0.0;
+}
+
+std::string ConsistencyReport::ToTable() const {
+  const auto share = [](int64_t part, int64_t whole) {
+    return whole > 0 ? 100.0 * static_cast<double>(part) / static_cast<double>(whole) : 0.0;
+  };
+  const auto line = [&](const std::string& name, const CameraConsistency& c) {
+    return fmt::format("{:<8} {:>10} {:>8.1f}% {:>9.1f}% {:>10.1f}% {:>10.1f}%\n", name, c.pixels,
+                       share(c.consistent, c.pixels), share(c.covered, c.pixels),
+                       share(c.consistent, c.covered), share(c.consistent, c.defined));
+  };
+  std::string table = fmt::format("{:<8} {:>10} {:>9} {:>10} {:>11} {:>11}\n", "camera", "pixels",
+                                  "consistent", "covered", "of covered", "of defined");
+  for (const CameraConsistency& c : cameras) table += line(std::to_string(c.camera), c);
+  table += line("all", total);
+  return table;
+}
+
+namespace {
+
+// Pixels of an image at the sweep's resolution (PrepareSweep's pyramid level for this image).
+int64_t SweptPixels(const Intrinsics& k, const SweepOptions& options) {
+  int level = options.pyramid_level;
+  if (level < 0) {
+    level = 0;
+    while (options.max_image_dimension > 0 &&
+           (std::max(k.width, k.height) >> level) > options.max_image_dimension) {
+      ++level;
+    }
+  }
+  const double scale = std::ldexp(1.0, -level);
+  return std::lround(k.width * scale) * std::lround(k.height * scale);
+}
+
+}  // namespace
+
+ConsistencyReport MeasureConsistency(const Scene& scene, const Mesh& mesh,
+                                     const ConsistencyOptions& options) {
+  if (!(options.ncc_threshold > -1 && options.ncc_threshold < 1)) {
+    throw InputError(
+        fmt::format("consistency threshold must be in (-1, 1), got {}", options.ncc_threshold));
+  }
+  options.sweep.Check();
+  options.neighbours.Check();
+  ConsistencyReport report;
+  Timer timer;
+  const int num_views = static_cast<int>(scene.views.size());
+  for (int c = 0; c < num_views; ++c) {
+    const std::vector<int> neighbours = SelectNeighbours(scene, c, options.neighbours);
+    if (neighbours.empty()) continue;
+    SweepJob job;
+    job.camera = LoadSweepCamera(c, scene.views[c]);
+    for (int n : neighbours) job.neighbours.push_back(LoadSweepCamera(n, scene.views[n]));
+    job.mesh = ExtractVisibleMesh(mesh, job.camera.view).mesh;
+    job.options = options.sweep;
+    job.options.num_offsets = 1;
+    CameraConsistency result;
+    result.camera = c;
+    if (job.mesh.NumFaces() == 0) {  // the mesh is entirely out of view: nothing is consistent
+      result.pixels = SweptPixels(job.camera.view.intrinsics, options.sweep);
+      report.cameras.push_back(result);
+      continue;
+    }
+    const PreparedSweep prep = PrepareSweep(job);
+    CpuSweepSlab slab(job, prep);
+    slab.Render(0);
+    const std::vector<int32_t>& faces = slab.faces();
+    const size_t pixels = faces.size();
+    std::vector<float> best(pixels, -INFINITY), ncc(pixels);
+    std::vector<uint8_t> defined(pixels, 0);
+    for (size_t j = 0; j < prep.neighbours.size(); ++j) {
+      slab.Reproject(static_cast<int>(j));
+      slab.Ncc(ncc.data());
+      for (size_t i = 0; i < pixels; ++i) {
+        if (std::isnan(ncc[i])) continue;
+        defined[i] = 1;
+        best[i] = std::max(best[i], ncc[i]);
+      }
+    }
+    result.pixels = static_cast<int64_t>(pixels);
+    for (size_t i = 0; i < pixels; ++i) {
+      result.covered += faces[i] >= 0;
+      result.defined += defined[i];
+      result.consistent += best[i] > options.ncc_threshold;
+    }
+    report.cameras.push_back(result);
+    spdlog::info("consistency: camera {}/{}: {:.1f}% of {} pixels consistent ({:.1f} s)", c + 1,
+                 num_views, 100.0 * result.consistent / std::max<int64_t>(1, result.pixels),
+                 result.pixels, timer.Seconds());
+  }
+  for (const CameraConsistency& c : report.cameras) {
+    report.total.pixels += c.pixels;
+    report.total.covered += c.covered;
+    report.total.defined += c.defined;
+    report.total.consistent += c.consistent;
+  }
+  return report;
+}
+
+}  // namespace ms
