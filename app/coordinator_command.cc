@@ -20,11 +20,26 @@ struct CoordinatorCommandOptions {
   std::string bind = "tcp://*:5555";
   std::string curve_secret_key;
   std::string curve_public_keys;
+  bool insecure = false;
 };
 
 void RunCoordinator(CoordinatorCommandOptions& options) {
   options.run.Check();
+  // Without CURVE any process that reaches the port can hand in points; beyond this machine
+  // that takes an explicit choice.
+  const bool reachable = !IsLocalOnlyEndpoint(options.bind);
+  if (reachable && options.curve_secret_key.empty() && !options.insecure) {
+    throw InputError("--bind " + options.bind +
+                     ": listening beyond this machine without CURVE lets anyone who reaches the "
+                     "port send results; give --curve-secret-key and --curve-public-keys (keys "
+                     "from `manisweep keygen`, docs/distributed.md), bind to 127.0.0.1, or pass "
+                     "--insecure to accept that");
+  }
   InitLogging("coordinator");
+  if (reachable && options.curve_secret_key.empty()) {
+    spdlog::warn("--insecure: {} accepts unauthenticated, unencrypted workers from the network",
+                 options.bind);
+  }
   InstallStopSignals();
   ZmqServerOptions server;
   server.bind = options.bind;
@@ -51,7 +66,8 @@ void RegisterCoordinatorCommand(CLI::App& app) {
                   "output directory: initial.ply, final.ply, run.h5, summary.json")
       ->required();
   cmd->add_option("--bind", options->bind,
-                  "ZeroMQ address to listen on (tcp://*:PORT, tcp://IP:PORT; PORT * = any free)")
+                  "ZeroMQ address to listen on (tcp://*:PORT, tcp://IP:PORT; PORT * = any free); "
+                  "beyond loopback it needs CURVE keys or --insecure")
       ->capture_default_str();
   cmd->add_option("--curve-secret-key", options->curve_secret_key,
                   "CURVE: this coordinator's key pair (NAME.key_secret from `manisweep keygen`); "
@@ -59,6 +75,9 @@ void RegisterCoordinatorCommand(CLI::App& app) {
   cmd->add_option("--curve-public-keys", options->curve_public_keys,
                   "CURVE: directory of the allowed workers' public keys (*.key); others are "
                   "refused");
+  cmd->add_flag("--insecure", options->insecure,
+                "allow a network-reachable --bind without CURVE (anyone reaching the port can "
+                "send results)");
   AddRunOptions(cmd, &options->run);
   cmd->callback([options] { RunCoordinator(*options); });
 }

@@ -73,6 +73,20 @@ TEST(ZmqTransport, RoundTripOnLoopback) {
   server->Send("no such peer", "dropped");  // silently dropped
 }
 
+TEST(ZmqTransport, LocalOnlyEndpoints) {
+  for (const char* local :
+       {"tcp://127.0.0.1:5555", "tcp://127.1.2.3:*", "tcp://localhost:5555", "tcp://[::1]:5555",
+        "ipc:///tmp/ms.sock", "inproc://x", "tcp://127.0.0.1;10.0.0.1:5555"}) {
+    EXPECT_TRUE(IsLocalOnlyEndpoint(local)) << local;
+  }
+  for (const char* reachable :
+       {"tcp://*:5555", "tcp://0.0.0.0:5555", "tcp://10.0.0.1:5555", "tcp://node01:5555",
+        "tcp://eth0:5555", "tcp://[::]:5555", "tcp://127.0.0.1.evil.org:5555", "tcp://1270.0.0.1:1",
+        "tcp://127.0.0.1", "udp://127.0.0.1:5555"}) {
+    EXPECT_FALSE(IsLocalOnlyEndpoint(reachable)) << reachable;
+  }
+}
+
 TEST(ZmqTransport, BindFailureNamesTheAddress) {
   ZmqServerOptions options;
   options.bind = "tcp://256.1.1.1:1";

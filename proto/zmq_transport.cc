@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -470,6 +471,25 @@ std::vector<CurveKeyPair> ReadPublicKeyDirectory(const std::string& directory) {
   std::vector<CurveKeyPair> keys;
   for (const std::string& file : files) keys.push_back(ReadCurveKeyFile(file, false));
   return keys;
+}
+
+bool IsLocalOnlyEndpoint(const std::string& endpoint) {
+  if (endpoint.rfind("ipc://", 0) == 0 || endpoint.rfind("inproc://", 0) == 0) return true;
+  if (endpoint.rfind("tcp://", 0) != 0) return false;
+  const std::string address = endpoint.substr(6);
+  const size_t colon = address.rfind(':');
+  if (colon == std::string::npos) return false;
+  std::string host = address.substr(0, colon);
+  // ZeroMQ's "tcp://interface;remote" form: only the part that is bound matters.
+  if (const size_t semicolon = host.find(';'); semicolon != std::string::npos) {
+    host = host.substr(0, semicolon);
+  }
+  if (host == "localhost" || host == "[::1]" || host == "::1") return true;
+  // 127.0.0.0/8, written as four decimal numbers.
+  int a = -1, b = -1, c = -1, d = -1;
+  char end = 0;
+  return std::sscanf(host.c_str(), "%d.%d.%d.%d%c", &a, &b, &c, &d, &end) == 4 && a == 127 &&
+         b >= 0 && b <= 255 && c >= 0 && c <= 255 && d >= 0 && d <= 255;
 }
 
 std::unique_ptr<ServerTransport> MakeZmqServer(const ZmqServerOptions& options) {

@@ -49,6 +49,11 @@ struct ZmqServerOptions {
 // bad key files.
 std::unique_ptr<ServerTransport> MakeZmqServer(const ZmqServerOptions& options);
 
+// True if a bind address can only be reached from this machine: tcp:// on 127.0.0.0/8,
+// localhost or [::1], and ipc:// or inproc://. "tcp://*:P", a host name or any other address is
+// reachable from the network.
+bool IsLocalOnlyEndpoint(const std::string& endpoint);
+
 struct ZmqClientOptions {
   std::string connect;  // e.g. "tcp://node01:5555"
   uint64_t max_message_bytes = uint64_t{64} << 20;

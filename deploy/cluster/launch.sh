@@ -6,11 +6,13 @@
 #
 #   deploy/cluster/launch.sh --scene SCENE --output DIR --hosts "node1 node2" \
 #       [--workers-per-host N] [--threads T] [--port P] [--manisweep PATH] \
-#       [--remote-manisweep PATH] [--keys DIR] [-- coordinator options...]
+#       [--remote-manisweep PATH] [--keys DIR | --insecure] [-- coordinator options...]
 #
 # --keys DIR: CURVE keys as for deploy/slurm/manisweep.sbatch (coordinator.key_secret,
-# coordinator.key, worker.key_secret, allowed/worker.key); the worker keys are copied to the
-# hosts with scp. Worker logs: ~/manisweep-worker-<port>-<i>.log on each host.
+# coordinator.key, worker.key_secret, allowed/worker.key); by default .curve-keys in the --output
+# directory, made on its first run and kept for resumes. The worker keys are copied to the hosts
+# with scp. --insecure: no CURVE (any process reaching the port can send results).
+# Worker logs: ~/manisweep-worker-<port>-<i>.log on each host.
 # Ctrl-C stops the coordinator (the checkpoint stays valid: rerun with the same arguments to
 # resume, --resume is always passed) and the workers (they also give up on their own).
 set -euo pipefail
@@ -18,7 +20,7 @@ set -euo pipefail
 scene="" out="" hosts="" per_host=1 threads=0 port=5555
 manisweep=${MANISWEEP:-manisweep}
 remote_manisweep=""
-keys=""
+keys="" insecure=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --scene) scene=$2; shift 2 ;;
@@ -30,8 +32,9 @@ while [ $# -gt 0 ]; do
     --manisweep) manisweep=$2; shift 2 ;;
     --remote-manisweep) remote_manisweep=$2; shift 2 ;;
     --keys) keys=$2; shift 2 ;;
+    --insecure) insecure=1; shift ;;
     --) shift; break ;;
-    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,18p' "$0"; exit 0 ;;
     *) echo "launch.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -42,8 +45,19 @@ fi
 remote_manisweep=${remote_manisweep:-$manisweep}
 here=$(hostname -f 2>/dev/null || hostname)
 
-coordinator_security=()
+coordinator_security=(--insecure)
 worker_security=""
+if [ -z "$keys" ] && [ -z "$insecure" ]; then
+  # CURVE by default: the coordinator listens on the network.
+  keys="$out/.curve-keys"
+  if [ ! -f "$keys/coordinator.key_secret" ]; then
+    mkdir -p "$keys/allowed"
+    chmod 700 "$keys"
+    "$manisweep" keygen --output "$keys/coordinator" >/dev/null
+    "$manisweep" keygen --output "$keys/worker" >/dev/null
+    cp "$keys/worker.key" "$keys/allowed/"
+  fi
+fi
 if [ -n "$keys" ]; then
   coordinator_security=(--curve-secret-key "$keys/coordinator.key_secret"
                         --curve-public-keys "$keys/allowed")

@@ -310,6 +310,26 @@ TEST_F(MultiProcessTest, AWorkerWithTheWrongCurveKeyIsRefused) {
   EXPECT_TRUE(fs::exists(out + "/final.ply"));
 }
 
+// Beyond loopback a coordinator needs CURVE keys or an explicit --insecure.
+TEST_F(MultiProcessTest, ANetworkBindWithoutCurveNeedsInsecure) {
+  const std::string out = Dir("insecure");
+  // No iteration: a run that needs no worker ends after the initial manifold.
+  std::vector<std::string> args = CoordinatorArgs(out, test::FreePort(), 0);
+  for (size_t i = 0; i + 1 < args.size(); ++i) {
+    if (args[i] == "--bind") args[i + 1] = "tcp://*:" + std::to_string(test::FreePort());
+  }
+  ChildProcess refused(kBinary, args, out + "/refused.log");
+  ASSERT_TRUE(refused.Wait(20)) << refused.Log();
+  EXPECT_EQ(refused.exit_code(), 2) << refused.Log();
+  EXPECT_NE(refused.Log().find("without CURVE"), std::string::npos) << refused.Log();
+  EXPECT_FALSE(fs::exists(out + "/run.h5"));  // refused before anything was written
+  args.push_back("--insecure");
+  ChildProcess insecure(kBinary, args, out + "/insecure.log");
+  ASSERT_TRUE(insecure.Wait(60)) << insecure.Log();
+  EXPECT_EQ(insecure.exit_code(), 0) << insecure.Log();
+  EXPECT_NE(insecure.Log().find("accepts unauthenticated"), std::string::npos) << insecure.Log();
+}
+
 // A raw ZeroMQ client sends junk and a foreign protocol version; the coordinator logs each,
 // answers the version mismatch, and finishes the run with a real worker.
 TEST_F(MultiProcessTest, BadMessagesAreLoggedAndDroppedAndAnotherVersionIsRefused) {
