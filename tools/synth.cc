@@ -354,7 +354,9 @@ void WriteSynthDataset(const SynthDataset& d, const std::string& directory) {
   fs::create_directories(d.images.empty() ? dir : dir / "images", ec);
   if (ec) throw InputError(directory + ": cannot create the dataset directory: " + ec.message());
   Scene scene = d.scene;
-  for (View& view : scene.views) view.image_path = (dir / "images" / view.name).string();
+  // Absolute, so that scene.h5 works from any working directory (a Slurm job's, a worker's).
+  const fs::path images = fs::absolute(dir) / "images";
+  for (View& view : scene.views) view.image_path = (images / view.name).string();
   if (!d.images.empty()) {
     Progress progress("writing images", static_cast<int64_t>(d.images.size()));
     for (size_t i = 0; i < d.images.size(); ++i) {
