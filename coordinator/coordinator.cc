@@ -46,6 +46,9 @@ std::string PeerTag(const std::string& peer) {
   return "peer " + HashHex(HashBytes(peer)).substr(0, 8);
 }
 
+// Results that do not fit their jobs before a worker is sent away.
+constexpr int kMaxUnfitResults = 3;
+
 // Rate-limited warnings about junk from the network: the first few per kind, then every 1000th.
 class JunkLog {
  public:
@@ -208,8 +211,8 @@ class Coordinator::Impl {
 
   void StartIteration(StepOutcome&& outcome) {
     iteration_ = static_cast<uint32_t>(run_.completed_iterations() + 1);
-    num_views_ = run_.num_views();
     jobs_.clear();
+    bounds_.clear();
     batch_ = InsertionBatch();
     round_ = SweepRound();
     round_.seconds_jobs = outcome.seconds_jobs;
@@ -218,6 +221,7 @@ class Coordinator::Impl {
     std::vector<uint64_t> ids;
     for (wire::Job& job : outcome.jobs.jobs) {
       ids.push_back(job.job_id());
+      bounds_.emplace(job.job_id(), JobBoundsFromWire(job));
       jobs_.emplace(job.job_id(), std::move(job));
     }
     scheduler_.StartIteration(iteration_, ids);
@@ -255,6 +259,10 @@ class Coordinator::Impl {
 
   void Handle(const PeerMessage& message) {
     const std::string who = PeerTag(message.peer);
+    if (sent_away_.count(message.peer)) {
+      junk_.Warn("sent away", fmt::format("dropped a message from {}, sent away earlier", who));
+      return;
+    }
     if (message.frames != 1) {
       junk_.Warn("frames", fmt::format("dropped a message of {} frames from {} (expected 1)",
                                        message.frames, who));
@@ -349,9 +357,22 @@ class Coordinator::Impl {
 
   // Checks a result's points against its job. Returns "" if they are usable.
   std::string ValidatePoints(const wire::Result& result, std::vector<FoundPoint>* points) const {
-    auto it = jobs_.find(result.job_id());
-    if (it == jobs_.end()) return "";  // late or unknown: the scheduler says so
-    return ValidateResultPoints(result, it->second.camera().id(), num_views_, points);
+    auto it = bounds_.find(result.job_id());
+    if (it == bounds_.end()) return "";  // late or unknown: the scheduler says so
+    return ValidateResultPoints(result, it->second, points);
+  }
+
+  // A worker whose results keep not fitting their jobs is buggy or hostile: after a few it is
+  // told to shut down and its messages are dropped (CURVE is what keeps strangers out).
+  void NoteUnfitResult(const std::string& peer, const std::string& sender) {
+    if (++unfit_results_[peer] < kMaxUnfitResults) return;
+    spdlog::warn("worker {} ({}) sent {} results that do not fit their jobs: sending it away",
+                 sender, PeerTag(peer), kMaxUnfitResults);
+    wire::Envelope envelope = stamper_.New();
+    envelope.mutable_shutdown()->set_reason("its results do not fit the jobs handed out");
+    transport_->Send(peer, Serialize(envelope));
+    scheduler_.Remove(peer);
+    sent_away_.insert(peer);
   }
 
   void OnResult(const std::string& peer, const std::string& sender, const wire::Result& result,
@@ -370,6 +391,7 @@ class Coordinator::Impl {
                                        JobName(result.job_id()), sender, problem));
       last_failure_[result.job_id()] = "malformed result: " + problem;
       scheduler_.OnWorkerFailure(peer, sender, result.job_id(), now);
+      NoteUnfitResult(peer, sender);
       return;
     }
     const JobScheduler::Outcome outcome = scheduler_.OnResult(peer, sender, result.job_id(), now);
@@ -429,14 +451,18 @@ class Coordinator::Impl {
 
   // The current iteration (the loop writes them while sweeping; the step reads them after).
   uint32_t iteration_ = 0;
-  int num_views_ = 0;
   std::map<uint64_t, wire::Job> jobs_;
+  std::map<uint64_t, JobBounds> bounds_;  // what each job's points must fit
   InsertionBatch batch_;
   SweepRound round_;
   std::map<uint64_t, std::string> last_failure_;
   double sweep_started_ = 0;
   std::string kernel_;
   std::set<std::string> warned_kernels_;
+  // Peers whose results did not fit their jobs, and those sent away for it (their messages are
+  // dropped from then on).
+  std::map<std::string, int> unfit_results_;
+  std::set<std::string> sent_away_;
 };
 
 Coordinator::Coordinator(const CoordinatorOptions& options, ServerTransport* transport)

@@ -11,6 +11,7 @@
 
 #include "manifold/delaunay_manifold.h"
 #include "proto/manisweep.pb.h"
+#include "scene/camera.h"
 
 namespace ms {
 
@@ -23,11 +24,31 @@ struct FoundPoint {
   std::vector<int32_t> cameras;
 };
 
-// The points of `result`, a result of the job of `camera`, into *points. Returns "" if every
-// point is usable, else the first problem (the result is then dropped whole): a non-finite
-// value, a point that does not list `camera` first, a camera listed twice or not in the scene
-// (num_views views).
-std::string ValidateResultPoints(const wire::Result& result, int32_t camera, int32_t num_views,
+// What a result is checked against: the job as it was handed out.
+struct JobBounds {
+  int32_t camera = -1;
+  std::vector<int32_t> cameras;  // C, then its neighbours: the only ids a point may list
+  View view;                     // C, full resolution (the sweep's pixels are undistorted)
+  // Camera z a swept point can have: the visible mesh's vertices' range widened by the largest
+  // move of the sweep, K alpha (alpha: the job's, or the automatic alpha's bound of 0.02 x the
+  // median vertex depth).
+  double min_depth = 0, max_depth = 0;
+};
+
+// The bounds of a job; throws InputError for a malformed job (the coordinator built it).
+JobBounds JobBoundsFromWire(const wire::Job& job);
+
+// A reported point's pixel and its projection into C may differ by this much (pixels): the
+// GLSL kernel places points in float32.
+constexpr double kPixelTolerance = 0.5;
+
+// The points of `result`, a result of the job `job`, into *points. Returns "" if every point is
+// usable, else the first problem (the result is then dropped whole): a non-finite value; a point
+// that does not list C first, lists a camera twice or one that is not C or its neighbours; a
+// pixel outside C's image; a position that does not project to its pixel (within
+// kPixelTolerance) or lies outside the swept depth range. A worker can thus only return points
+// of the kind the sweep of that job could find (docs/distributed.md).
+std::string ValidateResultPoints(const wire::Result& result, const JobBounds& job,
                                  std::vector<FoundPoint>* points);
 
 class InsertionBatch {

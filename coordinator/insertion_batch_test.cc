@@ -5,32 +5,30 @@
 #include <algorithm>
 #include <random>
 
+#include "proto/wire.h"
+
 namespace ms {
 namespace {
 
-wire::SweepPoint* AddPoint(wire::Result* result, double x, float px, float py,
-                           std::vector<int32_t> cameras) {
-  wire::SweepPoint* p = result->add_points();
-  p->set_x(x);
-  p->set_y(0.5 * x);
-  p->set_z(1);
-  p->set_pixel_x(px);
-  p->set_pixel_y(py);
-  for (int32_t c : cameras) p->add_cameras(c);
-  return p;
+FoundPoint Found(int32_t camera, double x, float px, float py, std::vector<int32_t> cameras) {
+  FoundPoint f;
+  f.camera = camera;
+  f.position = {x, 0.5 * x, 1};
+  f.pixel_x = px;
+  f.pixel_y = py;
+  f.cameras = std::move(cameras);
+  return f;
 }
 
 // Jobs 0..3, camera c's points at a few pixels, some of them tied on pixel.
 std::vector<std::pair<uint64_t, std::vector<FoundPoint>>> Results() {
   std::vector<std::pair<uint64_t, std::vector<FoundPoint>>> results;
   for (int32_t camera = 0; camera < 4; ++camera) {
-    wire::Result result;
-    AddPoint(&result, camera + 0.1, 10, 20, {camera, (camera + 1) % 4});
-    AddPoint(&result, camera + 0.2, 5, 20, {camera});
-    AddPoint(&result, camera + 0.3, 5, 20, {camera, (camera + 3) % 4});  // same pixel
-    AddPoint(&result, camera + 0.4, 90, 3, {camera, (camera + 2) % 4});
-    std::vector<FoundPoint> points;
-    EXPECT_EQ(ValidateResultPoints(result, camera, 4, &points), "");
+    std::vector<FoundPoint> points = {
+        Found(camera, camera + 0.1, 10, 20, {camera, (camera + 1) % 4}),
+        Found(camera, camera + 0.2, 5, 20, {camera}),
+        Found(camera, camera + 0.3, 5, 20, {camera, (camera + 3) % 4}),  // same pixel
+        Found(camera, camera + 0.4, 90, 3, {camera, (camera + 2) % 4})};
     results.emplace_back(uint64_t{1} << 32 | static_cast<uint64_t>(camera), std::move(points));
   }
   return results;
@@ -90,23 +88,79 @@ TEST(InsertionBatch, ARefusedJobCountsAsAJobWithoutPoints) {
   EXPECT_TRUE(batch.Sorted().empty());
 }
 
+// Camera 2 at the origin looking along +z (640 x 480, f = 500) with neighbours 0 and 3; its
+// visible mesh a square at z = 5. Default options: 19 offsets, automatic alpha, so points may lie
+// at camera z within 5 -+ 9 x 0.02 x 5.
+wire::Job MakeJob() {
+  wire::Job job;
+  job.set_job_id(uint64_t{1} << 32 | 2);
+  View view;
+  view.intrinsics.width = 640;
+  view.intrinsics.height = 480;
+  view.intrinsics.fx = view.intrinsics.fy = 500;
+  view.intrinsics.cx = 320;
+  view.intrinsics.cy = 240;
+  ViewToWire(2, view, job.mutable_camera());
+  for (int32_t n : {0, 3}) {
+    View other = view;
+    other.SetCenter({n - 1.0, 0, 0});
+    ViewToWire(n, other, job.add_neighbours());
+  }
+  Mesh square;
+  square.vertices = {{-2, -2, 5}, {2, -2, 5}, {2, 2, 5}, {-2, 2, 5}};
+  square.faces = {{0, 1, 2}, {0, 2, 3}};
+  PackMesh(square, job.mutable_mesh());
+  job.mutable_options()->set_num_offsets(20);
+  return job;
+}
+
+wire::SweepPoint* AddPoint(wire::Result* result, const Eigen::Vector3d& x,
+                           std::vector<int32_t> cameras) {
+  wire::SweepPoint* p = result->add_points();
+  p->set_x(x.x());
+  p->set_y(x.y());
+  p->set_z(x.z());
+  p->set_pixel_x(static_cast<float>(500 * x.x() / x.z() + 320));
+  p->set_pixel_y(static_cast<float>(500 * x.y() / x.z() + 240));
+  for (int32_t c : cameras) p->add_cameras(c);
+  return p;
+}
+
 TEST(InsertionBatch, ResultsThatDoNotFitTheirJobAreRefusedWithTheReason) {
+  const JobBounds job = JobBoundsFromWire(MakeJob());
+  EXPECT_EQ(job.cameras, (std::vector<int32_t>{2, 0, 3}));
+  EXPECT_NEAR(job.min_depth, 4.1, 1e-12);
+  EXPECT_NEAR(job.max_depth, 5.9, 1e-12);
   std::vector<FoundPoint> points;
-  wire::Result wrong_first;
-  AddPoint(&wrong_first, 1, 1, 1, {1, 2});
-  EXPECT_EQ(ValidateResultPoints(wrong_first, 2, 4, &points),
-            "point 0 does not list camera 2 first");
-  wire::Result twice;
-  AddPoint(&twice, 1, 1, 1, {2, 3, 3});
-  EXPECT_EQ(ValidateResultPoints(twice, 2, 4, &points),
-            "point 0 lists camera 3 (twice, or not in the scene)");
-  wire::Result outside;
-  AddPoint(&outside, 1, 1, 1, {2, 4});
-  EXPECT_EQ(ValidateResultPoints(outside, 2, 4, &points),
-            "point 0 lists camera 4 (twice, or not in the scene)");
-  wire::Result nan;
-  AddPoint(&nan, std::nan(""), 1, 1, {2});
-  EXPECT_EQ(ValidateResultPoints(nan, 2, 4, &points), "point 0 is not finite");
+  wire::Result good;
+  AddPoint(&good, {0.3, -0.2, 5.4}, {2, 3});
+  AddPoint(&good, {-1.1, 0.8, 4.2}, {2});
+  EXPECT_EQ(ValidateResultPoints(good, job, &points), "");
+  ASSERT_EQ(points.size(), 2u);
+  EXPECT_EQ(points[0].cameras, (std::vector<int32_t>{2, 3}));
+  const auto problem = [&](const Eigen::Vector3d& x, std::vector<int32_t> cameras,
+                           float shift_px = 0) {
+    wire::Result result;
+    AddPoint(&result, {0.3, -0.2, 5.4}, {2});  // a good one first: the result is dropped whole
+    wire::SweepPoint* p = AddPoint(&result, x, std::move(cameras));
+    p->set_pixel_x(p->pixel_x() + shift_px);
+    std::vector<FoundPoint> out;
+    return ValidateResultPoints(result, job, &out);
+  };
+  EXPECT_EQ(problem({0, 0, 5}, {1, 2}), "point 1 does not list camera 2 first");
+  EXPECT_EQ(problem({0, 0, 5}, {2, 3, 3}),
+            "point 1 lists camera 3 (twice, or not one of the job's)");
+  EXPECT_EQ(problem({0, 0, 5}, {2, 1}), "point 1 lists camera 1 (twice, or not one of the job's)");
+  EXPECT_EQ(problem({std::nan(""), 0, 5}, {2}), "point 1 is not finite");
+  // Off its pixel's ray (a rogue point anywhere in the box), out of depth range, outside the
+  // image.
+  EXPECT_NE(problem({0, 0, 5}, {2}, 3).find("projects to (320.00, 240.00) in camera 2, not to"),
+            std::string::npos);
+  EXPECT_NE(problem({0, 0, 7}, {2}).find("outside the swept range [4.1, 5.9]"), std::string::npos);
+  EXPECT_NE(problem({0, 0, -5}, {2}).find("outside the swept range"), std::string::npos);
+  EXPECT_NE(problem({4, 0, 5}, {2}).find("outside camera 2's 640x480 image"), std::string::npos);
+  // Within the tolerance of the pixel: accepted.
+  EXPECT_EQ(problem({0, 0, 5}, {2}, 0.4f), "");
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <filesystem>
+#include <memory>
 #include <thread>
 
 #include "base/error.h"
@@ -23,6 +24,22 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A rogue or buggy worker: the real sweep, then every point moved 5 cm sideways, off the ray of
+// the pixel it reports (inside the scene's box, so only the check against the job catches it).
+class OffRayKernel : public SweepKernel {
+ public:
+  explicit OffRayKernel(std::unique_ptr<SweepKernel> real) : real_(std::move(real)) {}
+  SweepResult Run(const SweepJob& job) override {
+    SweepResult result = real_->Run(job);
+    for (SweepPoint& p : result.points) p.position.x() += 0.05;
+    return result;
+  }
+  std::string Name() const override { return real_->Name(); }
+
+ private:
+  std::unique_ptr<SweepKernel> real_;
+};
+
 class InProcessRun : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -37,9 +54,10 @@ class InProcessRun : public ::testing::Test {
     if (!HasFailure()) fs::remove_all(root_);
   }
 
-  // Runs to the end with `workers` worker threads; `junk` is sent first by a rogue client.
+  // Runs to the end with `workers` worker threads; `junk` is sent first by a rogue client, and
+  // `rogues` more workers return points that no sweep of their job could find.
   CoordinatorResult Run(const std::string& name, int workers,
-                        const std::vector<std::string>& junk = {}) {
+                        const std::vector<std::string>& junk = {}, int rogues = 0) {
     auto network = InMemoryNetwork::Create();
     auto server = network->Bind();
     CoordinatorOptions options;
@@ -55,17 +73,22 @@ class InProcessRun : public ::testing::Test {
     // Workers end with the coordinator's Shutdown; the flag only unblocks a broken test.
     std::atomic<bool> stop{false};
     std::vector<std::thread> threads;
-    for (int i = 0; i < workers; ++i) {
+    for (int i = 0; i < workers + rogues; ++i) {
       threads.emplace_back([&, i] {
+        const bool rogue = i >= workers;
         WorkerOptions w;
-        w.id = "thread-" + std::to_string(i);
+        w.id = (rogue ? "rogue-" : "thread-") + std::to_string(i);
         w.heartbeat_interval_s = 0.05;
         w.liveness = 4;
         w.cache.directory = (root_ / "cache").string();
+        std::unique_ptr<SweepKernel> kernel = MakeSweepKernel("reference");
+        if (rogue) kernel = std::make_unique<OffRayKernel>(std::move(kernel));
         Worker worker(
-            w, [network] { return network->Connect(); }, MakeSweepKernel("reference"));
+            w, [network] { return network->Connect(); }, std::move(kernel));
         const WorkerSummary summary = worker.Run([&] { return stop.load(); });
-        EXPECT_EQ(summary.exit_reason, "shutdown: the run is complete");
+        EXPECT_EQ(summary.exit_reason, rogue
+                                           ? "shutdown: its results do not fit the jobs handed out"
+                                           : "shutdown: the run is complete");
       });
     }
     Coordinator coordinator(options, server.get());
@@ -103,6 +126,13 @@ TEST_F(InProcessRun, ConvergesToTheSameClosedManifoldWithOneOrTwoWorkers) {
   for (size_t i = 1; i < record.batches[0].size(); ++i) {
     EXPECT_LE(record.batches[0][i - 1].cameras[0], record.batches[0][i].cameras[0]);
   }
+}
+
+TEST_F(InProcessRun, AWorkerWhosePointsDoNotFitItsJobsIsSentAway) {
+  const CoordinatorResult honest = Run("honest", 1);
+  const CoordinatorResult mixed = Run("mixed", 1, {}, /*rogues=*/1);
+  EXPECT_EQ(mixed.status, "finished");
+  EXPECT_EQ(ReadFileToString(honest.final_mesh), ReadFileToString(mixed.final_mesh));
 }
 
 TEST_F(InProcessRun, ChangedOptionsCannotResumeARun) {
