@@ -1,7 +1,5 @@
 #include "sweep/cpu_sweep.h"
 
-#include <immintrin.h>
-
 #include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
@@ -9,15 +7,20 @@
 
 #include "base/log.h"
 #include "sweep/reference_sweep.h"
+#include "sweep/vector_clones.h"
+
+#if MS_HAVE_AVX2_DISPATCH
+#include <immintrin.h>
+#endif
 
 namespace ms {
 namespace {
 
 // C's camera frame to a neighbour's pixels, for reprojecting C's pixel rays.
 struct ReprojectionRow {
-  float ray0[3],
-      ray_dx[3];  // A r(col) = ray0 + col ray_dx, A = R_n R_c^T, r = K_c^-1 (col+.5, row+.5, 1)
-  float b[3];     // t_n - A t_c
+  // A r(col) = ray0 + col ray_dx with A = R_n R_c^T and r = K_c^-1 (col + .5, row + .5, 1).
+  float ray0[3], ray_dx[3];
+  float b[3];  // t_n - A t_c
   float fx, fy, cx, cy;
   int width, height;      // the neighbour's image
   float max_depth_ratio;  // 1 + occlusion tolerance
@@ -54,6 +57,7 @@ void ReprojectRow(const ReprojectionRow& p, const float* __restrict inv_z,
   }
 }
 
+#if MS_HAVE_AVX2_DISPATCH
 // The same with AVX2 gathers, 8 pixels at a time; the remainder by ReprojectRow.
 __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
     const ReprojectionRow& p, const float* __restrict inv_z, const float* __restrict shadow,
@@ -120,6 +124,8 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
   }
 }
 
+#endif  // MS_HAVE_AVX2_DISPATCH
+
 void ReprojectThrough(const SpanRasterizer& camera, const View& c, const View& n,
                       const cv::Mat& image, const SpanRasterizer& shadow,
                       double occlusion_tolerance, float* J, float* mask) {
@@ -140,15 +146,19 @@ void ReprojectThrough(const SpanRasterizer& camera, const View& c, const View& n
   p.max_depth_ratio = static_cast<float>(1 + occlusion_tolerance);
   const int width = camera.width();
   CV_Assert(image.isContinuous());
+#if MS_HAVE_AVX2_DISPATCH
   static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  const auto reproject_row = avx2 ? ReprojectRowAvx2 : ReprojectRow;
+#else
+  const auto reproject_row = ReprojectRow;
+#endif
   for (int row = 0; row < camera.height(); ++row) {
     const Eigen::Vector3d ray0 =
         A * Eigen::Vector3d((0.5 - kc.cx) / kc.fx, (row + 0.5 - kc.cy) / kc.fy, 1.0);
     for (int i = 0; i < 3; ++i) p.ray0[i] = static_cast<float>(ray0[i]);
     const size_t offset = static_cast<size_t>(row) * width;
-    (avx2 ? ReprojectRowAvx2 : ReprojectRow)(p, camera.inverse_depth().data() + offset,
-                                             shadow.inverse_depth().data(), image.ptr<float>(),
-                                             J + offset, mask + offset, width);
+    reproject_row(p, camera.inverse_depth().data() + offset, shadow.inverse_depth().data(),
+                  image.ptr<float>(), J + offset, mask + offset, width);
   }
 }
 

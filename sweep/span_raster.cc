@@ -6,6 +6,7 @@
 
 #include "base/check.h"
 #include "sweep/raster_rules.h"
+#include "sweep/vector_clones.h"
 
 namespace ms {
 using raster::Covers;
@@ -16,9 +17,8 @@ namespace {
 
 // Nearest-wins fill of one span: 1/z = inv_z0 + col * inv_z_dx. Kept free of branches that
 // stop the vectoriser.
-__attribute__((target_clones("arch=x86-64-v3", "default"))) void FillSpan(
-    float* __restrict inv_z, int32_t* __restrict faces, int begin, int end, double inv_z0,
-    double inv_z_dx, int32_t face) {
+MS_VECTOR_CLONES void FillSpan(float* __restrict inv_z, int32_t* __restrict faces, int begin,
+                               int end, double inv_z0, double inv_z_dx, int32_t face) {
   for (int col = begin; col < end; ++col) {
     const float value = static_cast<float>(inv_z0 + col * inv_z_dx);
     const bool nearer = value > inv_z[col];

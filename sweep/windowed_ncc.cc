@@ -5,9 +5,7 @@
 #include <limits>
 
 #include "base/check.h"
-
-// The hot loops are compiled for AVX2+FMA and for the baseline; the loader picks one.
-#define MS_VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#include "sweep/vector_clones.h"
 
 namespace ms {
 namespace {
