@@ -8,6 +8,15 @@
 #include "sweep/vector_clones.h"
 
 namespace ms {
+
+// One quantity of one row as the product of two rows of factors: m, mI, J, mI^2, J^2 and IJ
+// are m 1, m I, J 1, m I^2, J J and I J (J is already 0 where m is). Computed where they are
+// used, so the products are never stored.
+struct RowFactors {
+  const float* __restrict a;
+  const float* __restrict b;
+};
+
 namespace {
 
 constexpr int kLanes = WindowedNcc::kLanes;
@@ -37,13 +46,12 @@ FloatGaussian ToFloat(const RecursiveGaussian& g) {
 // s = pole s + x - tail x_tail per pole; y = the output.
 MS_VECTOR_CLONES void CausalRow(const FloatGaussian& g, float* __restrict s0r,
                                 float* __restrict s0i, float* __restrict s1r, float* __restrict s1i,
-                                const float* __restrict x, const float* __restrict x_tail,
-                                float* __restrict y, int n) {
+                                RowFactors x, RowFactors x_tail, float* __restrict y, int n) {
   const float p0r = g.pr[0], p0i = g.pi[0], p1r = g.pr[1], p1i = g.pi[1];
   const float t0r = g.tr[0], t0i = g.ti[0], t1r = g.tr[1], t1i = g.ti[1];
   const float w0r = g.wr[0], w0i = g.wi[0], w1r = g.wr[1], w1i = g.wi[1];
   for (int i = 0; i < n; ++i) {
-    const float xv = x[i], tv = x_tail[i];
+    const float xv = x.a[i] * x.b[i], tv = x_tail.a[i] * x_tail.b[i];
     const float a0r = p0r * s0r[i] - p0i * s0i[i] + xv - t0r * tv;
     const float a0i = p0r * s0i[i] + p0i * s0r[i] - t0i * tv;
     const float a1r = p1r * s1r[i] - p1i * s1i[i] + xv - t1r * tv;
@@ -60,15 +68,14 @@ MS_VECTOR_CLONES void CausalRow(const FloatGaussian& g, float* __restrict s0r,
 // output.
 MS_VECTOR_CLONES void AnticausalRow(const FloatGaussian& g, float* __restrict s0r,
                                     float* __restrict s0i, float* __restrict s1r,
-                                    float* __restrict s1i, const float* __restrict x_next,
-                                    const float* __restrict x_tail, const float* __restrict causal,
-                                    float* __restrict out, int n) {
+                                    float* __restrict s1i, RowFactors x_next, RowFactors x_tail,
+                                    const float* __restrict causal, float* __restrict out, int n) {
   const float p0r = g.pr[0], p0i = g.pi[0], p1r = g.pr[1], p1i = g.pi[1];
   const float t0r = g.tr[0], t0i = g.ti[0], t1r = g.tr[1], t1i = g.ti[1];
   const float w0r = g.wr[0], w0i = g.wi[0], w1r = g.wr[1], w1i = g.wi[1];
   for (int i = 0; i < n; ++i) {
-    const float tv = x_tail[i];
-    const float u0 = s0r[i] + x_next[i], u1 = s1r[i] + x_next[i];
+    const float tv = x_tail.a[i] * x_tail.b[i], xv = x_next.a[i] * x_next.b[i];
+    const float u0 = s0r[i] + xv, u1 = s1r[i] + xv;
     const float a0r = p0r * u0 - p0i * s0i[i] - t0r * tv;
     const float a0i = p0r * s0i[i] + p0i * u0 - t0i * tv;
     const float a1r = p1r * u1 - p1i * s1i[i] - t1r * tv;
@@ -134,21 +141,6 @@ MS_VECTOR_CLONES void HorizontalBlock(const FloatGaussian& g, const float* __res
   }
 }
 
-MS_VECTOR_CLONES void RowProducts(const float* __restrict i, const float* __restrict ii,
-                                  const float* __restrict j, const float* __restrict m,
-                                  float* __restrict q0, float* __restrict q1, float* __restrict q2,
-                                  float* __restrict q3, float* __restrict q4, float* __restrict q5,
-                                  int n) {
-  for (int c = 0; c < n; ++c) {
-    q0[c] = m[c];
-    q1[c] = m[c] * i[c];
-    q2[c] = j[c];
-    q3[c] = m[c] * ii[c];
-    q4[c] = j[c] * j[c];
-    q5[c] = i[c] * j[c];
-  }
-}
-
 // NCC of up to 8 rows of a block from their six sums ([quantity][col][lane]): WeightedNcc's
 // formula, 8 rows at a time. Returns the number of defined pixels.
 MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
@@ -188,10 +180,37 @@ MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
   return defined;
 }
 
-// Row `row`'s values of one quantity into lane `lane` of a block ([col][lane]).
-MS_VECTOR_CLONES void ToLane(const float* __restrict row, float* __restrict block, int lane,
-                             int n) {
-  for (int c = 0; c < n; ++c) block[c * kLanes + lane] = row[c];
+// Eight rows of one quantity ([lane][col], `stride` apart) into a block ([col][lane]), 8 x 8
+// tiles transposed in registers (unpack, shuffle, swap halves: three stages of shuffles).
+MS_VECTOR_CLONES void RowsToBlock(const float* __restrict rows, size_t stride,
+                                  float* __restrict block, int n) {
+  typedef int32_t Mask __attribute__((vector_size(32)));
+  int c = 0;
+  for (; c + kLanes <= n; c += kLanes) {
+    Lanes r[kLanes];
+    for (int l = 0; l < kLanes; ++l) r[l] = LoadLanes(rows + l * stride + c);
+    const Mask lo = {0, 8, 1, 9, 4, 12, 5, 13}, hi = {2, 10, 3, 11, 6, 14, 7, 15};
+    const Mask lo2 = {0, 1, 8, 9, 4, 5, 12, 13}, hi2 = {2, 3, 10, 11, 6, 7, 14, 15};
+    const Mask lo4 = {0, 1, 2, 3, 8, 9, 10, 11}, hi4 = {4, 5, 6, 7, 12, 13, 14, 15};
+    Lanes u[kLanes], v[kLanes];
+    for (int p = 0; p < kLanes; p += 2) {
+      u[p] = __builtin_shuffle(r[p], r[p + 1], lo);
+      u[p + 1] = __builtin_shuffle(r[p], r[p + 1], hi);
+    }
+    for (int p = 0; p < kLanes; p += 4) {
+      v[p] = __builtin_shuffle(u[p], u[p + 2], lo2);
+      v[p + 1] = __builtin_shuffle(u[p], u[p + 2], hi2);
+      v[p + 2] = __builtin_shuffle(u[p + 1], u[p + 3], lo2);
+      v[p + 3] = __builtin_shuffle(u[p + 1], u[p + 3], hi2);
+    }
+    for (int k = 0; k < 4; ++k) {  // v[k]: columns k and k + 4 of rows 0-3, v[k + 4] of rows 4-7
+      StoreLanes(block + (c + k) * kLanes, __builtin_shuffle(v[k], v[k + 4], lo4));
+      StoreLanes(block + (c + k + 4) * kLanes, __builtin_shuffle(v[k], v[k + 4], hi4));
+    }
+  }
+  for (; c < n; ++c) {
+    for (int l = 0; l < kLanes; ++l) block[c * kLanes + l] = rows[l * stride + c];
+  }
 }
 
 }  // namespace
@@ -209,10 +228,10 @@ WindowedNcc::WindowedNcc(int width, int height, double sigma_px, double min_text
   ii_.resize(n);
   causal_.resize(n * kQuantities);
   state_.resize(static_cast<size_t>(kQuantities) * 4 * width);
-  x_.resize(static_cast<size_t>(kQuantities) * width);
-  x_tail_.resize(x_.size());
-  zeros_.assign(x_.size(), 0.0f);
+  zeros_.assign(width, 0.0f);
+  ones_.assign(width, 1.0f);
   block_.resize(static_cast<size_t>(kQuantities) * width * kLanes);
+  rows_.assign(block_.size(), 0.0f);
   sums_.resize(block_.size());
 }
 
@@ -230,11 +249,25 @@ void WindowedNcc::SetCamera(const cv::Mat& image) {
   }
 }
 
-void WindowedNcc::Products(int row, float* out) const {
+RowFactors WindowedNcc::Factors(int row, int q) const {
+  if (row < 0 || row >= height_) return {zeros_.data(), zeros_.data()};
   const size_t offset = static_cast<size_t>(row) * width_;
-  const int n = width_;
-  RowProducts(i_.data() + offset, ii_.data() + offset, J_ + offset, mask_ + offset, out, out + n,
-              out + 2 * n, out + 3 * n, out + 4 * n, out + 5 * n, n);
+  const float *i = i_.data() + offset, *ii = ii_.data() + offset, *ones = ones_.data();
+  const float *j = J_ + offset, *m = mask_ + offset;
+  switch (q) {
+    case 0:
+      return {m, ones};
+    case 1:
+      return {m, i};
+    case 2:
+      return {j, ones};
+    case 3:
+      return {m, ii};
+    case 4:
+      return {j, j};
+    default:
+      return {i, j};
+  }
 }
 
 int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
@@ -249,39 +282,23 @@ int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
   // Pass 1: vertical causal, top to bottom.
   std::fill(state_.begin(), state_.end(), 0.0f);
   for (int row = 0; row < height_; ++row) {
-    Products(row, x_.data());
-    const float* tail = zeros_.data();
-    if (row > r) {
-      Products(row - r - 1, x_tail_.data());
-      tail = x_tail_.data();
-    }
     float* out = causal_.data() + static_cast<size_t>(row) * kQuantities * w;
     for (int q = 0; q < kQuantities; ++q) {
-      CausalRow(g, state(q, 0), state(q, 1), state(q, 2), state(q, 3), x_.data() + q * w,
-                tail + q * w, out + q * w, w);
+      CausalRow(g, state(q, 0), state(q, 1), state(q, 2), state(q, 3), Factors(row, q),
+                Factors(row - r - 1, q), out + q * w, w);
     }
   }
 
   // Pass 2: vertical anticausal, bottom to top; horizontal and NCC every 8 rows.
   std::fill(state_.begin(), state_.end(), 0.0f);
-  std::vector<float> row_sums(w);
-  const float* next = zeros_.data();  // products of the row below
   int64_t defined = 0;
   for (int row = height_ - 1; row >= 0; --row) {
-    const float* tail = zeros_.data();
-    if (row + r + 1 < height_) {
-      Products(row + r + 1, x_tail_.data());
-      tail = x_tail_.data();
-    }
     const float* causal = causal_.data() + static_cast<size_t>(row) * kQuantities * w;
     const int lane = row % kLanes;
     for (int q = 0; q < kQuantities; ++q) {
-      AnticausalRow(g, state(q, 0), state(q, 1), state(q, 2), state(q, 3), next + q * w,
-                    tail + q * w, causal + q * w, row_sums.data(), w);
-      ToLane(row_sums.data(), block_.data() + static_cast<size_t>(q) * w * kLanes, lane, w);
+      AnticausalRow(g, state(q, 0), state(q, 1), state(q, 2), state(q, 3), Factors(row + 1, q),
+                    Factors(row + r + 1, q), causal + q * w, rows_.data() + RowsOffset(q, lane), w);
     }
-    Products(row, x_.data());
-    next = x_.data();
     if (lane == 0) FinishBlock(row, ncc, &defined);
   }
   return defined;
@@ -291,6 +308,8 @@ void WindowedNcc::FinishBlock(int first_row, float* ncc, int64_t* defined) {
   const int w = width_;
   const int rows = std::min(kLanes, height_ - first_row);
   for (int q = 0; q < kQuantities; ++q) {
+    RowsToBlock(rows_.data() + RowsOffset(q, 0), w,
+                block_.data() + static_cast<size_t>(q) * w * kLanes, w);
     HorizontalBlock(ToFloat(gaussian_), block_.data() + static_cast<size_t>(q) * w * kLanes,
                     sums_.data() + static_cast<size_t>(q) * w * kLanes, w);
   }

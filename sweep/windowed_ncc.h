@@ -1,7 +1,7 @@
 // The fast CPU kernel's NCC (sweep/cpu_sweep.h): WeightedNcc's formula (sweep/reference_sweep.h)
 // with the six Gaussian-weighted sums taken by RecursiveGaussian (sweep/recursive_gaussian.h) in
 // O(1) per pixel, float32, vectorised, in two streaming passes over the image:
-//   1. top to bottom: the products of a row and the vertical causal recursion, stored;
+//   1. top to bottom: the vertical causal recursion of the products, stored;
 //   2. bottom to top: the vertical anticausal recursion, added to pass 1, and every 8 rows the
 //      horizontal recursions (8 rows in the SIMD lanes) and the NCC of those rows.
 // A workspace for one image size; reuse it across slabs (one per thread).
@@ -14,6 +14,8 @@
 #include "sweep/recursive_gaussian.h"
 
 namespace ms {
+
+struct RowFactors;  // windowed_ncc.cc
 
 class WindowedNcc {
  public:
@@ -31,7 +33,8 @@ class WindowedNcc {
   static constexpr int kLanes = 8;       // rows per horizontal block
 
  private:
-  void Products(int row, float* out) const;
+  // Quantity q of `row` as a product of two rows (zeros outside the image).
+  RowFactors Factors(int row, int q) const;
   void FinishBlock(int first_row, float* ncc, int64_t* defined);
 
   int width_, height_;
@@ -39,12 +42,16 @@ class WindowedNcc {
   double min_texture_variance_, min_window_weight_;
   const float* J_ = nullptr;
   const float* mask_ = nullptr;
-  std::vector<float> i_, ii_;      // I - 0.5 and its square
-  std::vector<float> causal_;      // pass 1: [row][quantity][col]
-  std::vector<float> state_;       // vertical recursions: [quantity][4][col]
-  std::vector<float> x_, x_tail_;  // products of two rows: [quantity][col]
-  std::vector<float> zeros_;
-  std::vector<float> block_, sums_;  // 8 rows: [quantity][col][lane]
+  std::vector<float> i_, ii_;        // I - 0.5 and its square
+  std::vector<float> causal_;        // pass 1: [row][quantity][col]
+  std::vector<float> state_;         // vertical recursions: [quantity][4][col]
+  std::vector<float> zeros_, ones_;  // one row each
+  // The 8 rows of a block as pass 2 makes them ([quantity][lane][col]), then transposed for the
+  // horizontal recursions ([quantity][col][lane]) and their sums.
+  std::vector<float> rows_, block_, sums_;
+  size_t RowsOffset(int q, int lane) const {
+    return (static_cast<size_t>(q) * kLanes + lane) * width_;
+  }
 };
 
 }  // namespace ms
