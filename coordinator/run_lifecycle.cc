@@ -50,7 +50,7 @@ StepOutcome RunLifecycle::Prepare() {
     input.Validate();
   }
   if (resuming) {
-    record_ = ReadRunFile(run_file);
+    record_ = ReadCheckpoint(run_file);
     if (record_.options_fingerprint != fingerprint) {
       throw InputError(run_file +
                        ": the run was made with other options (manifold, sweep, "
@@ -220,7 +220,38 @@ OutputMeshes RunLifecycle::WriteOutputMeshes(const std::string& name, bool with_
 
 // Writes run.h5 and summary.json; the time it took goes into the last row (and reaches the file
 // with the next checkpoint).
+// run.h5, or, if it is damaged (truncated, corrupted: its content hash does not match), the
+// previous checkpoint run.prev.h5; the damaged file is kept as run.damaged.h5 for inspection.
+RunRecord RunLifecycle::ReadCheckpoint(const std::string& run_file) {
+  try {
+    return ReadRunFile(run_file);
+  } catch (const InputError& e) {
+    const std::string previous = Path("run.prev.h5");
+    if (!fs::exists(previous)) throw;
+    spdlog::error("{}; resuming from the previous checkpoint {}", e.what(), previous);
+    RunRecord record;
+    try {
+      record = ReadRunFile(previous);
+    } catch (const InputError& e2) {
+      throw InputError(fmt::format("{}; and the previous checkpoint: {}", e.what(), e2.what()));
+    }
+    std::error_code ec;
+    fs::rename(run_file, Path("run.damaged.h5"), ec);
+    return record;
+  }
+}
+
 void RunLifecycle::Checkpoint() {
+  // Keep the checkpoint being replaced as run.prev.h5 (a hard link: no copy), then replace
+  // run.h5 atomically, so a good checkpoint exists at every moment.
+  const fs::path run = Path("run.h5"), previous = Path("run.prev.h5");
+  if (fs::exists(run)) {
+    std::error_code ec;
+    fs::remove(previous, ec);
+    fs::create_hard_link(run, previous, ec);
+    if (ec) fs::copy_file(run, previous, fs::copy_options::overwrite_existing, ec);
+    if (ec) spdlog::warn("cannot keep {} as {}: {}", run.string(), previous.string(), ec.message());
+  }
   Timer timer;
   WriteRunFile(record_, Path("run.h5"));
   record_.iterations.back().seconds_checkpoint = timer.Seconds();

@@ -78,6 +78,7 @@ class RunLifecycle {
   // Writes NAME.ply (and NAME_surface.ply with `with_surface`): the meshes users get, made
   // robust in floating point; their size and the cleanup's counts go into `row`.
   OutputMeshes WriteOutputMeshes(const std::string& name, bool with_surface, IterationStats* row);
+  RunRecord ReadCheckpoint(const std::string& run_file);
   void Checkpoint();
   StepOutcome NextOrStop();
   void Finish(const std::string& reason);

@@ -119,6 +119,28 @@ std::string SceneFingerprint(const Scene& scene) {
   return HashHex(h.Digest());
 }
 
+namespace {
+
+// XXH64 of everything a resume replays, so a damaged checkpoint is found before it is used.
+std::string CheckpointHash(int64_t completed, const std::string& scene_fingerprint,
+                           const std::string& options_fingerprint,
+                           const std::vector<int64_t>& batch_offsets,
+                           const std::vector<double>& positions,
+                           const std::vector<int64_t>& camera_offsets,
+                           const std::vector<int32_t>& cameras) {
+  Xxh64 hash;
+  hash.Update(&completed, sizeof completed);
+  hash.Update(scene_fingerprint);
+  hash.Update(options_fingerprint);
+  hash.Update(batch_offsets.data(), batch_offsets.size() * sizeof(int64_t));
+  hash.Update(positions.data(), positions.size() * sizeof(double));
+  hash.Update(camera_offsets.data(), camera_offsets.size() * sizeof(int64_t));
+  hash.Update(cameras.data(), cameras.size() * sizeof(int32_t));
+  return fmt::format("{:016x}", hash.Digest());
+}
+
+}  // namespace
+
 void WriteRunFile(const RunRecord& record, const std::string& path) {
   H5File file = H5File::Create(path);
   WriteSceneH5(record.scene, file, "/scene");
@@ -140,6 +162,10 @@ void WriteRunFile(const RunRecord& record, const std::string& path) {
     }
     batch_offsets.push_back(static_cast<int64_t>(camera_offsets.size() - 1));
   }
+  file.SetStringAttribute("/checkpoint", "content_hash",
+                          CheckpointHash(record.completed_iterations(), record.scene_fingerprint,
+                                         record.options_fingerprint, batch_offsets, positions,
+                                         camera_offsets, cameras));
   file.Write("/checkpoint/batch_offsets", batch_offsets);
   file.Write("/checkpoint/positions", positions, H5Shape{positions.size() / 3, 3});
   file.Write("/checkpoint/camera_offsets", camera_offsets);
@@ -173,6 +199,13 @@ RunRecord ReadRunFile(const std::string& path) {
   const auto positions = file.Read<double>("/checkpoint/positions", {kH5Any, 3});
   const auto camera_offsets = file.Read<int64_t>("/checkpoint/camera_offsets", {kH5Any});
   const auto cameras = file.Read<int32_t>("/checkpoint/cameras", {kH5Any});
+  // Files written before the hash have none; every newer one must match it.
+  if (file.HasAttribute("/checkpoint", "content_hash") &&
+      file.ReadStringAttribute("/checkpoint", "content_hash") !=
+          CheckpointHash(completed, record.scene_fingerprint, record.options_fingerprint,
+                         batch_offsets, positions, camera_offsets, cameras)) {
+    fail("its content hash does not match its data: the file is damaged");
+  }
   const int64_t num_points = static_cast<int64_t>(positions.size() / 3);
   if (completed < 0 || static_cast<int64_t>(batch_offsets.size()) != completed + 1) {
     fail("batch_offsets has " + std::to_string(batch_offsets.size()) + " entries for " +

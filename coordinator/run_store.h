@@ -6,6 +6,9 @@
 //   run.h5               /scene: the scene; /stats/iterations and /stats/workers: per-iteration
 //                        statistics; /checkpoint: every iteration's accepted, sorted batch of
 //                        points (the input of DelaunayManifold::Insert)
+//   run.prev.h5          the checkpoint before run.h5 (a hard link or copy), the fallback when
+//                        run.h5 is damaged: /checkpoint carries an XXH64 content hash of what a
+//                        resume replays, checked before use
 //   summary.json         the numbers for scripts
 //
 // Checkpoints work by deterministic replay: Build(scene points) followed by Insert(batch 1),
@@ -76,7 +79,7 @@ struct RunRecord {
 // A stable hash of everything in the scene that the reconstruction uses.
 std::string SceneFingerprint(const Scene& scene);
 
-// Writes run.h5 atomically. Throws InputError naming the file on failure.
+// Writes run.h5 atomically, with the content hash. Throws InputError naming the file on failure.
 void WriteRunFile(const RunRecord& record, const std::string& path);
 // Reads and checks it. Throws InputError naming the file and the dataset.
 RunRecord ReadRunFile(const std::string& path);

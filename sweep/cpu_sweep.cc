@@ -34,18 +34,16 @@ void ReprojectRow(const ReprojectionRow& p, const float* __restrict inv_z,
                   float* __restrict J, float* __restrict mask, int n) {
   const float u_max = p.width - 0.5f, v_max = p.height - 0.5f;
   for (int col = 0; col < n; ++col) {
-    // X / z = A r + b / z: homogeneous, one division per pixel.
-    const float iz = inv_z[col];  // 0 where empty
-    const float x = p.ray0[0] + col * p.ray_dx[0] + p.b[0] * iz;
-    const float y = p.ray0[1] + col * p.ray_dx[1] + p.b[1] * iz;
-    const float d = p.ray0[2] + col * p.ray_dx[2] + p.b[2] * iz;  // depth in the neighbour x iz
-    const float rd = 1.0f / d;
-    const float u = p.fx * x * rd + p.cx, v = p.fy * y * rd + p.cy;
-    bool ok = iz > 0 && d > 0 && u >= 0.5f && u <= u_max && v >= 0.5f && v <= v_max;
+    const float z = 1.0f / inv_z[col];  // +inf where empty
+    const float x = (p.ray0[0] + col * p.ray_dx[0]) * z + p.b[0];
+    const float y = (p.ray0[1] + col * p.ray_dx[1]) * z + p.b[1];
+    const float d = (p.ray0[2] + col * p.ray_dx[2]) * z + p.b[2];
+    const float u = p.fx * x / d + p.cx, v = p.fy * y / d + p.cy;
+    bool ok = inv_z[col] > 0 && d > 0 && u >= 0.5f && u <= u_max && v >= 0.5f && v <= v_max;
     const float uc = ok ? u : 0.5f, vc = ok ? v : 0.5f;  // safe to index with
     const int tu = std::min(static_cast<int>(uc), p.width - 1);
     const int tv = std::min(static_cast<int>(vc), p.height - 1);
-    ok = ok && d * shadow[tv * p.width + tu] <= p.max_depth_ratio * iz;
+    ok = ok && d * shadow[tv * p.width + tu] <= p.max_depth_ratio;
     const float sx = uc - 0.5f, sy = vc - 0.5f;
     const int x0 = std::min(static_cast<int>(sx), p.width - 1);
     const int y0 = std::min(static_cast<int>(sy), p.height - 1);
@@ -75,21 +73,20 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
   for (; col + 8 <= n; col += 8) {
     const __m256 c = _mm256_add_ps(_mm256_set1_ps(static_cast<float>(col)), iota);
     const __m256 iz = _mm256_loadu_ps(inv_z + col);
-    // X / z = A r + b / z: homogeneous, one division per pixel.
+    const __m256 z = _mm256_div_ps(one, iz);
     const __m256 x =
-        _mm256_fmadd_ps(_mm256_set1_ps(p.b[0]), iz,
-                        _mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[0]), _mm256_set1_ps(p.ray0[0])));
+        _mm256_fmadd_ps(_mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[0]), _mm256_set1_ps(p.ray0[0])),
+                        z, _mm256_set1_ps(p.b[0]));
     const __m256 y =
-        _mm256_fmadd_ps(_mm256_set1_ps(p.b[1]), iz,
-                        _mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[1]), _mm256_set1_ps(p.ray0[1])));
+        _mm256_fmadd_ps(_mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[1]), _mm256_set1_ps(p.ray0[1])),
+                        z, _mm256_set1_ps(p.b[1]));
     const __m256 d =
-        _mm256_fmadd_ps(_mm256_set1_ps(p.b[2]), iz,
-                        _mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[2]), _mm256_set1_ps(p.ray0[2])));
-    const __m256 rd = _mm256_div_ps(one, d);
-    const __m256 u =
-        _mm256_fmadd_ps(_mm256_mul_ps(_mm256_set1_ps(p.fx), x), rd, _mm256_set1_ps(p.cx));
-    const __m256 v =
-        _mm256_fmadd_ps(_mm256_mul_ps(_mm256_set1_ps(p.fy), y), rd, _mm256_set1_ps(p.cy));
+        _mm256_fmadd_ps(_mm256_fmadd_ps(c, _mm256_set1_ps(p.ray_dx[2]), _mm256_set1_ps(p.ray0[2])),
+                        z, _mm256_set1_ps(p.b[2]));
+    const __m256 u = _mm256_add_ps(_mm256_div_ps(_mm256_mul_ps(_mm256_set1_ps(p.fx), x), d),
+                                   _mm256_set1_ps(p.cx));
+    const __m256 v = _mm256_add_ps(_mm256_div_ps(_mm256_mul_ps(_mm256_set1_ps(p.fy), y), d),
+                                   _mm256_set1_ps(p.cy));
     __m256 ok =
         _mm256_and_ps(_mm256_cmp_ps(iz, zero, _CMP_GT_OQ), _mm256_cmp_ps(d, zero, _CMP_GT_OQ));
     ok = _mm256_and_ps(
@@ -101,7 +98,7 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
     const __m256i tv = _mm256_min_epi32(_mm256_cvttps_epi32(vc), last_row);
     const __m256 depth_ratio = _mm256_mul_ps(
         d, _mm256_i32gather_ps(shadow, _mm256_add_epi32(_mm256_mullo_epi32(tv, stride), tu), 4));
-    ok = _mm256_and_ps(ok, _mm256_cmp_ps(depth_ratio, _mm256_mul_ps(ratio, iz), _CMP_LE_OQ));
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(depth_ratio, ratio, _CMP_LE_OQ));
     const __m256 sx = _mm256_sub_ps(uc, half), sy = _mm256_sub_ps(vc, half);
     const __m256i x0 = _mm256_min_epi32(_mm256_cvttps_epi32(sx), last_col);
     const __m256i y0 = _mm256_min_epi32(_mm256_cvttps_epi32(sy), last_row);

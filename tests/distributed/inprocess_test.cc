@@ -14,6 +14,7 @@
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
 #include "proto/transport.h"
+#include "scene/h5_file.h"
 #include "sweep/sweep_kernel_factory.h"
 #include "tests/distributed/pyramid_scene_files.h"
 #include "worker/job_codec.h"
@@ -57,13 +58,15 @@ class InProcessRun : public ::testing::Test {
   // Runs to the end with `workers` worker threads; `junk` is sent first by a rogue client, and
   // `rogues` more workers return points that no sweep of their job could find.
   CoordinatorResult Run(const std::string& name, int workers,
-                        const std::vector<std::string>& junk = {}, int rogues = 0) {
+                        const std::vector<std::string>& junk = {}, int rogues = 0,
+                        bool resume = false) {
     auto network = InMemoryNetwork::Create();
     auto server = network->Bind();
     CoordinatorOptions options;
     options.input = scene_;
     options.output_dir = (root_ / name).string();
     options.run.max_iterations = 2;
+    options.run.resume = resume;
     options.scheduler.heartbeat_interval_s = 0.05;
     options.scheduler.liveness = 4;
     options.sweep.tile_size_px = 10;
@@ -133,6 +136,49 @@ TEST_F(InProcessRun, AWorkerWhosePointsDoNotFitItsJobsIsSentAway) {
   const CoordinatorResult mixed = Run("mixed", 1, {}, /*rogues=*/1);
   EXPECT_EQ(mixed.status, "finished");
   EXPECT_EQ(ReadFileToString(honest.final_mesh), ReadFileToString(mixed.final_mesh));
+}
+
+// A damaged checkpoint (truncated, or with data that no longer matches its content hash) is
+// reported and the run resumes from the previous one, to the same mesh; with both damaged the
+// error names both.
+TEST_F(InProcessRun, ADamagedCheckpointResumesFromThePreviousOne) {
+  const CoordinatorResult clean = Run("clean", 1);
+  const fs::path dir = root_ / "clean";
+  ASSERT_TRUE(fs::exists(dir / "run.prev.h5"));
+  const std::string mesh = ReadFileToString(clean.final_mesh);
+  // Truncated at half its size.
+  fs::resize_file(dir / "run.h5", fs::file_size(dir / "run.h5") / 2);
+  const CoordinatorResult truncated = Run("clean", 1, {}, 0, /*resume=*/true);
+  EXPECT_EQ(truncated.status, "finished");
+  EXPECT_EQ(ReadFileToString(truncated.final_mesh), mesh);
+  EXPECT_TRUE(fs::exists(dir / "run.damaged.h5"));
+  // One point moved inside the file, its hash left as it was.
+  {
+    H5File file = H5File::OpenReadWrite((dir / "run.h5").string());
+    std::vector<double> positions = file.Read<double>("/checkpoint/positions", {kH5Any, 3});
+    ASSERT_FALSE(positions.empty());
+    positions[0] += 1e-3;
+    file.Write("/checkpoint/positions", positions, H5Shape{positions.size() / 3, 3});
+  }
+  const CoordinatorResult altered = Run("clean", 1, {}, 0, /*resume=*/true);
+  EXPECT_EQ(ReadFileToString(altered.final_mesh), mesh);
+  // Both damaged: one error naming both.
+  fs::resize_file(dir / "run.h5", 100);
+  fs::resize_file(dir / "run.prev.h5", 100);
+  auto network = InMemoryNetwork::Create();
+  auto server = network->Bind();
+  CoordinatorOptions options;
+  options.output_dir = dir.string();
+  options.run.resume = true;
+  Coordinator coordinator(options, server.get());
+  try {
+    coordinator.Run({});
+    ADD_FAILURE() << "resumed from two damaged checkpoints";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("run.h5"), std::string::npos) << what;
+    EXPECT_NE(what.find("run.prev.h5"), std::string::npos) << what;
+  }
 }
 
 TEST_F(InProcessRun, ChangedOptionsCannotResumeARun) {
