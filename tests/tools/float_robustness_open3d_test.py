@@ -17,19 +17,16 @@ import os
 import subprocess
 import sys
 
+from open3d_import import open3d_or_skip
+
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--manisweep", required=True)
     parser.add_argument("--workdir", required=True)
     args = parser.parse_args()
-    try:
-        import numpy as np
-        import open3d as o3d
-    except Exception as e:  # ImportError, or a broken binary module
-        print(f"SKIP: open3d is not importable with {sys.executable}: {e}")
-        return 77
-    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
+    o3d = open3d_or_skip()
+    import numpy as np
     os.makedirs(args.workdir, exist_ok=True)
 
     # A rotation with no axis along the coordinate axes: Open3D's test scales each axis of a

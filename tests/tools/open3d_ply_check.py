@@ -12,19 +12,16 @@ import os
 import subprocess
 import sys
 
+from open3d_import import open3d_or_skip
+
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--writer", required=True, help="path of mesh_io_sample_writer")
     parser.add_argument("--workdir", required=True, help="folder for the written files")
     args = parser.parse_args()
-    try:
-        import numpy as np
-        import open3d as o3d
-    except Exception as e:  # ImportError, or a broken binary module
-        print(f"SKIP: open3d is not importable with {sys.executable}: {e}")
-        return 77
-    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
+    o3d = open3d_or_skip()
+    import numpy as np
 
     subprocess.run([args.writer, args.workdir], check=True)
     with open(os.path.join(args.workdir, "expected.json")) as f:

@@ -7,6 +7,8 @@ self-intersections; 1: one is not; 77: Open3D is not importable (CTest SKIP_RETU
 import argparse
 import sys
 
+from open3d_import import open3d_or_skip
+
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
@@ -14,12 +16,7 @@ def main():
     parser.add_argument("--open", action="store_true",
                         help="meshes with a boundary: require edge- and vertex-manifold, not watertight")
     args = parser.parse_args()
-    try:
-        import open3d as o3d
-    except Exception as e:  # ImportError, or a broken binary module
-        print(f"SKIP: open3d is not importable with {sys.executable}: {e}")
-        return 77
-    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
+    o3d = open3d_or_skip()
     ok = True
     for path in args.meshes:
         mesh = o3d.io.read_triangle_mesh(path)

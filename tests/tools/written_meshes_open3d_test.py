@@ -16,6 +16,8 @@ import os
 import subprocess
 import sys
 
+from open3d_import import open3d_or_skip
+
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
@@ -24,11 +26,7 @@ def main():
     parser.add_argument("--verdict", required=True, help="tests/tools/open3d_verdict.py")
     parser.add_argument("--workdir", required=True)
     args = parser.parse_args()
-    try:
-        import open3d  # noqa: F401
-    except Exception as e:  # ImportError, or a broken binary module
-        print(f"SKIP: open3d is not importable with {sys.executable}: {e}")
-        return 77
+    open3d_or_skip()
     real = ["castle-P30", "fountain-P11", "templeSparseRing", "dinoSparseRing"]
     missing = [d for d in real if not os.path.isdir(os.path.join(args.data, d, "sparse"))]
     if missing:
