@@ -51,7 +51,7 @@ for size in 1600 0; do
   "$manisweep" reconstruct --input "$fountain" --output "$work/run_$size" --workers "$workers" \
     --kernel "$kernel" --max-iterations "$iterations" --sweep.max-image-dimension "$size" \
     > "$work/log_$size.txt" 2>&1 || { tail -20 "$work/log_$size.txt"; exit 1; }
-  grep -E "kernel .* for --kernel" "$work/log_$size.txt" | head -1 || true
+  grep -E "joined \(kernel" "$work/log_$size.txt" | head -1 || true
   python3 - "$work/run_$size/summary.json" <<'PY'
 import json, sys
 summary = json.load(open(sys.argv[1]))
