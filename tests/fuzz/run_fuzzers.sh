@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds the scene-format fuzz targets with clang (ASan + UBSan + libFuzzer) into build-fuzz/
+# Builds the scene-format and protocol fuzz targets with clang (ASan + UBSan + libFuzzer) into build-fuzz/
 # and runs each for SECONDS (default 60), seeded from tests/data and tests/corpus. Findings
 # (crash-*, leak-*, timeout-*, oom-*) land in build-fuzz/fuzz-out/<target>/; the script exits
 # non-zero if any target found something.
@@ -13,7 +13,8 @@ BUILD=${BUILD_DIR:-build-fuzz}
 SECONDS_PER_TARGET=${SECONDS_PER_TARGET:-60}
 TARGETS=("$@")
 [ ${#TARGETS[@]} -eq 0 ] && TARGETS=(fuzz_colmap_text fuzz_colmap_binary fuzz_nvm fuzz_bundler
-  fuzz_openmvg fuzz_strecha fuzz_middlebury fuzz_image_header)
+  fuzz_openmvg fuzz_strecha fuzz_middlebury fuzz_image_header fuzz_protocol_coordinator
+  fuzz_protocol_worker)
 
 cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
   -DCMAKE_CXX_COMPILER=clang++ -DMANISWEEP_FUZZ=ON -DMANISWEEP_BUILD_BENCH=OFF >/dev/null
@@ -52,6 +53,13 @@ for f in "$D"/images/* "$C"/image/*; do seed fuzz_image_header "$(basename "$f")
 # A real JPEG header for the image target.
 [ -f "$ROOT/../shared/data/fountain-P11/images/0000.jpg" ] &&
   head -c 4096 "$ROOT/../shared/data/fountain-P11/images/0000.jpg" | seed fuzz_image_header fountain.jpg
+
+# The protocol targets write their own seeds: valid frames (a job, a result, a heartbeat).
+for t in fuzz_protocol_coordinator fuzz_protocol_worker; do
+  if [ -x "$BUILD/tests/fuzz/$t" ]; then
+    MS_WRITE_SEEDS="$SEEDS/$t" "$BUILD/tests/fuzz/$t" -runs=0 >/dev/null 2>&1 || true
+  fi
+done
 
 # UBSan only reports by default; make its findings stop the run like ASan's.
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
