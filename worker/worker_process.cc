@@ -159,8 +159,11 @@ class Worker::Impl {
 
   void Connect() {
     transport_ = connect_();
-    if (phase_ == Phase::kComputing) {
-      SendHeartbeat();  // busy: the result will say when we are idle
+    if (phase_ != Phase::kIdle) {
+      // Busy (fetching images or computing), maybe for a coordinator that has since restarted:
+      // a heartbeat says so, and the result will say when we are idle. A Ready here would get
+      // us a second job, refused as "busy", which would count against that job's attempts.
+      SendHeartbeat();
       return;
     }
     wire::Envelope envelope = stamper_.New();

@@ -1,0 +1,122 @@
+#!/usr/bin/python3
+"""Chaos run: a coordinator and 3 workers as real processes on loopback while a seeded driver
+SIGKILLs workers (starting a new one each time) and the coordinator (restarting it with --resume)
+at random moments: during kernels, image fetches, insertion, job building, checkpoint writes.
+The final mesh must be byte-identical to an undisturbed `reconstruct` of the same scene and
+options: no result lost or inserted twice. Prints the kills survived.
+
+  chaos_test.py --manisweep BIN --workdir DIR [--seed 1] [--kills 20] [--iterations 4]
+"""
+import argparse
+import filecmp
+import os
+import random
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+SWEEP = ["--sweep.tile-size-px", "10", "--sweep.gaussian-sigma-px", "4"]
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--manisweep", required=True)
+    parser.add_argument("--workdir", required=True)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--kills", type=int, default=20, help="kills in all (workers and coordinator)")
+    parser.add_argument("--iterations", type=int, default=4)
+    parser.add_argument("--time-limit", type=float, default=240)
+    args = parser.parse_args()
+    ms, work = args.manisweep, args.workdir
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    logs = open(os.path.join(work, "processes.log"), "w")
+
+    def run(cmd):
+        subprocess.run(cmd, check=True, stdout=logs, stderr=subprocess.STDOUT)
+
+    run([ms, "synth", "pyramid-down", "--views", "8", "--width", "200", "--height", "150",
+         "--output", os.path.join(work, "scene")])
+    scene = os.path.join(work, "scene", "scene.h5")
+    iterations = ["--max-iterations", str(args.iterations)]
+    run([ms, "reconstruct", "--input", scene, "--output", os.path.join(work, "undisturbed"),
+         "--workers", "2"] + iterations + SWEEP)
+
+    port = free_port()
+    out = os.path.join(work, "chaos")
+    coordinator_cmd = [ms, "coordinator", "--input", scene, "--bind", f"tcp://127.0.0.1:{port}",
+                       "--output", out, "--resume", "--heartbeat-interval", "0.1", "--liveness", "8",
+                       "--lease", "60", "--progress-interval", "1",
+                       # The driver kills workers mid-job on purpose: a job that loses 5 of them
+                       # is not the poison job --max-attempts is there to stop.
+                       "--max-attempts", "1000"] + iterations + SWEEP
+    next_worker = [0]
+
+    def start_worker():
+        i = next_worker[0]
+        next_worker[0] += 1
+        return subprocess.Popen(
+            [ms, "worker", "--connect", f"tcp://127.0.0.1:{port}", "--id", f"w{i}", "--threads", "1",
+             "--heartbeat-interval", "0.1", "--liveness", "8", "--reconnect-initial", "0.1",
+             "--reconnect-max", "0.5", "--give-up-after", "60", "--cache-dir",
+             os.path.join(work, "cache", f"w{i}")], stdout=logs, stderr=subprocess.STDOUT)
+
+    def start_coordinator():
+        return subprocess.Popen(coordinator_cmd, stdout=logs, stderr=subprocess.STDOUT)
+
+    rng = random.Random(args.seed)
+    coordinator = start_coordinator()
+    workers = [start_worker() for _ in range(3)]
+    killed = {"worker": 0, "coordinator": 0}
+    deadline = time.time() + args.time_limit
+    status = None
+    while time.time() < deadline:
+        time.sleep(rng.uniform(0.05, 0.5))
+        status = coordinator.poll()
+        if status is not None:
+            break
+        if killed["worker"] + killed["coordinator"] >= args.kills:
+            continue
+        if rng.random() < 0.3:
+            coordinator.send_signal(signal.SIGKILL)
+            coordinator.wait()
+            killed["coordinator"] += 1
+            coordinator = start_coordinator()
+        else:
+            victim = rng.randrange(len(workers))
+            workers[victim].send_signal(signal.SIGKILL)
+            workers[victim].wait()
+            killed["worker"] += 1
+            workers[victim] = start_worker()
+    if status is None:
+        coordinator.kill()
+        print(f"FAIL: the run did not finish within {args.time_limit} s")
+        return 1
+    for w in workers:
+        try:
+            w.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            w.kill()
+    print(f"chaos run (seed {args.seed}): {killed['worker']} workers and {killed['coordinator']} "
+          f"coordinators killed with SIGKILL; coordinator exit status {status}")
+    if status != 0:
+        print(f"FAIL: the last coordinator exited with {status} (see {logs.name})")
+        return 1
+    same = filecmp.cmp(os.path.join(work, "undisturbed", "final.ply"),
+                       os.path.join(out, "final.ply"), shallow=False)
+    print(("ok" if same else "FAIL") + ": final.ply " +
+          ("byte-identical to" if same else "differs from") + " the undisturbed run's")
+    return 0 if same else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
