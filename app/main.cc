@@ -1,12 +1,14 @@
 // manisweep: one binary, many commands. See `manisweep help`.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <string>
 
 #include "app/commands.h"
 #include "base/error.h"
 #include "base/log.h"
+#include "scene/h5_file.h"
 
 namespace {
 
@@ -111,6 +113,11 @@ int main(int argc, char** argv) {
     return ms::kExitBadInput;
   } catch (const ms::InputError& e) {
     std::fprintf(stderr, "manisweep: error: %s\n", e.what());
+    if (ms::Hdf5FilesAbandoned()) {
+      // A write failed (a full disk): HDF5's clean-up at exit would crash on the file left open.
+      std::fflush(nullptr);
+      std::_Exit(ms::kExitBadInput);
+    }
     return ms::kExitBadInput;
   } catch (const ms::InternalError& e) {
     std::fprintf(stderr, "manisweep: internal error: %s\n", e.what());

@@ -59,10 +59,21 @@ void QuietHdf5() {
 }
 
 std::string Hdf5Detail(const H5::Exception& e) {
-  if (!t_last_hdf5_error.empty()) return t_last_hdf5_error;
-  std::string text = e.getFuncName();
-  if (!e.getDetailMsg().empty()) text += (text.empty() ? "" : ": ") + e.getDetailMsg();
-  return text.empty() ? "HDF5 error" : text;
+  std::string text = t_last_hdf5_error;
+  if (text.empty()) {
+    text = e.getFuncName();
+    if (!e.getDetailMsg().empty()) text += (text.empty() ? "" : ": ") + e.getDetailMsg();
+  }
+  if (text.empty()) return "HDF5 error";
+  // One line: HDF5's messages (a failed write's, for one) can hold line breaks.
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  return text;
+}
+
+// Created files left open after a failure (Impl::Discard), never destroyed.
+std::vector<H5::H5File>& AbandonedFiles() {
+  static auto* files = new std::vector<H5::H5File>();
+  return *files;
 }
 
 // C calls report failure by a negative result; turn it into the C++ API's exception so that one
@@ -356,9 +367,19 @@ struct H5File::Impl {
   // Closes without committing; removes an uncommitted temporary. Never throws.
   void Discard() noexcept {
     QuietHdf5();
-    try {
-      if (file) file->close();
-    } catch (...) {
+    if (file && pending) {
+      // An unfinished created file is discarded after a failure, maybe a failed write (a full
+      // disk). HDF5 1.10.8 can crash closing a file whose writes failed (found by the full-disk
+      // test), so its handle is left open: the process is about to report the error anyway.
+      try {
+        AbandonedFiles().push_back(*file);
+      } catch (...) {
+      }
+    } else {
+      try {
+        if (file) file->close();
+      } catch (...) {
+      }
     }
     file.reset();
     if (pending) {
@@ -696,6 +717,8 @@ H5::FileAccPropList MakeAccessProperties() {
 }
 
 }  // namespace
+
+bool Hdf5FilesAbandoned() { return !AbandonedFiles().empty(); }
 
 H5File::H5File(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 H5File::H5File(H5File&&) noexcept = default;

@@ -80,6 +80,11 @@ struct H5Column {
 };
 using H5Value = std::variant<double, float, int32_t, int64_t, uint8_t, std::string>;
 
+// True once a file being created was abandoned after a failed write (a full disk): HDF5 1.10.8
+// can crash closing such a file, and its own clean-up at exit would, so the process should then
+// end without running exit handlers (app/main.cc does).
+bool Hdf5FilesAbandoned();
+
 class H5File {
  public:
   // Creates a new file atomically: everything goes to TempPathFor(path) (base/file_util.h) and

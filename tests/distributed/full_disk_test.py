@@ -1,0 +1,95 @@
+#!/usr/bin/python3
+"""A full disk in the middle of a run: the coordinator's writes fail (RLIMIT_FSIZE with SIGXFSZ
+ignored, so every write beyond the limit fails with EFBIG as on a full disk). It must stop with one
+clear error line naming the file, leave the previous checkpoint intact, and `--resume` with the
+space back must finish to the mesh of an undisturbed run, byte for byte.
+
+  full_disk_test.py --manisweep BIN --workdir DIR
+"""
+import argparse
+import filecmp
+import os
+import shutil
+import socket
+import subprocess
+import sys
+
+SWEEP = ["--sweep.tile-size-px", "10", "--sweep.gaussian-sigma-px", "4"]
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--manisweep", required=True)
+    parser.add_argument("--workdir", required=True)
+    args = parser.parse_args()
+    ms, work = args.manisweep, args.workdir
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    log = open(os.path.join(work, "processes.log"), "w")
+    subprocess.run([ms, "synth", "pyramid-down", "--views", "8", "--width", "200", "--height", "150",
+                    "--output", os.path.join(work, "scene")], check=True, stdout=log, stderr=log)
+    scene = os.path.join(work, "scene", "scene.h5")
+    iterations = ["--max-iterations", "6"]
+    subprocess.run([ms, "reconstruct", "--input", scene, "--output", os.path.join(work, "undisturbed"),
+                    "--workers", "2"] + iterations + SWEEP, check=True, stdout=log, stderr=log)
+    # The limit: a little more than the undisturbed run's checkpoint after its first iterations,
+    # less than its last one, so a later checkpoint (or mesh) write fails.
+    final_size = os.path.getsize(os.path.join(work, "undisturbed", "run.h5"))
+    limit_kb = max(1, final_size * 2 // 3 // 1024)
+
+    out = os.path.join(work, "full")
+    port = free_port()
+    coordinator = [ms, "coordinator", "--input", scene, "--bind", f"tcp://127.0.0.1:{port}",
+                   "--output", out, "--resume", "--heartbeat-interval", "0.1", "--liveness", "8"]
+    coordinator += iterations + SWEEP
+    def start_workers(tag):
+        return [subprocess.Popen([ms, "worker", "--connect", f"tcp://127.0.0.1:{port}", "--id",
+                                  f"{tag}{i}", "--threads", "1", "--heartbeat-interval", "0.1",
+                                  "--liveness", "8", "--reconnect-initial", "0.1",
+                                  "--reconnect-max", "0.5", "--give-up-after", "30", "--cache-dir",
+                                  os.path.join(work, "cache", f"{tag}{i}")], stdout=log, stderr=log)
+                for i in range(2)]
+
+    workers = start_workers("full")
+    limited = subprocess.run(["bash", "-c", f"trap '' XFSZ; ulimit -f {limit_kb}; exec \"$@\"", "-"]
+                             + coordinator, capture_output=True, text=True)
+    errors = [line for line in limited.stderr.splitlines() if "error" in line]
+    print(f"limit {limit_kb} KiB: exit {limited.returncode}; error lines: {errors}")
+    ok = True
+    if limited.returncode == 0 or len(errors) != 1 or out not in errors[0]:
+        print("FAIL: expected a non-zero exit and one error line naming a file in the output")
+        ok = False
+    leftovers = [f for f in os.listdir(out) if ".tmp-" in f]
+    if leftovers:
+        print(f"FAIL: temporary files left behind: {leftovers}")
+        ok = False
+    for w in workers:  # told to shut down by the failing coordinator
+        try:
+            w.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            w.kill()
+    workers = start_workers("space")
+    resumed = subprocess.run(coordinator, stdout=log, stderr=log)
+    for w in workers:
+        try:
+            w.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            w.kill()
+    if resumed.returncode != 0:
+        print(f"FAIL: the resumed run exited with {resumed.returncode}")
+        return 1
+    same = filecmp.cmp(os.path.join(work, "undisturbed", "final.ply"), os.path.join(out, "final.ply"),
+                       shallow=False)
+    print(("ok" if same else "FAIL") + ": after --resume final.ply is " +
+          ("byte-identical to" if same else "different from") + " the undisturbed run's")
+    return 0 if ok and same else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
