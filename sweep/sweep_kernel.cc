@@ -243,31 +243,39 @@ SweepPoint MakeSweepPoint(const TileWinner& winner, const PreparedSweep& prep) {
   return point;
 }
 
+int SweepPyramidLevel(int longest_side, const SweepOptions& options) {
+  if (options.pyramid_level >= 0) return options.pyramid_level;
+  int level = 0;
+  if (options.max_image_dimension > 0) {
+    while ((longest_side >> level) > options.max_image_dimension && level < 12) ++level;
+  }
+  return level;
+}
+
+cv::Size SweptImageSize(int width, int height, int level) {
+  const double factor = std::ldexp(1.0, -level);
+  return {std::max(1, static_cast<int>(std::lround(width * factor))),
+          std::max(1, static_cast<int>(std::lround(height * factor)))};
+}
+
 PreparedSweep PrepareSweep(const SweepJob& job) {
   CheckSweepJob(job);
   const SweepOptions& options = job.options;
   PreparedSweep prep;
 
   // Resolution: one level for the whole job so all cameras share the same pixel scale.
-  int level = options.pyramid_level;
-  if (level < 0) {
-    level = 0;
-    if (options.max_image_dimension > 0) {
-      int longest = std::max(job.camera.view.intrinsics.width, job.camera.view.intrinsics.height);
-      for (const SweepCamera& n : job.neighbours) {
-        longest = std::max({longest, n.view.intrinsics.width, n.view.intrinsics.height});
-      }
-      while ((longest >> level) > options.max_image_dimension && level < 12) ++level;
-    }
+  int longest = std::max(job.camera.view.intrinsics.width, job.camera.view.intrinsics.height);
+  for (const SweepCamera& n : job.neighbours) {
+    longest = std::max({longest, n.view.intrinsics.width, n.view.intrinsics.height});
   }
+  const int level = SweepPyramidLevel(longest, options);
   prep.pyramid_level = level;
   const auto scale_camera = [level](const SweepCamera& in) {
     SweepCamera out = in;
     if (level == 0) return out;
     Intrinsics& k = out.view.intrinsics;
-    const double factor = std::ldexp(1.0, -level);
-    const int width = std::max(1, static_cast<int>(std::lround(k.width * factor)));
-    const int height = std::max(1, static_cast<int>(std::lround(k.height * factor)));
+    const cv::Size swept = SweptImageSize(k.width, k.height, level);
+    const int width = swept.width, height = swept.height;
     const double sx = static_cast<double>(width) / k.width;
     const double sy = static_cast<double>(height) / k.height;
     k.fx *= sx;

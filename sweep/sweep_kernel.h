@@ -123,6 +123,12 @@ struct PreparedSweep {
   cv::Mat window;  // GaussianWindow(options.gaussian_sigma_px)
 };
 
+// The pyramid level of a job whose largest image side is `longest_side`: options.pyramid_level
+// if set, else the smallest level at which that side fits max_image_dimension (0: full size).
+int SweepPyramidLevel(int longest_side, const SweepOptions& options);
+// An image's size at a pyramid level, as PrepareSweep resizes it (rounded, at least 1 x 1).
+cv::Size SweptImageSize(int width, int height, int level);
+
 // Checks the job (CheckSweepJob), picks the pyramid level, resizes images (cv::INTER_AREA) and
 // scales intrinsics (fx, cx by the width ratio, fy, cy by the height ratio: exact with the
 // corner-origin convention), and derives alpha (docs/sweep.md).

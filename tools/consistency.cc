@@ -33,24 +33,6 @@ std::string ConsistencyReport::ToTable() const {
   return table;
 }
 
-namespace {
-
-// Pixels of an image at the sweep's resolution (PrepareSweep's pyramid level for this image).
-int64_t SweptPixels(const Intrinsics& k, const SweepOptions& options) {
-  int level = options.pyramid_level;
-  if (level < 0) {
-    level = 0;
-    while (options.max_image_dimension > 0 &&
-           (std::max(k.width, k.height) >> level) > options.max_image_dimension) {
-      ++level;
-    }
-  }
-  const double scale = std::ldexp(1.0, -level);
-  return std::lround(k.width * scale) * std::lround(k.height * scale);
-}
-
-}  // namespace
-
 ConsistencyReport MeasureConsistency(const Scene& scene, const Mesh& mesh,
                                      const ConsistencyOptions& options) {
   if (!(options.ncc_threshold > -1 && options.ncc_threshold < 1)) {
@@ -74,7 +56,10 @@ ConsistencyReport MeasureConsistency(const Scene& scene, const Mesh& mesh,
     CameraConsistency result;
     result.camera = c;
     if (job.mesh.NumFaces() == 0) {  // the mesh is entirely out of view: nothing is consistent
-      result.pixels = SweptPixels(job.camera.view.intrinsics, options.sweep);
+      const Intrinsics& k = job.camera.view.intrinsics;
+      const cv::Size size = SweptImageSize(
+          k.width, k.height, SweepPyramidLevel(std::max(k.width, k.height), options.sweep));
+      result.pixels = static_cast<int64_t>(size.width) * size.height;
       report.cameras.push_back(result);
       continue;
     }
