@@ -355,9 +355,10 @@ void H5FileOptions::Check() const {
 // ---------------------------------------------------------------------------------------------
 
 struct H5File::Impl {
-  std::string path;      // what the user named, used in messages
-  fs::path temp_path;    // Create(): where the file is written until Commit()
-  bool pending = false;  // Create() and not yet committed
+  std::string path;             // what the user named, used in messages
+  fs::path temp_path;           // Create(): where the file is written until Commit()
+  bool pending = false;         // Create() and not yet committed
+  mutable bool failed = false;  // an HDF5 operation on it failed (Guard)
   bool writable = false;
   H5FileOptions options;
   std::optional<H5::H5File> file;
@@ -367,10 +368,10 @@ struct H5File::Impl {
   // Closes without committing; removes an uncommitted temporary. Never throws.
   void Discard() noexcept {
     QuietHdf5();
-    if (file && pending) {
-      // An unfinished created file is discarded after a failure, maybe a failed write (a full
-      // disk). HDF5 1.10.8 can crash closing a file whose writes failed (found by the full-disk
-      // test), so its handle is left open: the process is about to report the error anyway.
+    if (file && pending && failed) {
+      // An unfinished created file discarded after an HDF5 failure, maybe a failed write (a
+      // full disk): HDF5 1.10.8 can crash closing such a file (found by the full-disk test), so
+      // its handle is left open; the process is about to report the error anyway.
       try {
         AbandonedFiles().push_back(*file);
       } catch (...) {
@@ -401,6 +402,7 @@ struct H5File::Impl {
     try {
       return body();
     } catch (const H5::Exception& e) {
+      failed = true;
       Fail(object, std::string(action) + ": " + Hdf5Detail(e));
     }
   }

@@ -80,9 +80,9 @@ struct H5Column {
 };
 using H5Value = std::variant<double, float, int32_t, int64_t, uint8_t, std::string>;
 
-// True once a file being created was abandoned after a failed write (a full disk): HDF5 1.10.8
-// can crash closing such a file, and its own clean-up at exit would, so the process should then
-// end without running exit handlers (app/main.cc does).
+// True once a file being created was abandoned after an HDF5 failure on it (a failed write: a
+// full disk): HDF5 1.10.8 can crash closing such a file, and its own clean-up at exit would, so
+// the process should then end without running exit handlers (app/main.cc does).
 bool Hdf5FilesAbandoned();
 
 class H5File {
