@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <random>
 
-#include "proto/wire.h"
+#include "coordinator/test_job.h"
 
 namespace ms {
 namespace {
@@ -88,32 +88,6 @@ TEST(InsertionBatch, ARefusedJobCountsAsAJobWithoutPoints) {
   EXPECT_TRUE(batch.Sorted().empty());
 }
 
-// Camera 2 at the origin looking along +z (640 x 480, f = 500) with neighbours 0 and 3; its
-// visible mesh a square at z = 5. Default options: 19 offsets, automatic alpha, so points may lie
-// at camera z within 5 -+ 9 x 0.02 x 5.
-wire::Job MakeJob() {
-  wire::Job job;
-  job.set_job_id(uint64_t{1} << 32 | 2);
-  View view;
-  view.intrinsics.width = 640;
-  view.intrinsics.height = 480;
-  view.intrinsics.fx = view.intrinsics.fy = 500;
-  view.intrinsics.cx = 320;
-  view.intrinsics.cy = 240;
-  ViewToWire(2, view, job.mutable_camera());
-  for (int32_t n : {0, 3}) {
-    View other = view;
-    other.SetCenter({n - 1.0, 0, 0});
-    ViewToWire(n, other, job.add_neighbours());
-  }
-  Mesh square;
-  square.vertices = {{-2, -2, 5}, {2, -2, 5}, {2, 2, 5}, {-2, 2, 5}};
-  square.faces = {{0, 1, 2}, {0, 2, 3}};
-  PackMesh(square, job.mutable_mesh());
-  job.mutable_options()->set_num_offsets(20);
-  return job;
-}
-
 wire::SweepPoint* AddPoint(wire::Result* result, const Eigen::Vector3d& x,
                            std::vector<int32_t> cameras) {
   wire::SweepPoint* p = result->add_points();
@@ -127,7 +101,7 @@ wire::SweepPoint* AddPoint(wire::Result* result, const Eigen::Vector3d& x,
 }
 
 TEST(InsertionBatch, ResultsThatDoNotFitTheirJobAreRefusedWithTheReason) {
-  const JobBounds job = JobBoundsFromWire(MakeJob());
+  const JobBounds job = JobBoundsFromWire(testing::MakeSmallTestJob());
   EXPECT_EQ(job.cameras, (std::vector<int32_t>{2, 0, 3}));
   EXPECT_NEAR(job.min_depth, 4.1, 1e-12);
   EXPECT_NEAR(job.max_depth, 5.9, 1e-12);

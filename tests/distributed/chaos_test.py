@@ -13,18 +13,11 @@ import os
 import random
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
 
-SWEEP = ["--sweep.tile-size-px", "10", "--sweep.gaussian-sigma-px", "4"]
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+from run_helpers import HEARTBEAT, SWEEP, free_port, make_scene, start_worker
 
 
 def main():
@@ -44,9 +37,7 @@ def main():
     def run(cmd):
         subprocess.run(cmd, check=True, stdout=logs, stderr=subprocess.STDOUT)
 
-    run([ms, "synth", "pyramid-down", "--views", "8", "--width", "200", "--height", "150",
-         "--output", os.path.join(work, "scene")])
-    scene = os.path.join(work, "scene", "scene.h5")
+    scene = make_scene(ms, work, logs)
     iterations = ["--max-iterations", str(args.iterations)]
     run([ms, "reconstruct", "--input", scene, "--output", os.path.join(work, "undisturbed"),
          "--workers", "2"] + iterations + SWEEP)
@@ -54,28 +45,22 @@ def main():
     port = free_port()
     out = os.path.join(work, "chaos")
     coordinator_cmd = [ms, "coordinator", "--input", scene, "--bind", f"tcp://127.0.0.1:{port}",
-                       "--output", out, "--resume", "--heartbeat-interval", "0.1", "--liveness", "8",
-                       "--lease", "60", "--progress-interval", "1",
+                       "--output", out, "--resume"] + HEARTBEAT + ["--lease", "60", "--progress-interval", "1",
                        # The driver kills workers mid-job on purpose: a job that loses 5 of them
                        # is not the poison job --max-attempts is there to stop.
                        "--max-attempts", "1000"] + iterations + SWEEP
     next_worker = [0]
 
-    def start_worker():
-        i = next_worker[0]
+    def new_worker():
         next_worker[0] += 1
-        return subprocess.Popen(
-            [ms, "worker", "--connect", f"tcp://127.0.0.1:{port}", "--id", f"w{i}", "--threads", "1",
-             "--heartbeat-interval", "0.1", "--liveness", "8", "--reconnect-initial", "0.1",
-             "--reconnect-max", "0.5", "--give-up-after", "60", "--cache-dir",
-             os.path.join(work, "cache", f"w{i}")], stdout=logs, stderr=subprocess.STDOUT)
+        return start_worker(ms, port, f"w{next_worker[0]}", work, logs)
 
     def start_coordinator():
         return subprocess.Popen(coordinator_cmd, stdout=logs, stderr=subprocess.STDOUT)
 
     rng = random.Random(args.seed)
     coordinator = start_coordinator()
-    workers = [start_worker() for _ in range(3)]
+    workers = [new_worker() for _ in range(3)]
     killed = {"worker": 0, "coordinator": 0}
     deadline = time.time() + args.time_limit
     status = None
@@ -96,7 +81,7 @@ def main():
             workers[victim].send_signal(signal.SIGKILL)
             workers[victim].wait()
             killed["worker"] += 1
-            workers[victim] = start_worker()
+            workers[victim] = new_worker()
     if status is None:
         coordinator.kill()
         print(f"FAIL: the run did not finish within {args.time_limit} s")

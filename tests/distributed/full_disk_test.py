@@ -10,17 +10,10 @@ import argparse
 import filecmp
 import os
 import shutil
-import socket
 import subprocess
 import sys
 
-SWEEP = ["--sweep.tile-size-px", "10", "--sweep.gaussian-sigma-px", "4"]
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+from run_helpers import HEARTBEAT, SWEEP, free_port, make_scene, start_worker
 
 
 def main():
@@ -32,9 +25,7 @@ def main():
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
     log = open(os.path.join(work, "processes.log"), "w")
-    subprocess.run([ms, "synth", "pyramid-down", "--views", "8", "--width", "200", "--height", "150",
-                    "--output", os.path.join(work, "scene")], check=True, stdout=log, stderr=log)
-    scene = os.path.join(work, "scene", "scene.h5")
+    scene = make_scene(ms, work, log)
     iterations = ["--max-iterations", "6"]
     subprocess.run([ms, "reconstruct", "--input", scene, "--output", os.path.join(work, "undisturbed"),
                     "--workers", "2"] + iterations + SWEEP, check=True, stdout=log, stderr=log)
@@ -52,16 +43,11 @@ def run_with_limit(ms, work, log, scene, iterations, limit_kb, name):
     out = os.path.join(work, name)
     port = free_port()
     coordinator = [ms, "coordinator", "--input", scene, "--bind", f"tcp://127.0.0.1:{port}",
-                   "--output", out, "--resume", "--heartbeat-interval", "0.1", "--liveness", "8"]
+                   "--output", out, "--resume"] + HEARTBEAT
     coordinator += iterations + SWEEP
 
     def start_workers(tag):
-        return [subprocess.Popen([ms, "worker", "--connect", f"tcp://127.0.0.1:{port}", "--id",
-                                  f"{tag}{i}", "--threads", "1", "--heartbeat-interval", "0.1",
-                                  "--liveness", "8", "--reconnect-initial", "0.1",
-                                  "--reconnect-max", "0.5", "--give-up-after", "30", "--cache-dir",
-                                  os.path.join(work, "cache", f"{tag}{i}")], stdout=log, stderr=log)
-                for i in range(2)]
+        return [start_worker(ms, port, f"{tag}{i}", work, log) for i in range(2)]
 
     def wait_all(workers):
         for w in workers:

@@ -13,44 +13,19 @@
 
 #include "base/error.h"
 #include "coordinator/insertion_batch.h"
+#include "coordinator/test_job.h"
 #include "fuzz_util.h"
-#include "proto/options_codec.h"
 #include "proto/wire.h"
 #include "sweep/sweep_options.h"
 
 namespace ms::fuzz {
 namespace {
 
-// Camera 2 (640 x 480, f = 500) at the origin, neighbours 0 and 3, a square at z = 5.
-wire::Job MakeJob() {
-  wire::Job job;
-  job.set_job_id(uint64_t{1} << 32 | 2);
-  job.set_iteration(1);
-  View view;
-  view.intrinsics.width = 640;
-  view.intrinsics.height = 480;
-  view.intrinsics.fx = view.intrinsics.fy = 500;
-  view.intrinsics.cx = 320;
-  view.intrinsics.cy = 240;
-  ViewToWire(2, view, job.mutable_camera());
-  for (int32_t n : {0, 3}) {
-    View other = view;
-    other.SetCenter({n - 1.0, 0, 0});
-    ViewToWire(n, other, job.add_neighbours());
-  }
-  Mesh square;
-  square.vertices = {{-2, -2, 5}, {2, -2, 5}, {2, 2, 5}, {-2, 2, 5}};
-  square.faces = {{0, 1, 2}, {0, 2, 3}};
-  PackMesh(square, job.mutable_mesh());
-  OptionsToWire(SweepOptions(), job.mutable_options());
-  return job;
-}
-
 std::vector<std::string> Seeds() {
   EnvelopeStamper stamper("seed");
   std::vector<std::string> seeds;
   wire::Envelope job = stamper.New();
-  *job.mutable_job() = MakeJob();
+  *job.mutable_job() = testing::MakeSmallTestJob();
   seeds.push_back(Serialize(job));
   wire::Envelope result = stamper.New();
   result.mutable_result()->set_job_id(uint64_t{1} << 32 | 2);
@@ -93,7 +68,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (DecodeEnvelope(data, size, WireLimits(), &envelope, &problem) != DecodeStatus::kOk) return 0;
   try {
 #if FUZZ_COORDINATOR
-    static const JobBounds bounds = JobBoundsFromWire(fuzz::MakeJob());
+    static const JobBounds bounds = JobBoundsFromWire(testing::MakeSmallTestJob());
     if (envelope.has_result()) {
       std::vector<FoundPoint> points;
       ValidateResultPoints(envelope.result(), bounds, &points);
