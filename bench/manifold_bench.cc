@@ -1,6 +1,7 @@
 // Throughput of the manifold reconstruction steps (docs/performance.md):
 //   manifold_bench [points ...] [--insert=N] [--export=DIR] [--graded-steiner=on|off]
 //                  [--steiner-grid=N] [--steiner-min-spacing=X] [--steiner-clearance=X]
+//                  [--regrow-seeds=boundary|changed]
 //   default Steiner mode: the library's (auto: graded from 5*10^4 points)
 //   default sizes: 10^4 10^5 10^6
 // For each size: Delaunay insertion, ray tracing (rays/s), growing (cells/s), peak memory per
@@ -31,7 +32,7 @@ int main(int argc, char** argv) {
   const char* usage =
       "usage: manifold_bench [points ...] [--insert=N] [--export=DIR] "
       "[--graded-steiner=on|off] [--steiner-grid=N] [--steiner-min-spacing=X] "
-      "[--steiner-clearance=X]\n";
+      "[--steiner-clearance=X] [--regrow-seeds=boundary|changed]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
@@ -55,6 +56,10 @@ int main(int argc, char** argv) {
         options.steiner_grid = std::stoi(arg.substr(15));
       } else if (arg == "--graded-steiner=on") {
         options.steiner_graded = ms::GradedSteiner::kOn;
+      } else if (arg == "--regrow-seeds=boundary") {
+        options.regrow_seeds = ms::RegrowSeeds::kBoundary;
+      } else if (arg == "--regrow-seeds=changed") {
+        options.regrow_seeds = ms::RegrowSeeds::kChanged;
       } else if (arg == "--graded-steiner=off") {
         options.steiner_graded = ms::GradedSteiner::kOff;
       } else {
@@ -127,6 +132,10 @@ int main(int argc, char** argv) {
         static_cast<long long>(ins.rewalked_rays),
         static_cast<double>(ins.rewalk_steps) / std::max<int64_t>(ins.rewalked_rays, 1),
         ins.seconds_insertion, ins.seconds_growing);
+    // Not timed: a manifold test on every free cell next to O.
+    std::printf("          after regrowing: %lld cells in O, %lld free cells could still join it\n",
+                static_cast<long long>(manifold.num_outside_cells()),
+                static_cast<long long>(manifold.num_joinable_cells()));
     std::fflush(stdout);
   }
   return 0;

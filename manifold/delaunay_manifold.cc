@@ -494,7 +494,7 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
 // growing refused it.
 void DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, const InsertionStats& stats) {
   if (stats.inserted == 0 && stats.shrunk_cells == 0 && stats.gained_rays == 0) return;
-  grow_shrink_.Grow(grow_shrink_.BoundarySeeds(batch.number));
+  grow_shrink_.Grow(grow_shrink_.BoundarySeeds(options_.regrow_seeds, batch.number));
   if (labels_.outside_count() == 0) grow_shrink_.GrowFromHeaviest();
 }
 
@@ -579,6 +579,7 @@ int64_t DelaunayManifold::num_points() const { return impl_->num_points(); }
 int64_t DelaunayManifold::num_vertices() const { return impl_->num_vertices(); }
 int64_t DelaunayManifold::num_cells() const { return impl_->num_cells(); }
 int64_t DelaunayManifold::num_outside_cells() const { return impl_->num_outside_cells(); }
+int64_t DelaunayManifold::num_joinable_cells() const { return impl_->CountJoinableCells(); }
 int64_t DelaunayManifold::num_free_cells_inside() const { return impl_->CountFreeCellsInside(); }
 size_t DelaunayManifold::MemoryBytes() const { return impl_->MemoryBytes(); }
 

@@ -108,14 +108,19 @@ class DelaunayManifold {
   Mesh ExtractSurface(SurfaceInfo* info = nullptr) const;
 
   // Full validity check: triangulation valid, no infinite cell in O, bookkeeping consistent,
-  // every vertex regular (the surface is a closed 2-manifold), and if check_weights the ray
-  // counts of every cell equal a recomputation from scratch. Returns "" if valid.
+  // every vertex regular (the surface is a closed 2-manifold), if check_weights the ray counts
+  // of every cell equal a recomputation from scratch, and with the paper's regrowing
+  // (--manifold.regrow-seeds boundary) O is maximal: no free cell sharing a face with O could
+  // join it keeping the surface manifold. Returns "" if valid.
   std::string Validate(bool check_weights = true) const;
 
   int64_t num_points() const;    // input points so far (ids 0..num_points-1)
   int64_t num_vertices() const;  // finite vertices incl. Steiner
   int64_t num_cells() const;     // finite cells
   int64_t num_outside_cells() const;
+  // Free cells sharing a face with O that could join O keeping the surface manifold: 0 when O
+  // is maximal (always after Build, and after Insert with --manifold.regrow-seeds boundary).
+  int64_t num_joinable_cells() const;
   // Free cells not in O (refused by the manifold test or unreachable). Scans every cell, so
   // Insert, whose cost should follow the batch, does not report it; Build does.
   int64_t num_free_cells_inside() const;

@@ -82,13 +82,15 @@ int64_t GrowShrink::GrowFromHeaviest() {
   return labels_.outside_count() - before;
 }
 
-std::vector<Cell_handle> GrowShrink::BoundarySeeds(uint32_t changed_in) const {
+std::vector<Cell_handle> GrowShrink::BoundarySeeds(RegrowSeeds which, uint32_t changed_in) const {
   std::vector<Cell_handle> seeds;
   for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
-    if (c->info().outside) continue;
-    bool changed = false;
-    for (int i = 0; i < 4; ++i) changed |= c->vertex(i)->info().changed == changed_in;
-    if (!changed) continue;
+    if (c->info().outside || !labels_.IsFree(c)) continue;
+    if (which == RegrowSeeds::kChanged) {
+      bool changed = false;
+      for (int i = 0; i < 4; ++i) changed |= c->vertex(i)->info().changed == changed_in;
+      if (!changed) continue;
+    }
     for (int i = 0; i < 4; ++i) {
       if (labels_.InO(c->neighbor(i))) {
         seeds.push_back(c);
@@ -97,6 +99,16 @@ std::vector<Cell_handle> GrowShrink::BoundarySeeds(uint32_t changed_in) const {
     }
   }
   return seeds;
+}
+
+int64_t GrowShrink::CountJoinableCells(std::vector<Cell_handle>* first, size_t max_kept) {
+  int64_t joinable = 0;
+  for (const Cell_handle& c : BoundarySeeds(RegrowSeeds::kBoundary, 0)) {
+    if (!regularity_.FlipKeepsManifold(c)) continue;
+    ++joinable;
+    if (first != nullptr && first->size() < max_kept) first->push_back(c);
+  }
+  return joinable;
 }
 
 bool GrowShrink::ShrinkAround(const std::vector<Cell_handle>& conflicts, uint32_t stamp,

@@ -29,9 +29,14 @@ class GrowShrink {
   // heaviest free cell of every further component). Returns the cells added.
   int64_t GrowFromHeaviest();
 
-  // Cells not in O, sharing a face with O, with a vertex marked changed in batch `changed_in`:
-  // where regrowing after an insertion batch starts.
-  std::vector<Cell_handle> BoundarySeeds(uint32_t changed_in) const;
+  // Free cells not in O sharing a face with O: all of them (RegrowSeeds::kBoundary) or those
+  // with a vertex marked changed in batch `changed_in` (kChanged). Where regrowing after an
+  // insertion batch starts.
+  std::vector<Cell_handle> BoundarySeeds(RegrowSeeds which, uint32_t changed_in) const;
+
+  // Free cells not in O, sharing a face with O, that could flip into O keeping the surface
+  // manifold: none after a complete Grow (O is maximal). Counts them, keeps the first few.
+  int64_t CountJoinableCells(std::vector<Cell_handle>* first, size_t max_kept);
 
   // Shrinks O around a new point's conflict region D (`conflicts`): removes cells of E (D,
   // then its neighbourhood, options.shrink_neighbourhood) from O where the surface stays

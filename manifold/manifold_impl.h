@@ -53,6 +53,8 @@ class DelaunayManifold::Impl {
   int64_t num_vertices() const { return static_cast<int64_t>(dt_.number_of_vertices()); }
   int64_t num_cells() const { return static_cast<int64_t>(dt_.number_of_finite_cells()); }
   int64_t num_outside_cells() const { return labels_.outside_count(); }
+  // Free cells next to O that could join it (a scan with the manifold test on each).
+  int64_t CountJoinableCells() { return grow_shrink_.CountJoinableCells(nullptr, 0); }
   // Free cells that growing left out of O (refused by the manifold test or unreachable).
   int64_t CountFreeCellsInside() const {
     int64_t n = 0;
@@ -140,6 +142,7 @@ class DelaunayManifold::Impl {
   std::string ValidateLabels() const;         // O and the per-vertex counts
   std::string ValidateManifold();             // every vertex regular
   std::string ValidateWeights();              // ray counts against a recount from scratch
+  std::string ValidateMaximal();              // no free cell next to O could join it
 
   ManifoldOptions options_;
   std::vector<ManifoldCamera> cameras_;

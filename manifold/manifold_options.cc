@@ -14,4 +14,10 @@ const std::vector<std::pair<const char*, GradedSteiner>>& OptionChoices(GradedSt
   return choices;
 }
 
+const std::vector<std::pair<const char*, RegrowSeeds>>& OptionChoices(RegrowSeeds) {
+  static const std::vector<std::pair<const char*, RegrowSeeds>> choices = {
+      {"boundary", RegrowSeeds::kBoundary}, {"changed", RegrowSeeds::kChanged}};
+  return choices;
+}
+
 }  // namespace ms

@@ -25,6 +25,17 @@ const std::vector<std::pair<const char*, W2Rule>>& OptionChoices(W2Rule);
 enum class GradedSteiner { kAuto, kOn, kOff };
 const std::vector<std::pair<const char*, GradedSteiner>>& OptionChoices(GradedSteiner);
 
+// Where regrowing starts after an insertion batch (--manifold.regrow-seeds, docs/manifold.md).
+enum class RegrowSeeds {
+  // Every free cell sharing a face with O (the paper): any cell the batch made free, anywhere
+  // along the new rays, is tried, so O is maximal again afterwards.
+  kBoundary,
+  // Only those with a vertex the batch touched (inserted, shrunk or gained rays): cheaper, but a
+  // cell far from the batch that new rays made free is never tried.
+  kChanged,
+};
+const std::vector<std::pair<const char*, RegrowSeeds>>& OptionChoices(RegrowSeeds);
+
 struct ManifoldOptions {
   static constexpr const char* kOptionGroup = "manifold";
 #define MS_OPTION_LIST "manifold/manifold_options_def.h"

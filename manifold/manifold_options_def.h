@@ -71,6 +71,12 @@ MS_OPTION(int, shrink_neighbourhood, 0, "shrink-neighbourhood",
           "cells shrunk before an insertion: 0 = conflict region + face neighbours, 1 = + every "
           "cell sharing a vertex",
           InRange(0, 1))
+// Regrowing after an insertion batch: from every free cell on the boundary of O (the paper) or
+// only from those with a vertex the batch touched (docs/manifold.md compares them).
+MS_OPTION(RegrowSeeds, regrow_seeds, RegrowSeeds::kBoundary, "regrow-seeds",
+          "where regrowing starts after an insertion batch: boundary (every free cell on the "
+          "boundary of O, the paper) or changed (only cells with a vertex the batch touched)",
+          AnyValue())
 MS_OPTION(bool, grow_all_components, false, "grow-all-components",
           "grow every free-space component, not only the heaviest cell's", AnyValue())
 // Debugging: the full validity check after every step (slow).

@@ -1,8 +1,8 @@
 // DelaunayManifold::Validate, layer by layer: the triangulation, then the labels (O and the
 // per-vertex counts), then the manifold (every vertex regular), then the weights (the ray
-// counts against a recount). Each layer assumes the ones before it hold, so it runs only when
-// they passed (as CGAL's is_valid checks the data structure first); the first layer with a
-// problem names it. Every message ends in "; ".
+// counts against a recount), then, with the paper's regrowing, that O is maximal. Each layer
+// assumes the ones before it hold, so it runs only when they passed (as CGAL's is_valid checks the
+// data structure first); the first layer with a problem names it. Every message ends in "; ".
 #include <array>
 #include <sstream>
 #include <string>
@@ -20,7 +20,25 @@ std::string DelaunayManifold::Impl::Validate(bool check_weights) {
   if (problems.empty()) problems = ValidateLabels();
   if (problems.empty()) problems = ValidateManifold();
   if (problems.empty() && check_weights) problems = ValidateWeights();
+  // Growing from every boundary cell leaves no free cell that could still join O; regrowing
+  // only near the batch does not promise it.
+  if (problems.empty() && options_.regrow_seeds == RegrowSeeds::kBoundary) {
+    problems = ValidateMaximal();
+  }
   return problems;
+}
+
+// No free cell sharing a face with O could flip into O with the surface staying manifold.
+std::string DelaunayManifold::Impl::ValidateMaximal() {
+  std::vector<manifold_detail::Cell_handle> first;
+  const int64_t joinable = grow_shrink_.CountJoinableCells(&first, 1);
+  if (joinable == 0) return "";
+  std::ostringstream problem;
+  problem << "O is not maximal: " << joinable
+          << " free cells on its boundary could join it keeping the surface manifold (one has "
+             "weight "
+          << labels_.Weight(first.front()) << "); ";
+  return problem.str();
 }
 
 std::string DelaunayManifold::Impl::ValidateTriangulation() const {
