@@ -85,6 +85,11 @@ DepthErrorStats DepthErrorAccumulator::Finish() const {
     s.rms = std::sqrt(sum_sq_ / covered_);
   }
   s.coverage = gt_pixels_ > 0 ? static_cast<double>(covered_) / gt_pixels_ : 0;
+  s.missing_penalty = max_multiple_ * sigma_;
+  if (gt_pixels_ > 0) {
+    s.mae_all = (sum_abs_ + static_cast<double>(gt_pixels_ - covered_) * s.missing_penalty) /
+                static_cast<double>(gt_pixels_);
+  }
   int64_t running = 0;
   for (int m = 0; m < max_multiple_; ++m) {
     running += within_[m];
@@ -233,13 +238,13 @@ std::string FormatEvaluationTable(const Evaluation& e) {
   for (const MeshEvaluation& m : e.meshes) label_width = std::max(label_width, m.label.size());
   const int multiples =
       e.meshes.empty() ? 0 : static_cast<int>(e.meshes[0].total.cumulative.size());
-  std::string header = fmt::format("{:<{}}  {:>9} {:>9} {:>9} {:>8}", "mesh", label_width, "MAE",
-                                   "MRE", "RMS", "coverage");
+  std::string header = fmt::format("{:<{}}  {:>9} {:>9} {:>9} {:>8} {:>9}", "mesh", label_width,
+                                   "MAE", "MRE", "RMS", "coverage", "MAE(all)");
   for (int m = 1; m <= multiples; ++m) header += fmt::format(" {:>5}", fmt::format("<{}S", m));
   out += header + "\n";
   auto row = [&](const std::string& label, const DepthErrorStats& s) {
-    std::string line = fmt::format("{:<{}}  {:>9.4f} {:>9.4f} {:>9.4f} {:>7.1f}%", label,
-                                   label_width, s.mae, s.mre, s.rms, 100 * s.coverage);
+    std::string line = fmt::format("{:<{}}  {:>9.4f} {:>9.4f} {:>9.4f} {:>7.1f}% {:>9.4f}", label,
+                                   label_width, s.mae, s.mre, s.rms, 100 * s.coverage, s.mae_all);
     for (double c : s.cumulative) line += fmt::format(" {:>4.0f}%", 100 * c);
     return line + "\n";
   };
@@ -251,9 +256,11 @@ std::string FormatEvaluationTable(const Evaluation& e) {
       }
     }
   }
-  out +=
-      "(MAE, RMS in scene units; MRE = mean |d-d*|/d*; <mS = share of ground-truth pixels "
-      "with error below m*Sigma)\n";
+  out += fmt::format(
+      "(MAE, MRE = mean |d-d*|/d* and RMS over the pixels the mesh covers; MAE(all) "
+      "over all ground-truth pixels, a missed pixel counting {}*Sigma; <mS = share of "
+      "ground-truth pixels with error below m*Sigma; scene units)\n",
+      multiples);
   return out;
 }
 
@@ -265,6 +272,8 @@ nlohmann::json EvaluationToJson(const Evaluation& e) {
                           {"mre", s.mre},
                           {"rms", s.rms},
                           {"coverage", s.coverage},
+                          {"mae_all", s.mae_all},
+                          {"missing_penalty", s.missing_penalty},
                           {"cumulative", s.cumulative}};
   };
   nlohmann::json meshes = nlohmann::json::array();

@@ -48,6 +48,9 @@ TEST(CompareDepthMaps, KnownErrors) {
   EXPECT_NEAR(s.cumulative[3], 3 / 5.0, 1e-12);  // 0.25 is not < 0.24
   EXPECT_NEAR(s.cumulative[4], 4 / 5.0, 1e-12);  // 0.25 < 0.30
   EXPECT_NEAR(s.cumulative[9], 4 / 5.0, 1e-12);  // never reaches the missing pixel
+  // Coverage-complete: the missing pixel counts 10 Sigma, over all 5 ground-truth pixels.
+  EXPECT_NEAR(s.missing_penalty, 0.6, 1e-12);
+  EXPECT_NEAR(s.mae_all, (0.1 + 0.25 + 0.6) / 5, 1e-6);
 }
 
 TEST_F(EvaluateTest, MeshAgainstItselfHasZeroErrorAndFullCoverage) {
@@ -61,6 +64,7 @@ TEST_F(EvaluateTest, MeshAgainstItselfHasZeroErrorAndFullCoverage) {
   EXPECT_GT(s.gt_pixels, 4 * 160 * 120 / 4);
   EXPECT_EQ(s.covered_pixels, s.gt_pixels);
   EXPECT_EQ(s.mae, 0);
+  EXPECT_EQ(s.mae_all, 0);
   EXPECT_EQ(s.rms, 0);
   EXPECT_EQ(s.coverage, 1);
   for (double c : s.cumulative) EXPECT_EQ(c, 1);
