@@ -23,6 +23,12 @@ OutputMeshes MakeOutputMeshes(const Mesh& surface, const SurfaceInfo& info, bool
     }
   }
   out.surface = FacesWithoutFlaggedVertices(out.closed, steiner);
+  // Written, the surface proper must be a 2-manifold with boundary (check-mesh, Open3D); the
+  // sweep jobs take every face of it, bow-ties included (SurfaceWithoutSteinerFaces).
+  const int64_t dropped = KeepOneFanPerVertex(&out.surface);
+  if (dropped > 0) {
+    spdlog::info("surface proper: {} faces dropped where a vertex kept two fans", dropped);
+  }
   return out;
 }
 

@@ -1,6 +1,7 @@
 // The meshes a run writes, from the manifold's surface: the closed 2-manifold, made robust in
 // floating point (mesh/float_cleanup.h) unless --manifold.float-cleanup is off, and the surface
-// proper (its faces with no Steiner vertex).
+// proper (its faces with no Steiner vertex, where a vertex kept two fans only the larger: a
+// 2-manifold with boundary).
 #pragma once
 
 #include "manifold/delaunay_manifold.h"
@@ -11,7 +12,7 @@ namespace ms {
 
 struct OutputMeshes {
   Mesh closed;
-  Mesh surface;               // the faces of `closed` with no Steiner vertex
+  Mesh surface;               // the faces of `closed` with no Steiner vertex, one fan per vertex
   FloatCleanupStats cleanup;  // all zero when not cleaned
 };
 

@@ -25,8 +25,16 @@ struct Mesh {
 };
 
 // The faces of `mesh` none of whose vertices is flagged (one flag per vertex), unreferenced
-// vertices removed.
+// vertices removed. Cut from a closed 2-manifold, that is a 2-manifold with boundary except
+// where a vertex keeps faces on two sides of dropped ones (a bow-tie, which check-mesh and
+// Open3D call non-manifold); KeepOneFanPerVertex mends those.
 Mesh FacesWithoutFlaggedVertices(const Mesh& mesh, const std::vector<uint8_t>& flagged);
+
+// Removes faces until around every vertex the faces form one fan (each joined to the next through
+// an edge at the vertex): at a vertex with several, the fan of most faces stays (ties: the one
+// with the smallest face index), repeated until none is left, since removing a fan may split
+// another vertex's. Unreferenced vertices are removed. Returns the faces removed.
+int64_t KeepOneFanPerVertex(Mesh* mesh);
 
 // A point cloud with optional normals and colours (what sweeping finds, what synth samples).
 struct PointCloud {

@@ -221,6 +221,30 @@ TEST(MeshChecker, TetrahedraSharingOnlyAVertexMakeANonManifoldVertex) {
   EXPECT_FALSE(Check(m, true).is_valid);
 }
 
+// What FacesWithoutFlaggedVertices does where dropping faces leaves a bow-tie: the larger fan
+// stays (here equal: the first), and the result passes the checker with boundaries allowed.
+TEST(KeepOneFanPerVertex, SplitsABowTieLeavingAValidSurfaceWithBoundary) {
+  Mesh m = Tetrahedron();
+  const Mesh top = Tetrahedron(Eigen::Vector3d(0, 0, 1));
+  m.vertices.insert(m.vertices.end(), top.vertices.begin() + 1, top.vertices.end());
+  for (auto f : top.faces) {
+    for (int32_t& v : f) v = v == 0 ? 3 : v + 3;
+    m.faces.push_back(f);
+  }
+  EXPECT_EQ(KeepOneFanPerVertex(&m), 3);  // the top tetrahedron's faces at the shared vertex
+  ASSERT_EQ(m.faces.size(), 5u);          // the bottom tetrahedron and the top's far face
+  const MeshReport r = Check(m, true);
+  EXPECT_TRUE(r.is_valid) << r.ToTable();
+  EXPECT_EQ(r.num_components, 2);
+  EXPECT_EQ(r.num_boundary_edges, 3);
+  EXPECT_EQ(KeepOneFanPerVertex(&m), 0);  // nothing left to split
+  // A closed 2-manifold keeps every face.
+  Mesh closed = Octahedron();
+  EXPECT_EQ(KeepOneFanPerVertex(&closed), 0);
+  EXPECT_EQ(closed.faces.size(), 8u);
+  EXPECT_TRUE(Check(closed).is_valid);
+}
+
 TEST(MeshChecker, ThreeFacesOnAnEdgeMakeANonManifoldEdge) {
   Mesh m = Tetrahedron();
   m.vertices.emplace_back(0.5, -1, 0.5);
