@@ -5,11 +5,12 @@
 #   - bench/sweep_kernels_bench: hypotheses/s of the GLSL kernel (the GPU where there is one) and
 #     of the CPU kernel on all cores, at 640x480, 1536x1024 and 3072x2048;
 #   - fountain-P11 `reconstruct` (../shared/data, its COLMAP sparse model) with the auto kernel
-#     at half size (1536x1024) and full size (3072x2048): seconds per iteration.
+#     at half size (1536x1024) and full size (3072x2048), with 1 worker (all cores) and with 2
+#     workers (the cores shared): seconds per iteration.
 #
 #   bench/sweep_machine_bench.sh [RESULTS_FILE]      (default bench_results/sweep_HOST_DATE.txt)
-# Environment: ITERATIONS (2), WORKERS (2), KERNEL (auto), SKIP_SETUP=1 (use build/ as it is),
-# DATA (../shared/data).
+# Environment: ITERATIONS (2), WORKERS (worker counts, "1 2"), KERNEL (auto), SKIP_SETUP=1 (use
+# build/ as it is), DATA (../shared/data).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
@@ -17,7 +18,7 @@ results=${1:-bench_results/sweep_$(hostname)_$(date +%Y%m%d_%H%M%S).txt}
 mkdir -p "$(dirname "$results")"
 results=$(cd "$(dirname "$results")" && pwd)/$(basename "$results")
 iterations=${ITERATIONS:-2}
-workers=${WORKERS:-2}
+worker_counts=${WORKERS:-1 2}
 kernel=${KERNEL:-auto}
 data=${DATA:-$root/../shared/data}
 [[ -n ${SKIP_SETUP:-} ]] || deploy/setup.sh
@@ -46,13 +47,15 @@ fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 for size in 1600 0; do
+for workers in $worker_counts; do
   label=$([[ $size == 0 ]] && echo "full size 3072x2048" || echo "half size 1536x1024")
+  run=$work/run_${size}_$workers
   echo "## fountain-P11 reconstruct, $label, $iterations iterations, $workers workers, --kernel $kernel"
-  "$manisweep" reconstruct --input "$fountain" --output "$work/run_$size" --workers "$workers" \
+  "$manisweep" reconstruct --input "$fountain" --output "$run" --workers "$workers" \
     --kernel "$kernel" --max-iterations "$iterations" --sweep.max-image-dimension "$size" \
-    > "$work/log_$size.txt" 2>&1 || { tail -20 "$work/log_$size.txt"; exit 1; }
-  grep -E "joined \(kernel" "$work/log_$size.txt" | head -1 || true
-  python3 - "$work/run_$size/summary.json" <<'PY'
+    > "$run.log" 2>&1 || { tail -20 "$run.log"; exit 1; }
+  grep -E "joined \(kernel" "$run.log" | head -1 || true
+  python3 - "$run/summary.json" <<'PY'
 import json, sys
 summary = json.load(open(sys.argv[1]))
 print("iteration  sweep_s  kernel_s(sum over jobs)  insert_s  points_found  vertices")
@@ -62,5 +65,6 @@ for it in summary["iterations"]:
     print(f'{it["iteration"]:9d}  {it["seconds_sweep"]:7.1f}  {it["seconds_kernel"]:23.1f}  '
           f'{it["seconds_insert"]:8.2f}  {it["points_found"]:12d}  {it["vertices"]:8d}')
 PY
+done
 done
 echo "# written to $results"

@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "base/error.h"
 #include "mesh/visible_mesh.h"
 #include "scene/camera.h"
+#include "sweep/vector_clones.h"
 
 namespace ms {
 namespace {
@@ -195,6 +197,28 @@ SweepStats PreparedSweepStats(const PreparedSweep& prep) {
   return stats;
 }
 
+namespace {
+
+// The largest value of a row, NaN ignored (-inf for none). Eight running maxima, so that the
+// loop vectorises without reassociation.
+MS_VECTOR_CLONES float RowMaximum(const float* __restrict values, int n) {
+  float lanes[8];
+  for (float& m : lanes) m = -std::numeric_limits<float>::infinity();
+  int col = 0;
+  for (; col + 8 <= n; col += 8) {
+    for (int l = 0; l < 8; ++l) {
+      const float v = values[col + l];
+      lanes[l] = v > lanes[l] ? v : lanes[l];  // NaN compares false: ignored
+    }
+  }
+  float m = -std::numeric_limits<float>::infinity();
+  for (; col < n; ++col) m = values[col] > m ? values[col] : m;
+  for (float l : lanes) m = l > m ? l : m;
+  return m;
+}
+
+}  // namespace
+
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
                        const int32_t* face, const Eigen::Vector3d* world, float threshold,
                        std::vector<TileWinner>* best) {
@@ -206,6 +230,12 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
         for (int row = tiles.YBegin(ty); row < tiles.YBegin(ty + 1); ++row) {
           const size_t row_offset = static_cast<size_t>(row) * tiles.width;
           const float* values = ncc[j] + row_offset;
+          // Most rows hold no winner: one vectorised pass tells (no pixel above both bars).
+          const float bar = std::max(threshold, tile.ncc);
+          if (RowMaximum(values + tiles.XBegin(tx), tiles.XBegin(tx + 1) - tiles.XBegin(tx)) <=
+              bar) {
+            continue;
+          }
           for (int col = tiles.XBegin(tx); col < tiles.XBegin(tx + 1); ++col) {
             const float value = values[col];
             if (!(value > threshold) || !(value > tile.ncc)) continue;  // NaN never wins
