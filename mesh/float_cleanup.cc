@@ -456,12 +456,13 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
   MS_CHECK(scaffold->size() == mesh->vertices.size()) << "one scaffold flag per vertex";
   FloatCleanupStats stats;
   const std::vector<uint8_t> usable(mesh->faces.size(), 1);
-  FloatRobustnessReport report = CheckFloatRobustness(*mesh, usable, options.check);
-  stats.tolerance = options.margin * report.tolerance;
+  // The cleanup works at `margin` times the checker's tolerance, so that what it leaves passes
+  // the check with room to spare; one full check, at that tolerance.
+  stats.tolerance = options.margin * FloatCheckTolerance(*mesh, usable, options.check).tolerance;
   FloatRobustnessOptions check = options.check;
   check.absolute_tolerance = stats.tolerance;
   check.max_examples = static_cast<int>(std::min<int64_t>(check.max_pairs, 1 << 30));
-  report = CheckFloatRobustness(*mesh, usable, check);
+  FloatRobustnessReport report = CheckFloatRobustness(*mesh, usable, check);
   stats.problems_before = ProblemCount(report);
   const double max_collapse = options.max_collapse_fraction * report.diagonal;
   // Splits help only in numbers, and clusters of near vertices can defeat the collapses: a

@@ -470,28 +470,56 @@ void FloatRobustnessOptions::Check() const {
   if (max_pairs < 1) throw InputError("mesh check: max_self_intersections must be >= 1");
 }
 
-FloatRobustnessReport CheckFloatRobustness(const Mesh& mesh, const std::vector<uint8_t>& usable,
-                                           const FloatRobustnessOptions& options) {
-  options.Check();
+namespace {
+
+// The bounding box of the usable faces' vertices, and which vertices they reference.
+void UsableBounds(const Mesh& mesh, const std::vector<uint8_t>& usable, Eigen::Vector3d* lo,
+                  Eigen::Vector3d* hi, std::vector<uint8_t>* referenced) {
   MS_CHECK(usable.size() == mesh.faces.size());
-  FloatRobustnessReport r;
-  std::vector<uint8_t> referenced(mesh.vertices.size(), 0);
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  *lo = Eigen::Vector3d::Constant(INFINITY);
+  *hi = -*lo;
+  if (referenced != nullptr) referenced->assign(mesh.vertices.size(), 0);
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     if (!usable[f]) continue;
     for (int32_t v : mesh.faces[f]) {
-      referenced[v] = 1;
-      lo = lo.cwiseMin(mesh.vertices[v]);
-      hi = hi.cwiseMax(mesh.vertices[v]);
+      if (referenced != nullptr) (*referenced)[v] = 1;
+      *lo = lo->cwiseMin(mesh.vertices[v]);
+      *hi = hi->cwiseMax(mesh.vertices[v]);
     }
   }
-  r.diagonal = (lo.array() <= hi.array()).all() ? (hi - lo).norm() : 0.0;
-  r.tolerance = options.absolute_tolerance > 0 ? options.absolute_tolerance
-                                               : options.relative_tolerance * r.diagonal;
-  r.relative_tolerance =
+}
+
+void SetTolerance(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                  const FloatRobustnessOptions& options, FloatRobustnessReport* r) {
+  r->diagonal = (lo.array() <= hi.array()).all() ? (hi - lo).norm() : 0.0;
+  r->tolerance = options.absolute_tolerance > 0 ? options.absolute_tolerance
+                                                : options.relative_tolerance * r->diagonal;
+  r->relative_tolerance =
       options.absolute_tolerance > 0
-          ? (r.diagonal > 0 && std::isfinite(r.diagonal) ? r.tolerance / r.diagonal : 0.0)
+          ? (r->diagonal > 0 && std::isfinite(r->diagonal) ? r->tolerance / r->diagonal : 0.0)
           : options.relative_tolerance;
+}
+
+}  // namespace
+
+FloatRobustnessReport FloatCheckTolerance(const Mesh& mesh, const std::vector<uint8_t>& usable,
+                                          const FloatRobustnessOptions& options) {
+  options.Check();
+  FloatRobustnessReport r;
+  Eigen::Vector3d lo, hi;
+  UsableBounds(mesh, usable, &lo, &hi, nullptr);
+  SetTolerance(lo, hi, options, &r);
+  return r;
+}
+
+FloatRobustnessReport CheckFloatRobustness(const Mesh& mesh, const std::vector<uint8_t>& usable,
+                                           const FloatRobustnessOptions& options) {
+  options.Check();
+  FloatRobustnessReport r;
+  std::vector<uint8_t> referenced;
+  Eigen::Vector3d lo, hi;
+  UsableBounds(mesh, usable, &lo, &hi, &referenced);
+  SetTolerance(lo, hi, options, &r);
 
   Timer timer;
   MeasureFaces(mesh, usable, &r);
