@@ -458,7 +458,7 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
   const std::vector<uint8_t> usable(mesh->faces.size(), 1);
   // The cleanup works at `margin` times the checker's tolerance, so that what it leaves passes
   // the check with room to spare; one full check, at that tolerance.
-  stats.tolerance = options.margin * FloatCheckTolerance(*mesh, usable, options.check).tolerance;
+  stats.tolerance = options.margin * FloatCheckTolerance(*mesh, usable, options.check);
   FloatRobustnessOptions check = options.check;
   check.absolute_tolerance = stats.tolerance;
   check.max_examples = static_cast<int>(std::min<int64_t>(check.max_pairs, 1 << 30));

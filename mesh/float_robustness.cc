@@ -502,14 +502,14 @@ void SetTolerance(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
 
 }  // namespace
 
-FloatRobustnessReport FloatCheckTolerance(const Mesh& mesh, const std::vector<uint8_t>& usable,
-                                          const FloatRobustnessOptions& options) {
+double FloatCheckTolerance(const Mesh& mesh, const std::vector<uint8_t>& usable,
+                           const FloatRobustnessOptions& options) {
   options.Check();
   FloatRobustnessReport r;
   Eigen::Vector3d lo, hi;
   UsableBounds(mesh, usable, &lo, &hi, nullptr);
   SetTolerance(lo, hi, options, &r);
-  return r;
+  return r.tolerance;
 }
 
 FloatRobustnessReport CheckFloatRobustness(const Mesh& mesh, const std::vector<uint8_t>& usable,

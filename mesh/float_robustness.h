@@ -70,10 +70,10 @@ struct FloatRobustnessReport {
   }
 };
 
-// The tolerance a check would use (CheckFloatRobustness's diagonal, tolerance and
-// relative_tolerance), without the check: a pass over the usable faces' vertices.
-FloatRobustnessReport FloatCheckTolerance(const Mesh& mesh, const std::vector<uint8_t>& usable,
-                                          const FloatRobustnessOptions& options = {});
+// The absolute tolerance a check would use (CheckFloatRobustness's report.tolerance), without
+// the check: one pass over the usable faces' vertices.
+double FloatCheckTolerance(const Mesh& mesh, const std::vector<uint8_t>& usable,
+                           const FloatRobustnessOptions& options = {});
 
 // Faces with usable[f] == 0 (an index out of range or a non-finite vertex) are ignored; the
 // others, degenerate ones included, take part in the pair tests. Edges and angles are measured
