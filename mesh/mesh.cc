@@ -57,61 +57,101 @@ Mesh FacesWithoutFlaggedVertices(const Mesh& mesh, const std::vector<uint8_t>& f
 
 namespace {
 
-// Faces (indices into `faces`) of the fans around one vertex other than its largest.
-void SmallerFans(int32_t v, const std::vector<int32_t>& around,
-                 const std::vector<std::array<int32_t, 3>>& faces, std::vector<int32_t>* drop) {
-  // Union-find over the faces around v: two are one fan when they share an edge at v.
-  std::vector<int> parent(around.size());
-  for (size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
-  const auto find = [&](int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+// Faces around each vertex, compressed: the faces of v are incident[offsets[v]..offsets[v+1]),
+// in face order. Rebuilt per pass, without an allocation per vertex.
+struct VertexFaces {
+  std::vector<int64_t> offsets;
+  std::vector<int32_t> incident;
+
+  void Build(const Mesh& mesh) {
+    const size_t nv = mesh.vertices.size();
+    offsets.assign(nv + 1, 0);
+    for (const auto& f : mesh.faces) {
+      for (int32_t v : f) ++offsets[v + 1];
+    }
+    for (size_t v = 0; v < nv; ++v) offsets[v + 1] += offsets[v];
+    incident.resize(offsets[nv]);
+    std::vector<int64_t> fill(offsets.begin(), offsets.end() - 1);
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      for (int32_t v : mesh.faces[f]) incident[fill[v]++] = static_cast<int32_t>(f);
+    }
+  }
+};
+
+// Appends to `drop` the faces around v (`around`, `count` of them, in face order) outside its
+// largest fan: faces are one fan when joined through edges at v (union-find over the faces,
+// joined when they share the edge's other vertex). Ties go to the fan of the first face.
+class FanSplitter {
+ public:
+  void SmallerFans(int32_t v, const int32_t* around, size_t count,
+                   const std::vector<std::array<int32_t, 3>>& faces, std::vector<int32_t>* drop) {
+    parent_.resize(count);
+    for (size_t i = 0; i < count; ++i) parent_[i] = static_cast<int>(i);
+    by_other_.clear();
+    for (size_t i = 0; i < count; ++i) {
+      for (int32_t w : faces[around[i]]) {
+        if (w != v) by_other_.emplace_back(w, static_cast<int>(i));
+      }
+    }
+    std::sort(by_other_.begin(), by_other_.end());
+    size_t fans = count;
+    for (size_t k = 1; k < by_other_.size(); ++k) {
+      if (by_other_[k].first != by_other_[k - 1].first) continue;
+      const int a = Find(by_other_[k].second), b = Find(by_other_[k - 1].second);
+      if (a != b) {
+        parent_[a] = b;
+        --fans;
+      }
+    }
+    if (fans == 1) return;
+    size_.assign(count, 0);
+    for (size_t i = 0; i < count; ++i) ++size_[Find(static_cast<int>(i))];
+    int keep = -1;
+    for (size_t i = 0; i < count; ++i) {
+      const int root = Find(static_cast<int>(i));
+      if (keep < 0 || size_[root] > size_[keep]) keep = root;
+    }
+    for (size_t i = 0; i < count; ++i) {
+      if (Find(static_cast<int>(i)) != keep) drop->push_back(around[i]);
+    }
+  }
+
+ private:
+  int Find(int i) {
+    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
     return i;
-  };
-  std::vector<std::pair<int32_t, int>> by_other;  // (other vertex of an edge at v, face)
-  for (size_t i = 0; i < around.size(); ++i) {
-    for (int32_t w : faces[around[i]]) {
-      if (w != v) by_other.emplace_back(w, static_cast<int>(i));
-    }
   }
-  std::sort(by_other.begin(), by_other.end());
-  for (size_t k = 1; k < by_other.size(); ++k) {
-    if (by_other[k].first == by_other[k - 1].first) {
-      parent[find(by_other[k].second)] = find(by_other[k - 1].second);
-    }
-  }
-  std::vector<int> size(around.size(), 0);
-  for (size_t i = 0; i < around.size(); ++i) ++size[find(static_cast<int>(i))];
-  int keep = -1;
-  for (size_t i = 0; i < around.size(); ++i) {  // around is in face order: ties to the first
-    const int root = find(static_cast<int>(i));
-    if (keep < 0 || size[root] > size[keep]) keep = root;
-  }
-  for (size_t i = 0; i < around.size(); ++i) {
-    if (find(static_cast<int>(i)) != keep) drop->push_back(around[i]);
-  }
-}
+  std::vector<int> parent_, size_;
+  std::vector<std::pair<int32_t, int>> by_other_;  // (other vertex of an edge at v, face)
+};
 
 }  // namespace
 
 int64_t KeepOneFanPerVertex(Mesh* mesh) {
   int64_t removed = 0;
+  VertexFaces adjacency;
+  FanSplitter splitter;
+  // Every vertex on the first pass; afterwards only those of removed faces can have split.
+  std::vector<uint8_t> look(mesh->vertices.size(), 1);
   for (;;) {
-    std::vector<std::vector<int32_t>> around(mesh->vertices.size());
-    for (size_t f = 0; f < mesh->faces.size(); ++f) {
-      for (int32_t v : mesh->faces[f]) around[v].push_back(static_cast<int32_t>(f));
-    }
+    adjacency.Build(*mesh);
     std::vector<int32_t> drop;
-    for (size_t v = 0; v < around.size(); ++v) {
-      if (around[v].size() > 1) SmallerFans(static_cast<int32_t>(v), around[v], mesh->faces, &drop);
+    for (size_t v = 0; v < look.size(); ++v) {
+      const int64_t begin = adjacency.offsets[v], end = adjacency.offsets[v + 1];
+      if (!look[v] || end - begin < 2) continue;
+      splitter.SmallerFans(static_cast<int32_t>(v), &adjacency.incident[begin],
+                           static_cast<size_t>(end - begin), mesh->faces, &drop);
     }
     if (drop.empty()) break;
     std::sort(drop.begin(), drop.end());
     drop.erase(std::unique(drop.begin(), drop.end()), drop.end());
+    std::fill(look.begin(), look.end(), 0);
     std::vector<std::array<int32_t, 3>> kept;
     kept.reserve(mesh->faces.size() - drop.size());
     for (size_t f = 0, d = 0; f < mesh->faces.size(); ++f) {
       if (d < drop.size() && drop[d] == static_cast<int32_t>(f)) {
         ++d;
+        for (int32_t v : mesh->faces[f]) look[v] = 1;
       } else {
         kept.push_back(mesh->faces[f]);
       }
