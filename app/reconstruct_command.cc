@@ -136,6 +136,11 @@ void RunReconstruct(ReconstructCommandOptions& options) {
   InitLogging("reconstruct");
   CoordinatorOptions& setup = options.coordinator;
   setup.CheckGroups();
+  if (setup.run.no_images) {
+    throw InputError(
+        "--no-images: reconstruct's workers sweep images; replaying a recorded run takes "
+        "`manisweep coordinator --no-images` and `manisweep worker --kernel replay`");
+  }
   if (setup.output_dir.empty()) throw InputError("--output: required");
   const bool have_checkpoint = fs::exists(fs::path(setup.output_dir) / "run.h5");
   const std::string default_dir = (fs::path(setup.output_dir) / "default_scene").string();

@@ -14,8 +14,10 @@
 #include "app/process_control.h"
 #include "base/error.h"
 #include "base/log.h"
+#include "coordinator/run_store.h"
 #include "proto/zmq_transport.h"
 #include "sweep/sweep_kernel_factory.h"
+#include "worker/replay_kernel.h"
 #include "worker/worker_process.h"
 
 namespace ms::app {
@@ -23,6 +25,7 @@ namespace {
 
 struct WorkerCommandOptions {
   WorkerOptions worker;
+  ReplayKernelOptions replay;
   std::string connect;
   std::string kernel = "auto";
   int threads = 0;
@@ -49,7 +52,17 @@ void RunWorker(WorkerCommandOptions& options) {
   w.Check();
   if (options.threads > 0) cv::setNumThreads(options.threads);
   std::string why;
-  std::unique_ptr<SweepKernel> kernel = MakeSweepKernel(options.kernel, {}, &why);
+  std::unique_ptr<SweepKernel> kernel;
+  if (options.kernel == "replay") {
+    options.replay.Check();
+    RunRecord recorded = ReadRunFile(options.replay.run);
+    why = fmt::format("{} recorded iterations of {}, {:.2f} s per job",
+                      recorded.completed_iterations(), options.replay.run, options.replay.delay_s);
+    kernel = std::make_unique<ReplayKernel>(options.replay, std::move(recorded.scene.views),
+                                            std::move(recorded.batches));
+  } else {
+    kernel = MakeSweepKernel(options.kernel, {}, &why);
+  }
   ZmqClientOptions client;
   client.connect = options.connect;
   client.max_message_bytes = w.limits.max_message_bytes;
@@ -83,7 +96,8 @@ void RegisterWorkerCommand(CLI::App& app) {
                   "the coordinator's address, e.g. tcp://node01:5555")
       ->required();
   cmd->add_option("--kernel", options->kernel,
-                  fmt::format("sweep kernel: {} (auto = the best available)",
+                  fmt::format("sweep kernel: {} (auto = the best available), or replay: "
+                              "hand back an earlier run's points (--replay.run)",
                               fmt::join(SweepKernelNames(), ", ")))
       ->capture_default_str();
   cmd->add_option("--threads", options->threads, "threads for the kernel (0 = all cores)")
@@ -103,6 +117,7 @@ void RegisterWorkerCommand(CLI::App& app) {
                   "CURVE: this worker's key pair (NAME.key_secret); its NAME.key must be in the "
                   "coordinator's --curve-public-keys");
   AddOptionGroup(cmd, &options->worker);
+  AddOptionGroup(cmd, &options->replay);
   cmd->callback([options] { RunWorker(*options); });
 }
 

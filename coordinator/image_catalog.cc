@@ -55,6 +55,12 @@ ImageCatalog::ImageCatalog(const Scene& scene) {
   }
 }
 
+ImageCatalog ImageCatalog::WithoutImages(const Scene& scene) {
+  ImageCatalog catalog;
+  catalog.views_.resize(scene.views.size());
+  return catalog;
+}
+
 void ImageCatalog::Serve(uint64_t hash, uint64_t offset, uint64_t max_bytes, uint64_t chunk_limit,
                          wire::ImageResponse* response) const {
   response->Clear();

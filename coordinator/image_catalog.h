@@ -26,6 +26,9 @@ class ImageCatalog {
   // Hashes every view's image file. Throws InputError naming the view if it has no image
   // path or the file cannot be read.
   explicit ImageCatalog(const Scene& scene);
+  // No image at all (coordinator --no-images): every view's record is empty (hash 0, size 0),
+  // which workers take as "no image" (only the replay kernel runs such jobs); nothing is served.
+  static ImageCatalog WithoutImages(const Scene& scene);
   const ImageRecord& view(size_t v) const { return views_.at(v); }
   size_t size() const { return views_.size(); }
   uint64_t total_bytes() const { return total_bytes_; }
@@ -35,6 +38,7 @@ class ImageCatalog {
              wire::ImageResponse* response) const;
 
  private:
+  ImageCatalog() = default;
   std::vector<ImageRecord> views_;
   std::map<uint64_t, size_t> by_hash_;
   uint64_t total_bytes_ = 0;

@@ -69,11 +69,16 @@ StepOutcome RunLifecycle::Prepare() {
   record_loaded_ = true;
   const Scene& scene = record_.scene;
   spdlog::info("scene: {}", scene.Summary());
-  Timer hashing;
-  catalog_ = std::make_unique<ImageCatalog>(scene);
+  if (options_.run.no_images) {
+    catalog_ = std::make_unique<ImageCatalog>(ImageCatalog::WithoutImages(scene));
+    spdlog::info("--no-images: jobs carry no image; only replay workers can take them");
+  } else {
+    Timer hashing;
+    catalog_ = std::make_unique<ImageCatalog>(scene);
+    spdlog::info("hashed {} image files ({:.1f} MiB) in {:.2f} s", catalog_->size(),
+                 catalog_->total_bytes() / 1048576.0, hashing.Seconds());
+  }
   catalog_ready_ = true;
-  spdlog::info("hashed {} image files ({:.1f} MiB) in {:.2f} s", catalog_->size(),
-               catalog_->total_bytes() / 1048576.0, hashing.Seconds());
   neighbours_.clear();
   for (size_t c = 0; c < scene.views.size(); ++c) {
     neighbours_.push_back(SelectNeighbours(scene, static_cast<int>(c), options_.neighbours));

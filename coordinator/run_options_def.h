@@ -18,3 +18,8 @@ MS_OPTION(double, max_message_mb, 64, "max-message-mb",
           "largest protocol message in MiB (jobs carry the visible mesh); larger ones are logged "
           "and dropped",
           InRange(0.0625, 2048))
+// The capacity benchmark drives the coordinator with replaying workers on scenes without images.
+MS_OPTION(bool, no_images, false, "no-images",
+          "do not hash or serve image files: jobs carry none, so only workers with --kernel "
+          "replay can take them (bench/scalability)",
+          AnyValue())

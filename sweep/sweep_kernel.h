@@ -34,6 +34,7 @@ struct SweepJob {
   std::vector<SweepCamera> neighbours;  // usually two (scene/view_selection.h)
   Mesh mesh;  // the part of the mesh C sees (mesh/visible_mesh.h); no need to be manifold
   SweepOptions options;
+  uint32_t iteration = 0;  // of the run (1-based); only kernels that replay a recorded run use it
 };
 
 struct SweepPoint {
@@ -74,6 +75,9 @@ class SweepKernel {
   // Throws InputError for a bad job (see CheckSweepJob), never crashes on one.
   virtual SweepResult Run(const SweepJob& job) = 0;
   virtual std::string Name() const = 0;
+  // False for a kernel that never reads the job's images (a replay of recorded results): the
+  // worker then neither fetches nor decodes them.
+  virtual bool NeedsImages() const { return true; }
 };
 
 // ---- Shared preparation: every kernel must sweep exactly these hypotheses. ----

@@ -275,12 +275,26 @@ class Worker::Impl {
       c.sweep.mesh = UnpackMesh(c.job.mesh(), what);
       c.sweep.options = OptionsFromWire<SweepOptions>(c.job.options());
       c.sweep.options.Check();
+      c.sweep.iteration = c.job.iteration();
     } catch (const InputError& e) {
       FailCurrent(wire::Error::BAD_JOB, e.what());
       return;
     }
     spdlog::info("{} started: {} neighbours, {} faces", what, c.sweep.neighbours.size(),
                  c.sweep.mesh.NumFaces());
+    if (!kernel_->NeedsImages()) {
+      c.fetch_s = 0;
+      StartCompute();
+      return;
+    }
+    for (const ImageRef& ref : c.refs) {
+      if (ref.hash == 0 && ref.size == 0) {
+        FailCurrent(wire::Error::BAD_JOB,
+                    "the job carries no image (the coordinator runs with --no-images); only "
+                    "--kernel replay takes such jobs");
+        return;
+      }
+    }
     for (const ImageRef& ref : c.refs) c.paths.push_back(cache_.Locate(ref));
     c.fetch = 0;
     NextFetchOrCompute();
@@ -368,12 +382,14 @@ class Worker::Impl {
     const uint64_t job_id = c.job.job_id();
     try {
       Timer images;
-      const View camera_view = c.sweep.camera.view;
-      c.sweep.camera = cache_.Load(c.sweep.camera.id, camera_view, c.refs[0].hash, c.paths[0]);
-      for (size_t i = 0; i < c.sweep.neighbours.size(); ++i) {
-        SweepCamera& n = c.sweep.neighbours[i];
-        const View view = n.view;
-        n = cache_.Load(n.id, view, c.refs[i + 1].hash, c.paths[i + 1]);
+      if (kernel_->NeedsImages()) {
+        const View camera_view = c.sweep.camera.view;
+        c.sweep.camera = cache_.Load(c.sweep.camera.id, camera_view, c.refs[0].hash, c.paths[0]);
+        for (size_t i = 0; i < c.sweep.neighbours.size(); ++i) {
+          SweepCamera& n = c.sweep.neighbours[i];
+          const View view = n.view;
+          n = cache_.Load(n.id, view, c.refs[i + 1].hash, c.paths[i + 1]);
+        }
       }
       const double images_s = c.fetch_s + images.Seconds();
       if (options_.debug_delay_s > 0) {
