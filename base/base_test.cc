@@ -1,17 +1,45 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
+#include <vector>
 
 #include "base/binary_reader.h"
 #include "base/error.h"
 #include "base/file_util.h"
+#include "base/parallel_for.h"
 #include "base/text_reader.h"
 
 namespace ms {
 namespace {
 
 namespace fs = std::filesystem;
+
+TEST(ParallelFor, RunsEveryIndexOnce) {
+  std::vector<int> runs(1000, 0);
+  ParallelFor(
+      runs.size(), [&](size_t i) { ++runs[i]; }, 4);
+  EXPECT_EQ(std::count(runs.begin(), runs.end(), 1), 1000);
+  ParallelFor(0, [](size_t) { FAIL(); });
+}
+
+TEST(ParallelFor, RethrowsTheErrorOfTheSmallestIndexLikeASequentialLoop) {
+  for (int threads : {1, 2, 8}) {
+    try {
+      ParallelFor(
+          200,
+          [](size_t i) {
+            if (i % 50 == 17) throw std::runtime_error("item " + std::to_string(i));
+          },
+          threads);
+      FAIL() << "nothing thrown";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "item 17");
+    }
+  }
+}
 
 TEST(TextReader, ReportsFileLineAndField) {
   TextReader reader("points.txt", "# comment\n\n1 2 x\n");

@@ -216,6 +216,8 @@ class Coordinator::Impl {
     batch_ = InsertionBatch();
     round_ = SweepRound();
     round_.seconds_jobs = outcome.seconds_jobs;
+    round_.job_bytes = static_cast<int64_t>(outcome.jobs.bytes);
+    round_.job_max_bytes = static_cast<int64_t>(outcome.jobs.max_bytes);
     round_.cameras_skipped = static_cast<int32_t>(outcome.jobs.skipped.size());
     round_.jobs = static_cast<int32_t>(outcome.jobs.jobs.size());
     std::vector<uint64_t> ids;

@@ -2,7 +2,13 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <optional>
+#include <string>
+#include <vector>
+
 #include "base/error.h"
+#include "base/parallel_for.h"
 #include "proto/content_hash.h"
 #include "proto/options_codec.h"
 #include "proto/wire.h"
@@ -20,17 +26,27 @@ IterationJobs BuildIterationJobs(const Scene& scene,
     ref->set_content_hash(record.hash);
     ref->set_byte_size(record.size);
   };
-  for (size_t c = 0; c < scene.views.size(); ++c) {
+  // Cameras are independent: build their jobs in parallel, then collect them in camera order.
+  const VisibleMeshIndex index(mesh);
+  struct CameraJob {
+    std::optional<wire::Job> job;
+    std::string skipped;
+    size_t faces = 0;
+    uint64_t bytes = 0;
+  };
+  std::vector<CameraJob> built(scene.views.size());
+  ParallelFor(scene.views.size(), [&](size_t c) {
+    CameraJob& out = built[c];
     if (neighbours[c].empty()) {
-      result.skipped.push_back(fmt::format("camera {}: no neighbour", c));
-      continue;
+      out.skipped = fmt::format("camera {}: no neighbour", c);
+      return;
     }
-    const VisibleMesh visible = ExtractVisibleMesh(mesh, scene.views[c], options.visible);
+    const VisibleMesh visible = index.Extract(scene.views[c], options.visible);
     if (visible.mesh.faces.empty()) {
-      result.skipped.push_back(fmt::format("camera {}: sees no face of the mesh", c));
-      continue;
+      out.skipped = fmt::format("camera {}: sees no face of the mesh", c);
+      return;
     }
-    wire::Job job;
+    wire::Job& job = out.job.emplace();
     job.set_job_id(MakeJobId(iteration, static_cast<uint32_t>(c)));
     job.set_iteration(iteration);
     job.set_session_id(session_id);
@@ -52,9 +68,18 @@ IterationJobs BuildIterationJobs(const Scene& scene,
           "bytes: raise --max-message-mb on the coordinator and the workers",
           c, visible.mesh.NumFaces(), bytes, options.limits.max_message_bytes));
     }
-    result.faces += static_cast<int64_t>(visible.mesh.NumFaces());
-    result.bytes += bytes;
-    result.jobs.push_back(std::move(job));
+    out.faces = visible.mesh.NumFaces();
+    out.bytes = bytes;
+  });
+  for (CameraJob& camera : built) {
+    if (!camera.job) {
+      result.skipped.push_back(std::move(camera.skipped));
+      continue;
+    }
+    result.faces += static_cast<int64_t>(camera.faces);
+    result.bytes += camera.bytes;
+    result.max_bytes = std::max(result.max_bytes, camera.bytes);
+    result.jobs.push_back(std::move(*camera.job));
   }
   return result;
 }

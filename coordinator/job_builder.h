@@ -30,6 +30,7 @@ struct IterationJobs {
   std::vector<std::string> skipped;  // "camera 3: no neighbour" ...
   int64_t faces = 0;                 // visible faces over all jobs
   uint64_t bytes = 0;                // serialized size of all jobs
+  uint64_t max_bytes = 0;            // of the largest
 };
 
 // One job per camera that has neighbours and sees at least one face. Throws InputError if a

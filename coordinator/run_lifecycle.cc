@@ -173,6 +173,8 @@ StepOutcome RunLifecycle::Integrate(const InsertionBatch& found, const SweepRoun
   }
   row.outside_cells = s.outside_cells;
   row.seconds_jobs = round.seconds_jobs;
+  row.job_bytes = round.job_bytes;
+  row.job_max_bytes = round.job_max_bytes;
   row.seconds_sweep = round.seconds_sweep;
   row.seconds_insert = insert_s;
   row.seconds_extract = extract.Seconds();

@@ -29,8 +29,9 @@ struct SweepRound {
   int32_t jobs_bad = 0;       // refused by the kernel (no points from that camera)
   int32_t jobs_requeued = 0;  // handed out again (lease expired, worker died or failed)
   int32_t cameras_skipped = 0;
-  double seconds_jobs = 0;   // building the jobs
-  double seconds_sweep = 0;  // first job out -> last result in
+  double seconds_jobs = 0;                   // building the jobs
+  int64_t job_bytes = 0, job_max_bytes = 0;  // job messages: all, the largest
+  double seconds_sweep = 0;                  // first job out -> last result in
   std::map<std::string, int64_t> jobs_by_worker;
   std::map<std::string, int64_t> points_by_worker;
   std::map<std::string, double> kernel_seconds_by_worker;

@@ -55,6 +55,8 @@ std::vector<Column<IterationStats>> IterationColumns() {
           Field("vertices", &S::vertices),
           Field("faces", &S::faces),
           Field("outside_cells", &S::outside_cells),
+          Field("job_bytes", &S::job_bytes),
+          Field("job_max_bytes", &S::job_max_bytes),
           Field("cleanup_collapses", &S::cleanup_collapses),
           Field("cleanup_splits", &S::cleanup_splits),
           Field("float_problems_left", &S::float_problems_left),
@@ -254,6 +256,10 @@ RunRecord ReadRunFile(const std::string& path) {
     ReadColumnInto(file, t, "vertices", &S::vertices, &rows);
     ReadColumnInto(file, t, "faces", &S::faces, &rows);
     ReadColumnInto(file, t, "outside_cells", &S::outside_cells, &rows);
+    if (file.Exists(t + "/job_bytes")) {  // runs before this column have none
+      ReadColumnInto(file, t, "job_bytes", &S::job_bytes, &rows);
+      ReadColumnInto(file, t, "job_max_bytes", &S::job_max_bytes, &rows);
+    }
     ReadColumnInto(file, t, "cleanup_collapses", &S::cleanup_collapses, &rows);
     ReadColumnInto(file, t, "cleanup_splits", &S::cleanup_splits, &rows);
     ReadColumnInto(file, t, "float_problems_left", &S::float_problems_left, &rows);
@@ -310,6 +316,8 @@ void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
          {"points_duplicate", s.discarded_duplicate},
          {"vertices", s.vertices},
          {"faces", s.faces},
+         {"job_bytes", s.job_bytes},
+         {"job_max_bytes", s.job_max_bytes},
          {"cleanup_collapses", s.cleanup_collapses},
          {"cleanup_splits", s.cleanup_splits},
          {"float_problems_left", s.float_problems_left},

@@ -20,6 +20,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
   # independent tools: mesh reader + Poisson baseline, SfM for camera-only datasets, cluster
   python3 python3-numpy python3-open3d colmap slurm-wlm
+  # benchmark plots (bench/scalability)
+  python3-matplotlib
 )
 
 missing=()

@@ -2,7 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <random>
+
 #include "base/error.h"
+#include "base/parallel_for.h"
 
 namespace ms {
 namespace {
@@ -92,6 +97,97 @@ TEST(ExtractVisibleMesh, DegenerateFacesAndBadIndices) {
   VisibleMeshOptions bad;
   bad.margin_px = -1;
   EXPECT_THROW(bad.Check(), InputError);
+}
+
+// A wavy terrain of 120 x 120 vertices (28,322 faces) in shuffled face order, so that blocks
+// are not simply runs of the input.
+Mesh Terrain() {
+  Mesh mesh;
+  const int n = 120;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      mesh.vertices.emplace_back(i * 0.1, j * 0.1, 0.3 * std::sin(i * 0.21) * std::cos(j * 0.17));
+    }
+  }
+  for (int j = 0; j + 1 < n; ++j) {
+    for (int i = 0; i + 1 < n; ++i) {
+      const int32_t v = j * n + i;
+      mesh.faces.push_back({v, v + 1, v + n + 1});
+      mesh.faces.push_back({v, v + n + 1, v + n});
+    }
+  }
+  std::mt19937 rng(7);
+  std::shuffle(mesh.faces.begin(), mesh.faces.end(), rng);
+  return mesh;
+}
+
+// A camera at `centre` looking at `target` (y roughly down the image).
+View LookAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& target) {
+  View v;
+  v.intrinsics = {640, 480, 500, 500, 320, 240};
+  const Eigen::Vector3d z = (target - centre).normalized();
+  Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ());
+  if (x.norm() < 1e-6) x = Eigen::Vector3d::UnitX();
+  x.normalize();
+  const Eigen::Vector3d y = z.cross(x);
+  v.R.row(0) = x;
+  v.R.row(1) = y;
+  v.R.row(2) = z;
+  v.SetCenter(centre);
+  return v;
+}
+
+TEST(VisibleMeshIndex, ExtractsExactlyWhatTheFaceByFaceTestKeeps) {
+  const Mesh mesh = Terrain();
+  const VisibleMeshIndex index(mesh);
+  EXPECT_EQ(index.num_blocks(), (mesh.faces.size() + 31) / 32);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> across(-3, 15), height(-1, 6);
+  VisibleMeshOptions wide;
+  wide.margin_px = 40;
+  wide.near = 0.5;
+  VisibleMeshOptions both_sides;
+  both_sides.keep_back_facing = true;
+  int64_t kept = 0, partial = 0;
+  for (int camera = 0; camera < 60; ++camera) {
+    const View view = LookAt({across(rng), across(rng), height(rng)},
+                             {across(rng), across(rng), height(rng) - 2});
+    for (const VisibleMeshOptions& options : {VisibleMeshOptions(), wide, both_sides}) {
+      const VisibleMesh expected = ExtractVisibleMesh(mesh, view, options);
+      const VisibleMesh got = index.Extract(view, options);
+      ASSERT_EQ(got.face_ids, expected.face_ids) << "camera " << camera;
+      ASSERT_EQ(got.vertex_ids, expected.vertex_ids) << "camera " << camera;
+      ASSERT_EQ(got.mesh.faces, expected.mesh.faces);
+      ASSERT_EQ(got.mesh.vertices, expected.mesh.vertices);
+      kept += static_cast<int64_t>(got.face_ids.size());
+      partial += !got.face_ids.empty() && got.face_ids.size() < mesh.faces.size();
+    }
+  }
+  // The cameras see parts of the terrain: the blocks are really culled, not all kept or none.
+  EXPECT_GT(partial, 60);
+  EXPECT_GT(kept, 0);
+}
+
+TEST(VisibleMeshIndex, GivesTheSameResultFromManyThreads) {
+  const Mesh mesh = Terrain();
+  const VisibleMeshIndex index(mesh);
+  std::vector<View> views;
+  for (int c = 0; c < 32; ++c) views.push_back(LookAt({c * 0.4, -2, 4}, {c * 0.4, 6, 0}));
+  std::vector<VisibleMesh> got(views.size());
+  ParallelFor(
+      views.size(), [&](size_t c) { got[c] = index.Extract(views[c]); }, 4);
+  for (size_t c = 0; c < views.size(); ++c) {
+    EXPECT_EQ(got[c].face_ids, ExtractVisibleMesh(mesh, views[c]).face_ids) << "camera " << c;
+  }
+}
+
+TEST(VisibleMeshIndex, RefusesBadIndicesAndTakesAnEmptyMesh) {
+  Mesh mesh;
+  AddTriangle(&mesh, 0, 0, 0, true);
+  mesh.faces.push_back({0, 1, 7});
+  EXPECT_THROW(VisibleMeshIndex{mesh}, InputError);
+  const Mesh empty;
+  EXPECT_TRUE(VisibleMeshIndex(empty).Extract(DownView()).face_ids.empty());
 }
 
 }  // namespace
