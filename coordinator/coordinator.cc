@@ -102,9 +102,7 @@ class Coordinator::Impl {
         session_(NewSessionId()),
         run_(options_, session_) {}
 
-  ~Impl() {
-    if (step_.valid()) step_.wait();
-  }
+  ~Impl() { WaitForSteps(); }
 
   CoordinatorResult Run(const std::function<bool()>& stop_requested) {
     spdlog::info("coordinator listening on {} (session {})", transport_->Endpoint(),
@@ -112,7 +110,7 @@ class Coordinator::Impl {
     try {
       return Loop(stop_requested);
     } catch (...) {
-      if (step_.valid()) step_.wait();
+      WaitForSteps();
       Broadcast("the coordinator stopped with an error");
       throw;
     }
@@ -120,6 +118,12 @@ class Coordinator::Impl {
 
  private:
   enum class Phase { kPreparing, kSweeping, kDone };
+
+  // The step in progress, then an early insertion still running (a step waits for it first).
+  void WaitForSteps() {
+    if (step_.valid()) step_.wait();
+    if (early_insert_.valid()) early_insert_.wait();
+  }
 
   // ---- The network loop (calling thread)
 
@@ -166,12 +170,20 @@ class Coordinator::Impl {
         Dispatch(now);
         if (scheduler_.IterationComplete()) {
           round_.seconds_sweep = Now() - sweep_started_;
-          // The step must not read the scheduler while the loop keeps using it.
+          // The step must not read the scheduler or the batch while the loop keeps using them.
           round_.jobs_by_worker = scheduler_.iteration_job_counts();
           round_.jobs_requeued = static_cast<int32_t>(scheduler_.num_requeued());
           phase_ = Phase::kPreparing;
-          step_ = std::async(std::launch::async, [this] { return run_.Integrate(batch_, round_); });
-        } else if (now >= next_progress) {
+          std::vector<RayPoint> rest = batch_.SortedOf(std::vector<uint64_t>(
+              job_order_.begin() + static_cast<std::ptrdiff_t>(early_jobs_), job_order_.end()));
+          step_ = std::async(std::launch::async, [this, rest = std::move(rest)] {
+            if (early_insert_.valid()) early_insert_.get();
+            return run_.Integrate(rest, round_);
+          });
+        } else {
+          InsertEarly();
+        }
+        if (phase_ == Phase::kSweeping && now >= next_progress) {
           LogProgress();
           next_progress = now + options_.run.progress_interval_s;
         }
@@ -187,6 +199,13 @@ class Coordinator::Impl {
           step_.get();
         } catch (const std::exception& e) {
           spdlog::warn("the step in progress failed while stopping: {}", e.what());
+        }
+      }
+      if (early_insert_.valid()) {
+        try {
+          early_insert_.get();
+        } catch (const std::exception& e) {
+          spdlog::warn("the insertion in progress failed while stopping: {}", e.what());
         }
       }
       Broadcast("interrupted");
@@ -227,11 +246,32 @@ class Coordinator::Impl {
       jobs_.emplace(job.job_id(), std::move(job));
     }
     scheduler_.StartIteration(iteration_, ids);
+    job_order_ = ids;  // by camera, the order of the batch
+    early_jobs_ = 0;
     sweep_started_ = Now();
     phase_ = Phase::kSweeping;
     spdlog::info("iteration {}/{}: {} jobs ({} visible faces, {:.1f} MiB), {} workers", iteration_,
                  options_.run.max_iterations, ids.size(), outcome.jobs.faces,
                  outcome.jobs.bytes / 1048576.0, scheduler_.num_workers());
+  }
+
+  // Hands the points of the next jobs in camera order whose results are all in to the
+  // manifold, one part at a time, while the other jobs are still out: the batch is inserted in
+  // camera order anyway, so this is the same insertion, done during the sweep.
+  void InsertEarly() {
+    if (early_insert_.valid()) {
+      if (early_insert_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+      early_insert_.get();  // rethrows what the part threw
+    }
+    size_t end = early_jobs_;
+    while (end < job_order_.size() && batch_.Has(job_order_[end])) ++end;
+    if (end == early_jobs_) return;
+    std::vector<RayPoint> part = batch_.SortedOf(
+        std::vector<uint64_t>(job_order_.begin() + static_cast<std::ptrdiff_t>(early_jobs_),
+                              job_order_.begin() + static_cast<std::ptrdiff_t>(end)));
+    early_jobs_ = end;
+    early_insert_ =
+        std::async(std::launch::async, [this, part = std::move(part)] { run_.InsertEarly(part); });
   }
 
   void Dispatch(double now) {
@@ -456,6 +496,9 @@ class Coordinator::Impl {
   std::map<uint64_t, wire::Job> jobs_;
   std::map<uint64_t, JobBounds> bounds_;  // what each job's points must fit
   InsertionBatch batch_;
+  std::vector<uint64_t> job_order_;  // this iteration's jobs, by camera
+  size_t early_jobs_ = 0;            // of which handed to InsertEarly
+  std::future<void> early_insert_;
   SweepRound round_;
   std::map<uint64_t, std::string> last_failure_;
   double sweep_started_ = 0;

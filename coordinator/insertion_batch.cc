@@ -98,10 +98,17 @@ bool InsertionBatch::Add(uint64_t job_id, std::vector<FoundPoint> points) {
 }
 
 std::vector<RayPoint> InsertionBatch::Sorted() const {
+  std::vector<uint64_t> all;
+  for (const auto& [id, points] : by_job_) all.push_back(id);
+  return SortedOf(all);
+}
+
+std::vector<RayPoint> InsertionBatch::SortedOf(const std::vector<uint64_t>& job_ids) const {
   std::vector<const FoundPoint*> found;
-  found.reserve(static_cast<size_t>(num_points_));
-  for (const auto& [id, points] : by_job_) {
-    for (const FoundPoint& p : points) found.push_back(&p);
+  for (uint64_t id : job_ids) {
+    auto it = by_job_.find(id);
+    if (it == by_job_.end()) continue;
+    for (const FoundPoint& p : it->second) found.push_back(&p);
   }
   std::sort(found.begin(), found.end(),
             [](const FoundPoint* a, const FoundPoint* b) { return InsertionOrder(*a, *b); });

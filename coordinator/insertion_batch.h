@@ -62,9 +62,15 @@ class InsertionBatch {
   int64_t num_points() const { return num_points_; }
   size_t num_jobs() const { return by_job_.size(); }
 
+  // True once the result (or the refusal) of job `job_id` is recorded.
+  bool Has(uint64_t job_id) const { return by_job_.count(job_id) > 0; }
+
   // The points in insertion order: by camera, pixel row, column, then every other field, so the
   // order is total and the same whatever the arrival order.
   std::vector<RayPoint> Sorted() const;
+  // The points of these jobs only, in insertion order. Camera comes first in that order, so for
+  // consecutive runs of jobs in camera order the parts, one after the other, are Sorted().
+  std::vector<RayPoint> SortedOf(const std::vector<uint64_t>& job_ids) const;
 
  private:
   std::map<uint64_t, std::vector<FoundPoint>> by_job_;

@@ -57,6 +57,26 @@ TEST(InsertionBatch, IsSortedByCameraThenPixelRowThenColumn) {
   EXPECT_EQ(lines[4], "1.400000 1 3");
 }
 
+// The coordinator inserts runs of jobs in camera order while the sweep goes on: the parts, one
+// after the other, must be the whole sorted batch.
+TEST(InsertionBatch, PartsByConsecutiveJobsMakeTheSortedBatch) {
+  InsertionBatch batch;
+  std::vector<uint64_t> ids;
+  for (auto& [id, points] : Results()) {
+    batch.Add(id, points);
+    ids.push_back(id);
+  }
+  EXPECT_TRUE(batch.Has(ids[2]));
+  EXPECT_FALSE(batch.Has(ids[3] + 1));
+  std::vector<std::string> parts;
+  for (const std::vector<uint64_t>& run :
+       {std::vector<uint64_t>{ids[0]}, std::vector<uint64_t>{ids[1], ids[2]},
+        std::vector<uint64_t>{}, std::vector<uint64_t>{ids[3]}}) {
+    for (const std::string& line : Describe(batch.SortedOf(run))) parts.push_back(line);
+  }
+  EXPECT_EQ(parts, Describe(batch.Sorted()));
+}
+
 TEST(InsertionBatch, ArrivalOrderAndDuplicateResultsDoNotChangeTheBatch) {
   const auto results = Results();
   InsertionBatch reference;

@@ -55,9 +55,13 @@ class RunLifecycle {
   // replaying its batches (checking each inserts what it did); then the first jobs, or the end
   // (the run is then finished). Throws InputError for bad input or a checkpoint of another run.
   StepOutcome Prepare();
-  // An iteration's sweep is over: inserts `batch`, extracts the surface, records the
-  // statistics, checkpoints; then the next jobs, or the end.
-  StepOutcome Integrate(const InsertionBatch& batch, const SweepRound& round);
+  // While an iteration's sweep runs: inserts the points of the next cameras in order, whose
+  // results are all in (DelaunayManifold::InsertPart), so that less is left for Integrate.
+  void InsertEarly(const std::vector<RayPoint>& points);
+  // An iteration's sweep is over: inserts `rest` (the points InsertEarly has not had, in
+  // order), completes the insertion, extracts the surface, records the statistics,
+  // checkpoints; then the next jobs, or the end.
+  StepOutcome Integrate(const std::vector<RayPoint>& rest, const SweepRound& round);
 
   // Safe to call while a step runs: the image catalog once Prepare has hashed the images (it
   // does not change afterwards), else null.
@@ -97,6 +101,10 @@ class RunLifecycle {
   std::atomic<bool> catalog_ready_{false};
   std::vector<std::vector<int>> neighbours_;
   std::unique_ptr<DelaunayManifold> manifold_;
+  // This iteration's insertion while its sweep runs: open, the points given, the seconds taken.
+  bool insert_open_ = false;
+  std::vector<RayPoint> early_points_;
+  double early_seconds_ = 0;
   // The closed manifold, and the surface proper (without the Steiner faces that close it): what
   // the sweep jobs are built from (docs/manifold.md).
   Mesh mesh_;

@@ -106,7 +106,7 @@ TEST(RunLifecycle, ResumingReplaysTheCheckpointToTheSameMesh) {
   SweepRound round;
   round.jobs = static_cast<int32_t>(first.jobs.jobs.size());
   round.jobs_by_worker["w1"] = round.jobs;
-  const StepOutcome second = run.Integrate(Batch(scene, 0.0), round);
+  const StepOutcome second = run.Integrate(Batch(scene, 0.0).Sorted(), round);
   ASSERT_FALSE(second.stop);
   EXPECT_EQ(run.completed_iterations(), 1);
   EXPECT_GT(run.mesh().NumVertices(), initial_vertices) << "no point of the batch was inserted";
@@ -125,12 +125,51 @@ TEST(RunLifecycle, ResumingReplaysTheCheckpointToTheSameMesh) {
   EXPECT_EQ(again.jobs.jobs.front().iteration(), 2u);
 
   // Iteration 2 reaches --max-iterations: the run finishes with a closed manifold.
-  const StepOutcome last = resumed.Integrate(Batch(scene, 0.1), round);
+  const StepOutcome last = resumed.Integrate(Batch(scene, 0.1).Sorted(), round);
   EXPECT_TRUE(last.stop);
   EXPECT_EQ(resumed.final_result().stop_reason, "reached --max-iterations 2");
   EXPECT_TRUE(resumed.final_result().final_is_closed_manifold);
   const MeshReport report = CheckMesh(ReadMesh(dir / "run/final.ply"));
   EXPECT_TRUE(report.is_closed_manifold);
+}
+
+// The coordinator inserts the points of cameras whose results are in while the sweep goes on:
+// the iteration must come out exactly as when the whole batch is inserted at the end, checkpoint
+// included (a resumed run replays the batch whole).
+TEST(RunLifecycle, InsertingDuringTheSweepGivesTheSameIteration) {
+  const TempDir dir("lifecycle");
+  const std::string scene_file = WriteSphereScene(dir);
+  const std::vector<RayPoint> batch = Batch(scene_file, 0.0).Sorted();
+  ASSERT_GT(batch.size(), 10u);
+  SweepRound round;
+  round.jobs = 1;
+
+  RunLifecycle at_end(Options(scene_file, dir / "at_end"), 1);
+  ASSERT_FALSE(at_end.Prepare().stop);
+  at_end.Integrate(batch, round);
+
+  RunLifecycle early(Options(scene_file, dir / "early"), 1);
+  ASSERT_FALSE(early.Prepare().stop);
+  const auto cut = [&](size_t a, size_t b) {
+    return std::vector<RayPoint>(batch.begin() + static_cast<std::ptrdiff_t>(a),
+                                 batch.begin() + static_cast<std::ptrdiff_t>(b));
+  };
+  early.InsertEarly(cut(0, 3));
+  early.InsertEarly(cut(3, batch.size() / 2));
+  early.Integrate(cut(batch.size() / 2, batch.size()), round);
+
+  EXPECT_EQ(early.mesh().vertices, at_end.mesh().vertices);
+  EXPECT_EQ(early.mesh().faces, at_end.mesh().faces);
+  const RunRecord a = ReadRunFile(dir / "at_end/run.h5");
+  const RunRecord b = ReadRunFile(dir / "early/run.h5");
+  ASSERT_EQ(b.batches.size(), 1u);
+  ASSERT_EQ(b.batches[0].size(), a.batches[0].size());
+  for (size_t i = 0; i < a.batches[0].size(); ++i) {
+    EXPECT_EQ(b.batches[0][i].position, a.batches[0][i].position);
+  }
+  EXPECT_EQ(b.iterations[1].points_inserted, a.iterations[1].points_inserted);
+  EXPECT_GT(b.iterations[1].seconds_insert_early, 0);
+  EXPECT_EQ(a.iterations[1].seconds_insert_early, 0);
 }
 
 TEST(RunLifecycle, AnExistingRunIsNeverOverwrittenOrResumedWithOtherOptions) {
@@ -152,7 +191,7 @@ TEST(RunLifecycle, ABatchWithNothingNewEndsTheRun) {
   const std::string scene = WriteSphereScene(dir);
   RunLifecycle run(Options(scene, dir / "run"), 1);
   ASSERT_FALSE(run.Prepare().stop);
-  const StepOutcome outcome = run.Integrate(InsertionBatch(), SweepRound());
+  const StepOutcome outcome = run.Integrate({}, SweepRound());
   EXPECT_TRUE(outcome.stop);
   EXPECT_EQ(run.final_result().stop_reason, "converged: no new point was inserted");
   EXPECT_TRUE(std::filesystem::exists(dir / "run/final.ply"));

@@ -64,6 +64,7 @@ std::vector<Column<IterationStats>> IterationColumns() {
           Field("seconds_sweep", &S::seconds_sweep),
           Field("seconds_kernel", &S::seconds_kernel),
           Field("seconds_insert", &S::seconds_insert),
+          Field("seconds_insert_early", &S::seconds_insert_early),
           Field("seconds_extract", &S::seconds_extract),
           Field("seconds_checkpoint", &S::seconds_checkpoint),
           Field("seconds_total", &S::seconds_total)};
@@ -256,10 +257,13 @@ RunRecord ReadRunFile(const std::string& path) {
     ReadColumnInto(file, t, "vertices", &S::vertices, &rows);
     ReadColumnInto(file, t, "faces", &S::faces, &rows);
     ReadColumnInto(file, t, "outside_cells", &S::outside_cells, &rows);
-    if (file.Exists(t + "/job_bytes")) {  // runs before this column have none
-      ReadColumnInto(file, t, "job_bytes", &S::job_bytes, &rows);
-      ReadColumnInto(file, t, "job_max_bytes", &S::job_max_bytes, &rows);
-    }
+    // Columns added later: runs made before them have none (the fields stay 0).
+    const auto read_if_there = [&](const char* name, auto member) {
+      if (file.Exists(t + "/" + name)) ReadColumnInto(file, t, name, member, &rows);
+    };
+    read_if_there("job_bytes", &S::job_bytes);
+    read_if_there("job_max_bytes", &S::job_max_bytes);
+    read_if_there("seconds_insert_early", &S::seconds_insert_early);
     ReadColumnInto(file, t, "cleanup_collapses", &S::cleanup_collapses, &rows);
     ReadColumnInto(file, t, "cleanup_splits", &S::cleanup_splits, &rows);
     ReadColumnInto(file, t, "float_problems_left", &S::float_problems_left, &rows);
@@ -325,6 +329,7 @@ void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
          {"seconds_sweep", s.seconds_sweep},
          {"seconds_kernel", s.seconds_kernel},
          {"seconds_insert", s.seconds_insert},
+         {"seconds_insert_early", s.seconds_insert_early},
          {"seconds_extract", s.seconds_extract},
          {"seconds_checkpoint", s.seconds_checkpoint},
          {"seconds_total", s.seconds_total}});

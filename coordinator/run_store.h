@@ -49,13 +49,14 @@ struct IterationStats {
   int64_t cleanup_collapses = 0;
   int64_t cleanup_splits = 0;
   int64_t float_problems_left = 0;
-  double seconds_jobs = 0;        // building this iteration's jobs (visible meshes)
-  double seconds_sweep = 0;       // first job sent -> last result in
-  double seconds_kernel = 0;      // sum of the workers' kernel times
-  double seconds_insert = 0;      // Insert (Build for iteration 0)
-  double seconds_extract = 0;     // surface extraction and mesh files
-  double seconds_checkpoint = 0;  // writing run.h5 (of the previous iteration's checkpoint)
-  double seconds_total = 0;       // wall time of the iteration
+  double seconds_jobs = 0;          // building this iteration's jobs (visible meshes)
+  double seconds_sweep = 0;         // first job sent -> last result in
+  double seconds_kernel = 0;        // sum of the workers' kernel times
+  double seconds_insert = 0;        // Insert (Build for iteration 0), after the sweep
+  double seconds_insert_early = 0;  // inserting while the sweep ran (RunLifecycle::InsertEarly)
+  double seconds_extract = 0;       // surface extraction and mesh files
+  double seconds_checkpoint = 0;    // writing run.h5 (of the previous iteration's checkpoint)
+  double seconds_total = 0;         // wall time of the iteration
 };
 
 // One row of /stats/workers: what one worker did in one iteration.

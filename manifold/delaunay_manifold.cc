@@ -240,23 +240,44 @@ void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
 // Incremental insertion
 
 InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& points) {
+  BeginInsert();
+  InsertPart(points);
+  return FinishInsert();
+}
+
+void DelaunayManifold::Impl::BeginInsert() {
   MS_CHECK(built_) << "Insert before Build";
-  InsertionStats stats;
-  stats.requested = static_cast<int64_t>(points.size());
-  CheckNewPoints(points);
-  Timer timer;
-  Progress progress("manifold: inserting points", stats.requested);
+  MS_CHECK(!open_batch_) << "BeginInsert with a batch open";
   // Cells created in this batch carry its number; their ray counts are rebuilt once at the
   // end (shrinking and the discard rule do not depend on weights, only growing does).
-  InsertionBatch batch = StartBatch();
+  open_batch_ = StartBatch();
+  open_stats_ = InsertionStats();
+}
+
+void DelaunayManifold::Impl::InsertPart(const std::vector<RayPoint>& points) {
+  MS_CHECK(open_batch_) << "InsertPart without BeginInsert";
+  CheckNewPoints(points);
+  Timer timer;
+  InsertionStats& stats = open_stats_;
+  stats.requested += static_cast<int64_t>(points.size());
+  Progress progress("manifold: inserting points", static_cast<int64_t>(points.size()));
   for (size_t n = 0; n < points.size(); ++n) {
     progress.Update(static_cast<int64_t>(n));
-    InsertOne(points[n], &batch, &stats);
+    InsertOne(points[n], &*open_batch_, &stats);
   }
+  stats.seconds_insertion += timer.Seconds();
+}
+
+InsertionStats DelaunayManifold::Impl::FinishInsert() {
+  MS_CHECK(open_batch_) << "FinishInsert without BeginInsert";
+  InsertionBatch batch = std::move(*open_batch_);
+  open_batch_.reset();
+  InsertionStats stats = open_stats_;
+  Timer timer;
   // The exact recount of the cells born in the batch.
   RewalkOldRays(batch, &stats);
   TraceNewRays(&batch, &stats);
-  stats.seconds_insertion = timer.Seconds();
+  stats.seconds_insertion += timer.Seconds();
 
   timer.Restart();
   Regrow(batch, stats);
@@ -569,6 +590,11 @@ BuildStats DelaunayManifold::Build(const std::vector<RayPoint>& points) {
 InsertionStats DelaunayManifold::Insert(const std::vector<RayPoint>& points) {
   return impl_->Insert(points);
 }
+void DelaunayManifold::BeginInsert() { impl_->BeginInsert(); }
+void DelaunayManifold::InsertPart(const std::vector<RayPoint>& points) {
+  impl_->InsertPart(points);
+}
+InsertionStats DelaunayManifold::FinishInsert() { return impl_->FinishInsert(); }
 Mesh DelaunayManifold::ExtractSurface(SurfaceInfo* info) const {
   return impl_->ExtractSurface(info);
 }

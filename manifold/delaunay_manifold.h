@@ -103,6 +103,15 @@ class DelaunayManifold {
   // continue after the existing ones.
   InsertionStats Insert(const std::vector<RayPoint>& points);
 
+  // Insert in pieces, for a caller that receives a batch in order (the coordinator inserts the
+  // points of the cameras whose results are in while later cameras are still being swept):
+  // BeginInsert(); InsertPart(a); InsertPart(b); FinishInsert() does exactly what Insert(a then
+  // b) does, the re-walks, new rays and regrowing waiting for FinishInsert. Each part is checked
+  // as Insert checks its points; calls out of that order are programming errors (MS_CHECK).
+  void BeginInsert();
+  void InsertPart(const std::vector<RayPoint>& points);
+  InsertionStats FinishInsert();
+
   // The surface between O and the rest, normals towards O (free space). Deterministic:
   // vertices ordered by point id, faces sorted.
   Mesh ExtractSurface(SurfaceInfo* info = nullptr) const;

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <random>
 #include <set>
 
@@ -310,6 +311,37 @@ TEST(DelaunayManifold, RandomInsertionsKeepTheSurfaceManifold) {
     }
     EXPECT_GT(inserted, 100) << "seed " << seed;
     EXPECT_EQ(manifold.num_points(), 150 + inserted);
+  }
+}
+
+// The coordinator inserts a batch in pieces while the sweep is still running: Begin, parts in
+// order, Finish must be exactly Insert of the whole batch.
+TEST(DelaunayManifold, InsertingABatchInPartsEqualsInsertingItWhole) {
+  RandomScene scene = SphereScene(150, 10, 5, 1.0);
+  DelaunayManifold whole(scene.cameras, ManifoldOptions{});
+  DelaunayManifold parts(scene.cameras, ManifoldOptions{});
+  whole.Build(scene.points);
+  parts.Build(scene.points);
+  for (int batch = 0; batch < 3; ++batch) {
+    const RandomScene more = SphereScene(90, 10, 77 + batch, 1.0 + 0.02 * (batch - 1));
+    const InsertionStats expected = whole.Insert(more.points);
+    parts.BeginInsert();
+    const size_t cuts[] = {0, 1, 40, 40, more.points.size()};  // an empty part too
+    for (size_t k = 0; k + 1 < std::size(cuts); ++k) {
+      parts.InsertPart(
+          std::vector<RayPoint>(more.points.begin() + cuts[k], more.points.begin() + cuts[k + 1]));
+    }
+    const InsertionStats got = parts.FinishInsert();
+    EXPECT_EQ(got.requested, expected.requested);
+    EXPECT_EQ(got.inserted, expected.inserted);
+    EXPECT_EQ(got.discarded_conflict, expected.discarded_conflict);
+    EXPECT_EQ(got.rewalked_rays, expected.rewalked_rays);
+    EXPECT_EQ(got.outside_cells, expected.outside_cells);
+    ASSERT_GT(expected.inserted, 0);
+    const Mesh a = whole.ExtractSurface(), b = parts.ExtractSurface();
+    ASSERT_EQ(a.faces, b.faces) << "batch " << batch;
+    ASSERT_EQ(a.vertices, b.vertices) << "batch " << batch;
+    ASSERT_EQ(parts.Validate(true), "");
   }
 }
 

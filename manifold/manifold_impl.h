@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,9 @@ class DelaunayManifold::Impl {
 
   BuildStats Build(const std::vector<RayPoint>& points);
   InsertionStats Insert(const std::vector<RayPoint>& points);
+  void BeginInsert();
+  void InsertPart(const std::vector<RayPoint>& points);
+  InsertionStats FinishInsert();
   Mesh ExtractSurface(SurfaceInfo* info) const;
   // Not const, unlike DelaunayManifold::Validate: the weight layer walks every ray again,
   // which takes visit stamps and the walker's scratch buffers. The state checked is unchanged.
@@ -159,6 +163,9 @@ class DelaunayManifold::Impl {
   MergeTolerance merge_;               // near-duplicate input points (set by Build)
   MergeTolerance new_point_merge_;     // near-duplicate new points (set by Build)
   uint32_t batch_ = 0;                 // insertion batches so far
+  // The batch between BeginInsert and FinishInsert, and what its parts counted so far.
+  std::optional<InsertionBatch> open_batch_;
+  InsertionStats open_stats_;
   bool built_ = false;
 };
 

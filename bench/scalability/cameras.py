@@ -108,7 +108,8 @@ def plot(per_n, line, path, title):
     a.set_title(title)
     a.legend(fontsize=8)
     b.set_xlabel("cameras")
-    b.set_ylabel("seconds per iteration per camera")
+    b.set_yscale("log")
+    b.set_ylabel("seconds per iteration per camera (log)")
     b.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -128,11 +129,21 @@ def main():
     parser.add_argument("--image-noise", type=float, default=0, help="city, grey levels")
     parser.add_argument("--texture-photos", help="city: photographs mixed into the texture")
     parser.add_argument("--data", default="../shared/data", help="castle: the datasets folder")
+    parser.add_argument("--plot-only", action="store_true",
+                        help="redraw OUT/cameras.png from OUT/cameras.json")
     parser.add_argument("--sweep", nargs=argparse.REMAINDER, default=[],
                         help="options passed to reconstruct (last): e.g. --sweep.tile-size-px 32")
     args = parser.parse_args()
     cameras = args.cameras or ([16, 32, 64, 128, 256] if args.scene == "city"
                                else [5, 10, 15, 20, 25, 30])
+    if args.plot_only:
+        with open(os.path.join(args.out, "cameras.json")) as f:
+            saved = json.load(f)
+        line = saved["fit_total_vs_cameras"]
+        plot(saved["per_cameras"], (line["intercept_s"], line["slope_s_per_camera"], line["r2"]),
+             os.path.join(args.out, "cameras.png"),
+             f"{saved['scene']}, {saved['iterations']} iterations, {saved['workers']} workers")
+        return
     os.makedirs(args.out, exist_ok=True)
     log = open(os.path.join(args.out, "cameras.log"), "a")
     rows, per_n = [], []

@@ -65,7 +65,12 @@ def replay(args, scene, recorded, workers, log):
          "--kernel", "replay", "--replay.run", os.path.join(recorded, "run.h5"),
          "--replay.delay-s", str(args.delay), "--give-up-after", "120"],
         stdout=subprocess.DEVNULL, stderr=log) for i in range(workers)]
-    status = coordinator.wait()
+    while coordinator.poll() is None:
+        time.sleep(0.5)
+        if all(p.poll() not in (None, 0) for p in procs):
+            coordinator.kill()
+            sys.exit(f"every replaying worker failed (see {log.name})")
+    status = coordinator.returncode
     for p in procs:
         try:
             p.wait(timeout=60)
