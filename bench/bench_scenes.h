@@ -26,7 +26,4 @@ ManifoldBenchScene MakeBlobScene(int64_t num_points, int num_cameras, int rays_p
 void SortLikeTheCoordinator(const std::vector<ManifoldCamera>& cameras,
                             std::vector<RayPoint>* points);
 
-// Peak resident memory of this process so far (VmHWM), in bytes.
-int64_t PeakRssBytes();
-
 }  // namespace ms::bench

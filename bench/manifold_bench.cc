@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "base/log.h"
+#include "base/memory.h"
 #include "bench/bench_scenes.h"
 #include "manifold/delaunay_manifold.h"
 #include "mesh/mesh_io.h"
@@ -83,12 +84,12 @@ int main(int argc, char** argv) {
               "ins total s");
   for (int64_t n : sizes) {
     const ms::bench::ManifoldBenchScene scene = ms::bench::MakeBlobScene(n, 48, 5, 42);
-    const int64_t rss_before = ms::bench::PeakRssBytes();
+    const int64_t rss_before = ms::PeakRssBytes();
     ms::DelaunayManifold manifold(scene.cameras, options);
     ms::Timer timer;
     const ms::BuildStats stats = manifold.Build(scene.points);
     const double total = timer.Seconds();
-    const int64_t rss = ms::bench::PeakRssBytes() - rss_before;
+    const int64_t rss = ms::PeakRssBytes() - rss_before;
     if (!export_dir.empty()) {
       ms::PointCloud cloud;
       for (const ms::RayPoint& p : scene.points) {

@@ -7,6 +7,7 @@
 
 #include "base/error.h"
 #include "base/file_util.h"
+#include "base/memory.h"
 #include "proto/content_hash.h"
 #include "scene/h5_file.h"
 #include "scene/scene_h5.h"
@@ -356,6 +357,8 @@ void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
                        {"check", info.mesh_check}};
   }
   j["seconds_this_process"] = info.seconds;
+  // This process: the coordinator (reconstruct's workers are processes of their own).
+  j["peak_rss_bytes_this_process"] = PeakRssBytes();
   WriteFileAtomically(
       path, [&](std::ostream& out) { out << j.dump(2) << "\n"; }, false);
 }

@@ -8,8 +8,9 @@ workers on this machine) of
   castle: the first N images (by name) of ../shared/data/castle-P30's COLMAP model, with the
           points seen by at least 2 of them,
 then per iteration the seconds of every step (jobs, sweep, kernel, insert, extract, checkpoint),
-vertices, points found/inserted, job message bytes, and the run's peak RSS (the reconstruct
-process: coordinator in-process, workers are its children).
+vertices, points found/inserted, job message bytes, the coordinator's peak RSS (reconstruct's
+own process, from summary.json) and the largest process's (GNU time: usually a worker, whose
+decoded-image cache grows with the cameras it has swept).
 
 Writes OUT/cameras.json, OUT/cameras.csv and OUT/cameras.png: seconds per iteration and per
 camera against cameras for each step, with the least-squares line of the total and its R^2.
@@ -167,9 +168,10 @@ def main():
              "--input", scene, "--output", out, "--workers", str(args.workers),
              "--max-iterations", str(args.iterations)] + args.sweep, log)
         with open(rss_file) as f:
-            rss_mib = int(f.read().split()[-1]) / 1024
+            largest_rss_mib = int(f.read().split()[-1]) / 1024
         with open(os.path.join(out, "summary.json")) as f:
             summary = json.load(f)
+        rss_mib = summary["peak_rss_bytes_this_process"] / 1048576
         its = summary["iterations"][1:]
         if not its:
             sys.exit(f"{out}: no iteration ran ({summary.get('stop_reason')})")
@@ -180,17 +182,22 @@ def main():
                          "vertices": it["vertices"], "points_found": it["points_found"],
                          "points_inserted": it["points_inserted"],
                          "job_bytes_mean": it.get("job_bytes", 0) / max(1, it["jobs"]),
-                         "job_max_bytes": it.get("job_max_bytes", 0), "peak_rss_mib": rss_mib})
+                         "job_max_bytes": it.get("job_max_bytes", 0),
+                         "coordinator_peak_rss_mib": rss_mib,
+                         "largest_process_peak_rss_mib": largest_rss_mib})
         mean = {k: sum(it[k] for it in its) / len(its) for k in STEPS}
         mean["seconds_iteration"] = sum(it["seconds_total"] + it["seconds_checkpoint"]
                                         for it in its) / len(its)
         vertices = its[-1]["vertices"]
-        per_n.append({"cameras": n, **mean, "vertices": vertices, "peak_rss_mib": rss_mib,
-                      "rss_bytes_per_vertex": rss_mib * 1048576 / max(1, vertices),
+        per_n.append({"cameras": n, **mean, "vertices": vertices,
+                      "coordinator_peak_rss_mib": rss_mib,
+                      "largest_process_peak_rss_mib": largest_rss_mib,
+                      "coordinator_rss_bytes_per_vertex": rss_mib * 1048576 / max(1, vertices),
                       "seconds_total_run": summary.get("seconds_this_process", 0)})
         print(f"N={n}: {mean['seconds_iteration']:.1f} s per iteration "
               f"({mean['seconds_iteration'] / n:.3f} s per camera), {vertices} vertices, "
-              f"RSS {rss_mib:.0f} MiB", flush=True)
+              f"coordinator RSS {rss_mib:.0f} MiB (largest process {largest_rss_mib:.0f} MiB)",
+              flush=True)
     ns = [p["cameras"] for p in per_n]
     line = fit(ns, [p["seconds_iteration"] for p in per_n]) if len(ns) > 1 else (0, 0, 1)
     per_camera = [p["seconds_iteration"] / p["cameras"] for p in per_n]
