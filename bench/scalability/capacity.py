@@ -151,9 +151,28 @@ def main():
     parser.add_argument("--iterations", type=int, default=3)
     parser.add_argument("--width", type=int, default=320)
     parser.add_argument("--height", type=int, default=240)
+    parser.add_argument("--plot-only", nargs="+", metavar="JSON",
+                        help="merge these capacity.json files (one scene and delay) into "
+                        "OUT/capacity.json and OUT/capacity.png; runs nothing")
     parser.add_argument("--recorded", help="the recorded run and its scene to reuse (default: "
                         "OUT/recorded, OUT/cityN, made when missing)")
     args = parser.parse_args()
+    if args.plot_only:
+        merged = None
+        for path in args.plot_only:
+            with open(path) as f:
+                saved = json.load(f)
+            if merged is None:
+                merged = saved
+            else:
+                merged["rows"] += saved["rows"]
+        merged["rows"].sort(key=lambda r: (r["workers"], r["iteration"]))
+        os.makedirs(args.out, exist_ok=True)
+        with open(os.path.join(args.out, "capacity.json"), "w") as f:
+            json.dump(merged, f, indent=1)
+        plot(merged["rows"], os.path.join(args.out, "capacity.png"), merged["delay_s"],
+             merged["views"])
+        return
     # Tiles and window scaled to the small images (the defaults are for megapixel photographs).
     args.sweep = ["--sweep.tile-size-px", "16", "--sweep.gaussian-sigma-px", "4"]
     os.makedirs(args.out, exist_ok=True)
