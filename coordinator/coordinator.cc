@@ -250,9 +250,11 @@ class Coordinator::Impl {
     early_jobs_ = 0;
     sweep_started_ = Now();
     phase_ = Phase::kSweeping;
-    spdlog::info("iteration {}/{}: {} jobs ({} visible faces, {:.1f} MiB), {} workers", iteration_,
-                 options_.run.max_iterations, ids.size(), outcome.jobs.faces,
-                 outcome.jobs.bytes / 1048576.0, scheduler_.num_workers());
+    spdlog::info(
+        "iteration {}/{}: {} jobs ({} visible faces, {:.1f} MiB, the largest {:.0f} KiB), {} "
+        "workers",
+        iteration_, options_.run.max_iterations, ids.size(), outcome.jobs.faces,
+        outcome.jobs.bytes / 1048576.0, outcome.jobs.max_bytes / 1024.0, scheduler_.num_workers());
   }
 
   // Hands the points of the next jobs in camera order whose results are all in to the

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "base/error.h"
+#include "base/memory.h"
 #include "manifold/scene_rays.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
@@ -69,6 +70,7 @@ StepOutcome RunLifecycle::Prepare() {
   record_loaded_ = true;
   const Scene& scene = record_.scene;
   spdlog::info("scene: {}", scene.Summary());
+  spdlog::info("memory after the scene: {}", MemoryReport());
   if (options_.run.no_images) {
     catalog_ = std::make_unique<ImageCatalog>(ImageCatalog::WithoutImages(scene));
     spdlog::info("--no-images: jobs carry no image; only replay workers can take them");
@@ -98,6 +100,8 @@ void RunLifecycle::BuildOrReplay(bool resuming, const std::string& run_file) {
   const double build_s = build.Seconds();
   spdlog::info("initial manifold: {} points ({} Steiner), {} cells, {} outside; {:.2f} s",
                stats.points, stats.steiner_points, stats.cells, stats.outside_cells, build_s);
+  spdlog::info("memory after the initial manifold: {} (manifold about {:.0f} MiB)", MemoryReport(),
+               manifold_->MemoryBytes() / 1048576.0);
   if (!resuming) {
     WriteInitial(stats, build_s);
     return;
@@ -145,6 +149,7 @@ void RunLifecycle::WriteInitial(const BuildStats& stats, double build_s) {
   Checkpoint();
   spdlog::info("initial mesh: {} vertices, {} faces -> {}", written.closed.NumVertices(),
                written.closed.NumFaces(), Path("initial.ply"));
+  spdlog::info("memory after the initial meshes: {}", MemoryReport());
 }
 
 void RunLifecycle::InsertEarly(const std::vector<RayPoint>& points) {
@@ -320,6 +325,7 @@ StepOutcome RunLifecycle::NextOrStop() {
     for (const std::string& skipped : outcome.jobs.skipped) {
       spdlog::info("iteration {}: no job for {}", done + 1, skipped);
     }
+    spdlog::info("memory with iteration {}'s jobs: {}", done + 1, MemoryReport());
     if (outcome.jobs.jobs.empty()) reason = "no camera has a job (no neighbours or no face)";
   }
   if (reason.empty()) return outcome;

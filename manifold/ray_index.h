@@ -5,6 +5,12 @@
 // buckets whose direction lies in the projection's bounding rectangle and that reach the
 // box's nearest depth. Conservative: it may return rays that miss the box, never omits one
 // that hits it.
+//
+// Scale (docs/scalability.md): each camera's grid grows with its rays (about kRaysPerBucket a
+// bucket, up to `grid` per side), so thousands of cameras with a few thousand rays each do not
+// each hold a full grid; and a query skips every camera whose rays' bounding box (the camera
+// centre and the end points) misses the box, so its cost follows the cameras near the box, not
+// all of them.
 #pragma once
 
 #include <Eigen/Core>
@@ -33,8 +39,10 @@ class RayIndex {
     double u_min = -1, u_max = 1, v_min = -1, v_max = 1;
   };
 
-  // `grid`: buckets per side of each camera's grid.
+  // `grid`: the most buckets per side of a camera's grid.
   RayIndex(std::vector<Camera> cameras, int grid = 128);
+  // Filed rays per bucket a camera's grid aims at before it doubles its side.
+  static constexpr size_t kRaysPerBucket = 4;
 
   // Returns the ray's id: rays are numbered 0, 1, ... in the order they are added. Added rays
   // wait in a short list that queries scan whole until Flush files them into the buckets:
@@ -63,18 +71,27 @@ class RayIndex {
   };
   struct CameraBuckets {
     Camera camera;
+    int side = 1;  // buckets per side: a power of two, or grid_
     double du = 1, dv = 1;
-    // Bucket b (row-major, grid x grid) is entries[start[b], start[b + 1]): a query's rows of
+    // Bucket b (row-major, side x side) is entries[start[b], start[b + 1]): a query's rows of
     // buckets are contiguous runs.
     std::vector<Entry> entries;
-    std::vector<uint32_t> start;
-    std::vector<std::pair<uint32_t, Entry>> pending;  // (bucket, entry) until Flush
-    std::vector<Entry> overflow;                      // outside the grid, or at depth <= 0
+    std::vector<uint32_t> start{0, 0};
+    std::vector<Entry> pending;   // inside the grid, until Flush files them
+    std::vector<Entry> overflow;  // outside the grid, or at depth <= 0
     size_t count = 0;
+    // Box of the camera centre and every end point: it holds every ray of the camera.
+    Eigen::Vector3d lo, hi;
   };
+  // Sets cb's side for `rays` filed rays (it only grows) and files entries and pending anew.
+  void Refile(CameraBuckets* cb, size_t rays) const;
+  int SideFor(size_t rays) const;
+  const std::vector<uint32_t>& MortonOrder(int side) const;
+
   std::vector<CameraBuckets> cameras_;
   int grid_;
-  std::vector<uint32_t> morton_buckets_;  // bucket indices in Morton order
+  // Bucket indices in Morton order, per side (1, 2, 4, ... and grid_).
+  std::vector<std::pair<int, std::vector<uint32_t>>> morton_;
   size_t size_ = 0;
 };
 
@@ -83,12 +100,12 @@ void RayIndex::ForEachInDirectionOrder(Visit&& visit) const {
   for (size_t c = 0; c < cameras_.size(); ++c) {
     const CameraBuckets& cb = cameras_[c];
     const int32_t camera = static_cast<int32_t>(c);
-    for (uint32_t bucket : morton_buckets_) {
+    for (uint32_t bucket : MortonOrder(cb.side)) {
       for (uint32_t k = cb.start[bucket]; k < cb.start[bucket + 1]; ++k) {
         visit(RayRef{camera, cb.entries[k].point, cb.entries[k].id});
       }
     }
-    for (const auto& [bucket, e] : cb.pending) visit(RayRef{camera, e.point, e.id});
+    for (const Entry& e : cb.pending) visit(RayRef{camera, e.point, e.id});
     for (const Entry& e : cb.overflow) visit(RayRef{camera, e.point, e.id});
   }
 }

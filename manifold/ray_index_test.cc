@@ -118,5 +118,91 @@ TEST(RayIndex, VisitsEveryRayOnceCameraByCameraInDirectionOrder) {
   for (int count : seen) EXPECT_EQ(count, 1);
 }
 
+// Brute-force reference for the two tests below: the rays whose segment clearly meets the box.
+std::vector<RayRef> RaysHitting(const std::vector<RayIndex::Camera>& cameras,
+                                const std::vector<Eigen::Vector3d>& points,
+                                const std::vector<RayRef>& rays, const Eigen::Vector3d& lo,
+                                const Eigen::Vector3d& hi) {
+  std::vector<RayRef> hits;
+  for (const RayRef& ray : rays) {
+    if (SegmentHitsBox(cameras[ray.camera].center, points[ray.point], lo, hi)) hits.push_back(ray);
+  }
+  return hits;
+}
+
+TEST(RayIndex, AGridThatGrowsWithItsRaysStillFindsEveryRay) {
+  // One camera, rays added in batches: the grid starts at one bucket and doubles its side as
+  // the rays come (kRaysPerBucket each), refiling what it holds each time.
+  RayIndex::Camera cam;
+  cam.R.setIdentity();
+  cam.center.setZero();
+  RayIndex index({cam}, 64);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.9, 0.9), depth(1, 3);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<RayRef> rays;
+  size_t memory_before = index.MemoryBytes();
+  for (int batch = 0; batch < 6; ++batch) {
+    const int n = 20 << batch;  // 20 ... 640: the side grows 2 -> 16 along the way
+    for (int i = 0; i < n; ++i) {
+      const double z = depth(rng);
+      points.emplace_back(u(rng) * z, u(rng) * z, z);
+      const int32_t point = static_cast<int32_t>(points.size()) - 1;
+      rays.push_back({0, point, index.Add(0, point, points.back())});
+    }
+    index.Flush();
+    EXPECT_GT(index.MemoryBytes(), memory_before);
+    memory_before = index.MemoryBytes();
+    for (int q = 0; q < 30; ++q) {
+      const Eigen::Vector3d center(u(rng), u(rng), depth(rng));
+      const Eigen::Vector3d half = Eigen::Vector3d::Constant(0.02 + 0.1 * std::abs(u(rng)));
+      std::vector<RayRef> found;
+      index.Query(center - half, center + half, &found);
+      std::sort(found.begin(), found.end());
+      for (const RayRef& hit : RaysHitting({cam}, points, rays, center - half, center + half)) {
+        EXPECT_TRUE(std::binary_search(found.begin(), found.end(), hit))
+            << "batch " << batch << ": missed point " << hit.point;
+      }
+      EXPECT_LT(found.size(), rays.size() / 2 + 5) << "the grid selects, batch " << batch;
+    }
+  }
+  // A full-size grid would be 64 x 64 buckets; 1,260 rays need 16 x 16.
+  EXPECT_LT(index.MemoryBytes(), rays.size() * 24 + 17 * 17 * 4 + 4096);
+}
+
+TEST(RayIndex, AQuerySkipsCamerasWhoseRaysAreElsewhere) {
+  // Two cameras far apart along a street, each seeing its own block of points.
+  std::vector<RayIndex::Camera> cameras(2);
+  for (int c = 0; c < 2; ++c) {
+    cameras[c].R.setIdentity();
+    cameras[c].center = Eigen::Vector3d(100.0 * c, 0, 0);
+  }
+  RayIndex index(cameras, 16);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<RayRef> rays;
+  for (int i = 0; i < 400; ++i) {
+    const int32_t camera = i % 2;
+    points.push_back(cameras[camera].center + Eigen::Vector3d(u(rng), u(rng), 2 + u(rng)));
+    rays.push_back({camera, i, index.Add(camera, i, points.back())});
+  }
+  index.Flush();
+  // A box at camera 0's points: only camera 0's rays come back, every hitting one among them.
+  const Eigen::Vector3d lo(-0.3, -0.3, 1.6), hi(0.3, 0.3, 2.4);
+  std::vector<RayRef> found;
+  index.Query(lo, hi, &found);
+  ASSERT_FALSE(found.empty());
+  for (const RayRef& ray : found) EXPECT_EQ(ray.camera, 0);
+  std::sort(found.begin(), found.end());
+  for (const RayRef& hit : RaysHitting(cameras, points, rays, lo, hi)) {
+    EXPECT_TRUE(std::binary_search(found.begin(), found.end(), hit));
+  }
+  // A box between the two blocks meets no ray, and no camera's rays come near it.
+  found.clear();
+  index.Query(Eigen::Vector3d(40, -1, 1), Eigen::Vector3d(60, 1, 3), &found);
+  EXPECT_TRUE(found.empty());
+}
+
 }  // namespace
 }  // namespace ms

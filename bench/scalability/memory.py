@@ -1,0 +1,136 @@
+#!/usr/bin/python3
+"""The coordinator's memory and job messages on large scenes (docs/scalability.md, "Memory").
+
+For each SCENE (VIEWS:POINTS), synthesises a street with that many cameras and sparse points
+(`manisweep synth city --no-images`, reused when OUT/city_VIEWS_POINTS holds it already), then
+starts the real coordinator on it (`coordinator --no-images`, no worker) and waits until it has
+built the first iteration's jobs: the initial manifold, the meshes users get and one job per
+camera are then all in memory. Reads the coordinator's resident memory from /proc, its own
+`memory after ...` log lines (heap in use after each step) and the job line (total and largest
+job message), stops it with SIGINT and writes OUT/memory.json and OUT/memory.csv.
+
+  memory.py --manisweep build/app/manisweep --out /tmp/memory [--scenes 4096:1000000]
+
+Bytes per point are divided by the scene's sparse points (the coordinator's own count after
+merging is in the log).
+"""
+import argparse
+import csv
+import json
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+MIB = 1024.0 * 1024.0
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def status_bytes(pid, field):
+    with open(f"/proc/{pid}/status") as f:
+        for line in f:
+            if line.startswith(field + ":"):
+                return int(line.split()[1]) * 1024
+    return 0
+
+
+def synthesise(args, views, points):
+    folder = os.path.join(args.out, f"city_{views}_{points}")
+    scene = os.path.join(folder, "scene.h5")
+    if not os.path.exists(scene):
+        cmd = [args.manisweep, "synth", "city", "--views", str(views), "--points", str(points),
+               "--no-images", "--output", folder]
+        print("+ " + " ".join(cmd), flush=True)
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+    return scene
+
+
+def measure(args, views, points):
+    scene = synthesise(args, views, points)
+    out = os.path.join(args.out, f"coordinator_{views}_{points}")
+    subprocess.run(["rm", "-rf", out], check=True)
+    os.makedirs(out)
+    log_path = os.path.join(out, "coordinator.log")
+    start = time.monotonic()
+    with open(log_path, "w") as log:
+        coordinator = subprocess.Popen(
+            [args.manisweep, "coordinator", "--input", scene, "--output", out, "--no-images",
+             "--bind", f"tcp://127.0.0.1:{free_port()}"], stdout=log, stderr=subprocess.STDOUT)
+        jobs_line = None
+        while jobs_line is None:
+            time.sleep(0.5)
+            if coordinator.poll() is not None:
+                sys.exit(f"the coordinator exited with {coordinator.returncode} (see {log_path})")
+            with open(log_path) as f:
+                jobs_line = next((l for l in f if re.search(r"iteration 1/\d+: \d+ jobs", l)), None)
+        row = {"views": views, "points": points,
+               "resident_mib": status_bytes(coordinator.pid, "VmRSS") / MIB,
+               "peak_mib": status_bytes(coordinator.pid, "VmHWM") / MIB,
+               "seconds_to_first_jobs": time.monotonic() - start}
+        coordinator.send_signal(signal.SIGINT)
+        coordinator.wait(timeout=120)
+    with open(log_path) as f:
+        text = f.read()
+    for step in ["the scene", "the initial manifold", "the initial meshes"]:
+        m = re.search(rf"memory after {step}: (\d+) MiB in use, (\d+) MiB resident", text)
+        key = step.replace("the ", "").replace(" ", "_")
+        row[f"in_use_after_{key}_mib"] = float(m.group(1)) if m else None
+    m = re.search(r"memory with iteration 1's jobs: (\d+) MiB in use", text)
+    row["in_use_with_jobs_mib"] = float(m.group(1)) if m else None
+    m = re.search(r"manifold about (\d+) MiB", text)
+    row["manifold_estimate_mib"] = float(m.group(1)) if m else None
+    m = re.search(r"iteration 1/\d+: (\d+) jobs \((\d+) visible faces, ([\d.]+) MiB, the largest "
+                  r"(\d+) KiB\)", text)
+    if not m:
+        sys.exit(f"no job line in {log_path}")
+    row["jobs"] = int(m.group(1))
+    row["job_mib_total"] = float(m.group(3))
+    row["job_kib_mean"] = float(m.group(3)) * 1024 / max(int(m.group(1)), 1)
+    row["job_kib_max"] = float(m.group(4))
+    m = re.search(r"initial mesh: (\d+) vertices", text)
+    row["mesh_vertices"] = int(m.group(1)) if m else None
+    row["bytes_per_point_resident"] = row["resident_mib"] * MIB / points
+    row["bytes_per_point_peak"] = row["peak_mib"] * MIB / points
+    print(f"{views} cameras, {points} points: resident {row['resident_mib']:.0f} MiB "
+          f"({row['bytes_per_point_resident']:.0f} B/point), peak {row['peak_mib']:.0f} MiB "
+          f"({row['bytes_per_point_peak']:.0f} B/point); jobs {row['jobs']}, "
+          f"{row['job_kib_mean']:.0f} KiB mean, {row['job_kib_max']:.0f} KiB largest", flush=True)
+    return row
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--manisweep", required=True)
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--scenes", nargs="+", default=["4096:1000000"],
+                        help="VIEWS:POINTS for each scene (default 4096:1000000)")
+    args = parser.parse_args()
+    args.manisweep = os.path.abspath(args.manisweep)
+    os.makedirs(args.out, exist_ok=True)
+    rows = []
+    for spec in args.scenes:
+        try:
+            views, points = (int(x) for x in spec.split(":"))
+        except ValueError:
+            sys.exit(f"--scenes: {spec} is not VIEWS:POINTS")
+        rows.append(measure(args, views, points))
+    with open(os.path.join(args.out, "memory.json"), "w") as f:
+        json.dump(rows, f, indent=1)
+    with open(os.path.join(args.out, "memory.csv"), "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        writer.writeheader()
+        writer.writerows(rows)
+    print(f"wrote {args.out}/memory.json, memory.csv")
+
+
+if __name__ == "__main__":
+    main()
