@@ -68,9 +68,12 @@ void RunManifold(const ManifoldCommandOptions& options) {
               static_cast<long long>(info.steiner_vertices), mesh.NumFaces());
   if (options.manifold.float_cleanup) {
     const FloatCleanupStats& c = output.cleanup;
-    std::printf("  float cleanup     %lld problems -> %lld: %lld collapses, %lld splits, %.3f s\n",
-                static_cast<long long>(c.problems_before), static_cast<long long>(c.problems_after),
-                static_cast<long long>(c.collapses), static_cast<long long>(c.splits), c.seconds);
+    std::printf(
+        "  float cleanup     %lld problems -> %lld: %lld collapses, %lld splits, %lld moves, "
+        "%.3f s\n",
+        static_cast<long long>(c.problems_before), static_cast<long long>(c.problems_after),
+        static_cast<long long>(c.collapses), static_cast<long long>(c.splits),
+        static_cast<long long>(c.moves), c.seconds);
   }
   std::printf("  total             %.3f s; wrote %s\n", total, options.output.c_str());
   if (options.check) {

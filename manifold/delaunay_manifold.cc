@@ -248,9 +248,8 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
 void DelaunayManifold::Impl::BeginInsert() {
   MS_CHECK(built_) << "Insert before Build";
   MS_CHECK(!open_batch_) << "BeginInsert with a batch open";
-  // Cells created in a part carry its number; their ray counts are rebuilt at the end of the
-  // part (shrinking and the discard rule do not depend on weights, only growing does, and it
-  // runs once, at the end of the batch).
+  // Cells created in this batch carry its number; their ray counts are rebuilt once at the
+  // end (shrinking and the discard rule do not depend on weights, only growing does).
   open_batch_ = StartBatch();
   open_stats_ = InsertionStats();
 }
@@ -260,16 +259,12 @@ void DelaunayManifold::Impl::InsertPart(const std::vector<RayPoint>& points) {
   CheckNewPoints(points);
   Timer timer;
   InsertionStats& stats = open_stats_;
-  InsertionBatch& batch = *open_batch_;
   stats.requested += static_cast<int64_t>(points.size());
-  batch.part = ++parts_;
-  batch.first_new_id = static_cast<int32_t>(positions_.size());
   Progress progress("manifold: inserting points", static_cast<int64_t>(points.size()));
   for (size_t n = 0; n < points.size(); ++n) {
     progress.Update(static_cast<int64_t>(n));
-    InsertOne(points[n], &batch, &stats);
+    InsertOne(points[n], &*open_batch_, &stats);
   }
-  CountPart(&batch, &stats);
   stats.seconds_insertion += timer.Seconds();
 }
 
@@ -279,6 +274,12 @@ InsertionStats DelaunayManifold::Impl::FinishInsert() {
   open_batch_.reset();
   InsertionStats stats = open_stats_;
   Timer timer;
+  // The exact recount of the cells born in the batch.
+  RewalkOldRays(batch, &stats);
+  TraceNewRays(&batch, &stats);
+  stats.seconds_insertion += timer.Seconds();
+
+  timer.Restart();
   Regrow(batch, stats);
   stats.outside_cells = labels_.outside_count();
   stats.seconds_growing = timer.Seconds();
@@ -313,6 +314,7 @@ void DelaunayManifold::Impl::CheckNewPoints(const std::vector<RayPoint>& points)
 DelaunayManifold::Impl::InsertionBatch DelaunayManifold::Impl::StartBatch() {
   InsertionBatch batch;
   batch.number = ++batch_;
+  batch.first_new_id = static_cast<int32_t>(positions_.size());
   batch.ray_reach.assign(ray_index_->size(), 2.0f);
   batch.box_slack = 1e-9 * (box_max_ - box_min_).norm();
   return batch;
@@ -392,16 +394,16 @@ void DelaunayManifold::Impl::MarkRaysNear(InsertionBatch* batch, InsertionStats*
       hi = hi.cwiseMax(x);
     }
   }
-  // A candidate costs about what 1/20 of a whole re-walk does: past 20 candidates per ray in
-  // a part (large conflict regions: the box-only Steiner grid's long cells) every ray is walked.
+  // A candidate costs about what 1/20 of a whole re-walk does: past 20 candidates per ray,
+  // (large conflict regions: the box-only Steiner grid's long cells) every ray is walked.
   if (!batch->all_affected &&
-      batch->part_candidates > 20 * static_cast<int64_t>(ray_index_->size())) {
+      stats->candidate_rays > 20 * static_cast<int64_t>(ray_index_->size())) {
     batch->all_affected = true;
+    std::fill(batch->ray_reach.begin(), batch->ray_reach.end(), 0.0f);
   }
   std::vector<RayRef>& candidates = batch->candidates;
   candidates.clear();
   if (!batch->all_affected) ray_index_->Query(lo, hi, &candidates);
-  batch->part_candidates += static_cast<int64_t>(candidates.size());
   stats->candidate_rays += static_cast<int64_t>(candidates.size());
   const Eigen::Vector3d slack = Eigen::Vector3d::Constant(batch->box_slack);
   for (const RayRef& ray : candidates) {
@@ -409,7 +411,6 @@ void DelaunayManifold::Impl::MarkRaysNear(InsertionBatch* batch, InsertionStats*
     if (SegmentMeetsBox(cameras_[ray.camera].center, positions_[ray.point], lo - slack, hi + slack,
                         &entry)) {
       float& reach = batch->ray_reach[ray.id];
-      if (reach > 1.0f) batch->marked.push_back(ray);
       // Rounded down (float), so the walk starts no later than the box.
       reach = std::min(reach, static_cast<float>(entry) - 1e-6f);
     }
@@ -431,7 +432,7 @@ void DelaunayManifold::Impl::InsertPoint(const Point& p, const RayPoint& point,
   dt_.incident_cells(v, std::back_inserter(around));
   for (const Cell_handle& c : around) {
     c->info() = CellInfo{};
-    c->info().born = batch->part;
+    c->info().born = batch->number;
     for (int i = 0; i < 4; ++i) {
       ++c->vertex(i)->info().cells;
       c->vertex(i)->info().changed = batch->number;
@@ -444,24 +445,18 @@ void DelaunayManifold::Impl::InsertPoint(const Point& p, const RayPoint& point,
   batch->hint = v->cell();
 }
 
-void DelaunayManifold::Impl::CountPart(InsertionBatch* batch, InsertionStats* stats) {
-  RewalkOldRays(batch, stats);
-  TraceNewRays(batch, stats);
-  batch->ray_reach.resize(ray_index_->size(), 2.0f);
-  batch->part_candidates = 0;
-  batch->all_affected = false;
-}
-
-// Every ray already in the index that may cross a cell born in the part is walked once and
-// counted on those cells only (the others keep their counts: their geometry did not change).
-// Marked rays are walked camera by camera, so that consecutive walks share cells in cache.
-void DelaunayManifold::Impl::RewalkOldRays(InsertionBatch* batch, InsertionStats* stats) {
-  const uint32_t born = batch->part;
+// Every old ray that may cross a cell born in the batch is walked once and counted on those
+// cells only (the others keep their counts: their geometry did not change). The rays are
+// walked in the index's order (which keeps cells in cache).
+void DelaunayManifold::Impl::RewalkOldRays(const InsertionBatch& batch, InsertionStats* stats) {
+  const uint32_t born = batch.number;
   const auto is_new = [&](const Cell_handle& c) { return c->info().born == born; };
   const auto count_new_cells = [&](const Cell_handle& c, unsigned mask) {
     if (is_new(c)) labels_.CountCrossing(c, mask);
   };
-  const auto rewalk = [&](const RayRef& ray, float reach) {
+  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
+    const float reach = batch.ray_reach[ray.id];
+    if (reach > 1.0f) return;
     const Vertex_handle target = vertex_of_point_[ray.point];
     // Only the part of the ray from its first hole box on can cross a new cell: walk that
     // part backwards from the point; where that is degenerate, the whole ray forwards.
@@ -470,15 +465,7 @@ void DelaunayManifold::Impl::RewalkOldRays(InsertionBatch* batch, InsertionStats
       stats->rewalk_steps += walker_.WalkFromCamera(ray.camera, target, count_new_cells);
     }
     ++stats->rewalked_rays;
-  };
-  if (batch->all_affected) {
-    ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) { rewalk(ray, 0.0f); });
-  } else {
-    std::sort(batch->marked.begin(), batch->marked.end());
-    for (const RayRef& ray : batch->marked) rewalk(ray, batch->ray_reach[ray.id]);
-  }
-  for (const RayRef& ray : batch->marked) batch->ray_reach[ray.id] = 2.0f;
-  batch->marked.clear();
+  });
 }
 
 // The cameras of a duplicate that `vertex` does not have yet, for TraceNewRays (Steiner vertices
@@ -508,13 +495,12 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
     cams.insert(std::upper_bound(cams.begin(), cams.end(), c), c);
     target->info().changed = batch->number;  // growing looks at its cells again
     ++stats->gained_rays;
-    // A point new in this part has its rays, the gained one included, traced below.
+    // A point new in this batch has its rays, the gained one included, traced below.
     if (id >= batch->first_new_id) continue;
     walker_.WalkFromCamera(c, target, count);
     ray_index_->Add(c, id, positions_[id]);
     ++stats->new_rays;
   }
-  gained.clear();
   for (int32_t id = batch->first_new_id; id < static_cast<int32_t>(positions_.size()); ++id) {
     const Vertex_handle target = vertex_of_point_[id];
     for (int32_t c : point_cameras_[id]) {

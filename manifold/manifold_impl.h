@@ -79,20 +79,14 @@ class DelaunayManifold::Impl {
  private:
   friend struct ManifoldTestAccess;
 
-  // One Insert call's state, shared by its steps. A batch is inserted in one or more parts
-  // (InsertPart); the ray counts of each part's new cells are made exact at the end of that
-  // part, so that a coordinator inserting parts while its sweep runs is left with regrowing
-  // alone once the last result is in.
+  // One Insert call's state, shared by its steps.
   struct InsertionBatch {
-    uint32_t number = 0;       // vertices changed in the batch carry it (for regrowing)
-    uint32_t part = 0;         // cells born in the current part carry it (CellInfo::born)
-    int32_t first_new_id = 0;  // id of the current part's first inserted point
-    // Per ray already in the index (by its id): the smallest parameter (0 at the camera, 1 at
-    // the point) where it may enter a cell born in the current part; > 1: none.
+    uint32_t number = 0;       // cells born and vertices changed in the batch carry it
+    int32_t first_new_id = 0;  // id of the batch's first inserted point
+    // Per old ray (by its id in the ray index): the smallest parameter (0 at the camera, 1 at
+    // the point) where it may enter a new cell; > 1: none.
     std::vector<float> ray_reach;
-    std::vector<RayRef> marked;  // the current part's rays with a reach <= 1
-    int64_t part_candidates = 0;
-    bool all_affected = false;  // the current part walks every old ray from its camera on
+    bool all_affected = false;  // every old ray from its camera on
     // Slack for the segment/box test: rounding in the box and the clipping, scene-relative.
     double box_slack = 0;
     Cell_handle hint;  // where locating the next point starts
@@ -135,14 +129,12 @@ class DelaunayManifold::Impl {
   bool ShrinkAround(const InsertionBatch& batch, InsertionStats* stats);
   // Lowers the reach of the old rays that may cross D (for RewalkOldRays).
   void MarkRaysNear(InsertionBatch* batch, InsertionStats* stats);
-  // Replaces D by the star of the new point; the new cells are born in the current part.
+  // Replaces D by the star of the new point; the new cells are born in this batch.
   void InsertPoint(const Point& p, const RayPoint& point, InsertionBatch* batch,
                    InsertionStats* stats);
-  // Exact ray counts on the cells born in the current part: the rays already in the index that
-  // may cross one, walked again and counted on those cells only (RewalkOldRays), then the
-  // part's new rays, counted everywhere and filed in the index (TraceNewRays).
-  void CountPart(InsertionBatch* batch, InsertionStats* stats);
-  void RewalkOldRays(InsertionBatch* batch, InsertionStats* stats);
+  // Exact ray counts on the cells born in the batch: the old rays that may cross one, walked
+  // again and counted on those cells only, then the new points' rays, counted everywhere.
+  void RewalkOldRays(const InsertionBatch& batch, InsertionStats* stats);
   void TraceNewRays(InsertionBatch* batch, InsertionStats* stats);
   void GainCameras(const Vertex_handle& vertex, const std::vector<int32_t>& cameras,
                    InsertionBatch* batch);
@@ -171,7 +163,6 @@ class DelaunayManifold::Impl {
   MergeTolerance merge_;               // near-duplicate input points (set by Build)
   MergeTolerance new_point_merge_;     // near-duplicate new points (set by Build)
   uint32_t batch_ = 0;                 // insertion batches so far
-  uint32_t parts_ = 0;                 // insertion parts so far (CellInfo::born)
   // The batch between BeginInsert and FinishInsert, and what its parts counted so far.
   std::optional<InsertionBatch> open_batch_;
   InsertionStats open_stats_;

@@ -17,9 +17,10 @@ OutputMeshes MakeOutputMeshes(const Mesh& surface, const SurfaceInfo& info, bool
     if (c.problems_before > 0) {
       spdlog::log(c.problems_after > 0 ? spdlog::level::warn : spdlog::level::info,
                   "float cleanup: {} floating-point problems (pairs within {:.3g} or crossing in "
-                  "double precision) -> {}: {} edge collapses, {} splits, {} rounds, {:.2f} s",
-                  c.problems_before, c.tolerance, c.problems_after, c.collapses, c.splits, c.rounds,
-                  c.seconds);
+                  "double precision) -> {}: {} edge collapses, {} splits, {} moves, {} rounds, "
+                  "{:.2f} s",
+                  c.problems_before, c.tolerance, c.problems_after, c.collapses, c.splits, c.moves,
+                  c.rounds, c.seconds);
     }
   }
   out.surface = FacesWithoutFlaggedVertices(out.closed, steiner);

@@ -125,6 +125,7 @@ class Cleaner {
 
   int64_t collapses() const { return collapses_; }
   int64_t splits() const { return splits_; }
+  int64_t moves() const { return moves_; }
 
   // One pass over the problems of `report` (every pair listed); returns the operations done.
   int64_t Round(const FloatRobustnessReport& report) {
@@ -135,7 +136,7 @@ class Cleaner {
     tree_.Build(box_, std::move(alive));
     recent_.clear();
     touched_.assign(mesh_.faces.size(), 0);
-    const int64_t before = collapses_ + splits_;
+    const int64_t before = collapses_ + splits_ + moves_;
     for (const auto& pair : report.near_vertex_examples) {
       CollapseAround({pair[0], pair[1]});
     }
@@ -148,11 +149,13 @@ class Cleaner {
       const Face& b = mesh_.faces[g];
       if (TriangleDistance(Corners(a), Corners(b)) > tolerance_) {
         SplitLongestEdge(f, g);  // far apart: only Möller's relative snapping sees them touch
-      } else {
-        CollapseAround({a[0], a[1], a[2], b[0], b[1], b[2]});
+      } else if (!CollapseAround({a[0], a[1], a[2], b[0], b[1], b[2]})) {
+        // Two sheets too close, with no edge short enough to collapse (a thin wall whose two
+        // sides are faces of 20 cm, half a millimetre apart): move them apart instead.
+        MoveApart(static_cast<int32_t>(f), static_cast<int32_t>(g));
       }
     }
-    return collapses_ + splits_ - before;
+    return collapses_ + splits_ + moves_ - before;
   }
 
   // Drops dead faces and unreferenced vertices, renumbering `scaffold` along; the cleaner is
@@ -209,14 +212,15 @@ class Cleaner {
   }
 
   // Tries to remove one of `vertices` by collapsing one of its edges (shortest first), so that
-  // every face around the problem is replaced by faces checked clean.
-  void CollapseAround(std::vector<int32_t> vertices) {
+  // every face around the problem is replaced by faces checked clean. True if one collapsed
+  // (or the problem's faces changed already this round).
+  bool CollapseAround(std::vector<int32_t> vertices) {
     std::sort(vertices.begin(), vertices.end());
     vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
     for (int32_t v : vertices) {
-      if (faces_of_[v].empty()) return;  // removed this round
+      if (faces_of_[v].empty()) return true;  // removed this round
       for (int32_t f : faces_of_[v]) {
-        if (touched_[f]) return;
+        if (touched_[f]) return true;
       }
     }
     struct Candidate {
@@ -237,8 +241,78 @@ class Cleaner {
       return std::tie(a.length, a.removed, a.kept) < std::tie(b.length, b.removed, b.kept);
     });
     for (const Candidate& c : candidates) {
-      if (TryCollapse(c.removed, c.kept)) return;
+      if (TryCollapse(c.removed, c.kept)) return true;
     }
+    return false;
+  }
+
+  // Faces f and g, closer than the tolerance and sharing no vertex: moves the corners of one of
+  // them (or one corner) 2 tolerances along g's normal, away from the other, where that leaves
+  // fewer problems and nothing forbidden: 4e-6 of the diagonal with the defaults (check-mesh's
+  // tolerance, times the cleanup's margin, times 2).
+  void MoveApart(int32_t f, int32_t g) {
+    const Face a = mesh_.faces[f], b = mesh_.faces[g];
+    const Vector3d n = Normal(b);
+    if (!(n.norm() > 0)) return;
+    const Vector3d centre_a =
+        (mesh_.vertices[a[0]] + mesh_.vertices[a[1]] + mesh_.vertices[a[2]]) / 3;
+    const double side = n.dot(centre_a - mesh_.vertices[b[0]]) >= 0 ? 1.0 : -1.0;
+    const Vector3d away = 2 * tolerance_ * side * n.normalized();  // moves a away from b
+    const std::vector<std::pair<std::vector<int32_t>, Vector3d>> tries = {
+        {{a[0], a[1], a[2]}, away},
+        {{b[0], b[1], b[2]}, -away},
+        {{a[0]}, away},
+        {{a[1]}, away},
+        {{a[2]}, away},
+        {{b[0]}, -away},
+        {{b[1]}, -away},
+        {{b[2]}, -away}};
+    for (const auto& [vertices, delta] : tries) {
+      if (TryMove(vertices, delta)) return;
+    }
+  }
+
+  // Moves `vertices` by `delta`: each gets a moved copy and their faces are made anew on the
+  // copies (the old vertices end unreferenced), if every face keeps its side and the change
+  // improves (Improves).
+  bool TryMove(const std::vector<int32_t>& vertices, const Vector3d& delta) {
+    std::vector<int32_t> removed;
+    for (int32_t v : vertices) {
+      if (scaffold_[v] != scaffold_[vertices.front()]) return false;
+      for (int32_t f : faces_of_[v]) {
+        if (touched_[f]) return false;
+        removed.push_back(f);
+      }
+    }
+    std::sort(removed.begin(), removed.end());
+    removed.erase(std::unique(removed.begin(), removed.end()), removed.end());
+    const int32_t first = static_cast<int32_t>(mesh_.vertices.size());
+    for (int32_t v : vertices) mesh_.vertices.push_back(mesh_.vertices[v] + delta);
+    const auto moved = [&](int32_t w) {
+      const auto it = std::find(vertices.begin(), vertices.end(), w);
+      return it == vertices.end() ? w : first + static_cast<int32_t>(it - vertices.begin());
+    };
+    std::vector<Face> made;
+    bool ok = true;
+    for (int32_t f : removed) {
+      Face face = mesh_.faces[f];
+      const Vector3d old_normal = Normal(face);
+      for (int32_t& w : face) w = moved(w);
+      ok = ok && FlipFree(old_normal, face);
+      made.push_back(face);
+    }
+    if (!ok || !Improves(removed, made)) {
+      mesh_.vertices.resize(first);
+      return false;
+    }
+    for (int32_t v : vertices) {
+      if (mesh_.HasColors()) mesh_.vertex_colors.push_back(mesh_.vertex_colors[v]);
+      scaffold_.push_back(scaffold_[v]);
+      faces_of_.emplace_back();
+    }
+    Apply(removed, made);
+    ++moves_;
+    return true;
   }
 
   bool TryCollapse(int32_t u, int32_t v) {
@@ -435,7 +509,7 @@ class Cleaner {
   std::vector<int32_t> recent_;                 // faces made this round (not in tree_)
   FaceTree tree_;                               // faces alive at the round's start
   int64_t live_vertices_ = 0;                   // vertices with a face
-  int64_t collapses_ = 0, splits_ = 0;
+  int64_t collapses_ = 0, splits_ = 0, moves_ = 0;
 };
 
 int64_t ProblemCount(const FloatRobustnessReport& r) {
@@ -476,6 +550,7 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
     cleaner.Compact();
     stats.collapses += cleaner.collapses();
     stats.splits += cleaner.splits();
+    stats.moves += cleaner.moves();
     if (operations == 0) break;
     report = CheckFloatRobustness(*mesh, std::vector<uint8_t>(mesh->faces.size(), 1), check);
   }
@@ -484,7 +559,7 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
     *mesh = original;
     *scaffold = original_scaffold;
     stats.problems_after = stats.problems_before;
-    stats.collapses = stats.splits = 0;
+    stats.collapses = stats.splits = stats.moves = 0;
   }
   stats.seconds = timer.Seconds();
   return stats;

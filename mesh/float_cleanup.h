@@ -9,7 +9,13 @@
 // - edge splits at the midpoint for what only Open3D's test sees: a face far larger than a
 //   nearby small one makes Möller's plane distances (relative to the pair's extent) snap to 0,
 //   and the pair "intersects" though it is farther apart than the tolerance. A split leaves the
-//   surface where it was and shrinks the large face.
+//   surface where it was and shrinks the large face;
+// - moves, where two faces sharing no vertex lie within the tolerance and no edge around them
+//   may collapse (both sheets of a thin wall, with edges far longer than the gap): the corners
+//   of one face, or one corner, go 2 tolerances (2e-6 of the diagonal with the defaults) away
+//   from the other face along its normal, under the same conditions as a collapse. The only
+//   operation that moves a vertex off its input position: 2 tolerances a move, and a vertex
+//   is moved again only in a later round, if a problem is left around it.
 // It repeats check, then operations, until the check passes or nothing more can be done; if it
 // ends with no fewer problems than it started with, the mesh is left as it was.
 //
@@ -42,6 +48,7 @@ struct FloatCleanupStats {
   int64_t problems_after = 0;
   int64_t collapses = 0;
   int64_t splits = 0;
+  int64_t moves = 0;  // vertices, or a face's corners, moved 2 tolerances apart
   int rounds = 0;
   double tolerance = 0;  // absolute, as cleaned to
   double seconds = 0;

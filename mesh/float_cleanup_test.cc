@@ -173,6 +173,34 @@ TEST(FloatCleanup, SplitVertexOfAScaffoldEdgeIsScaffold) {
   EXPECT_EQ(std::count(scaffold.begin(), scaffold.end(), 0), 4);  // the tiny corner only
 }
 
+// Two unit cubes face to face, 1e-7 of the diagonal apart: both sheets of a thin wall, and the
+// cubes' side faces edge to edge across the gap, all with edges (1) far too long to collapse
+// (the bound is 1e-3 of the diagonal). The cleanup moves corners apart, 2 tolerances a move;
+// no vertex is made or removed, and none moves far.
+TEST(FloatCleanup, ThinWallIsMovedApartWhereNoEdgeCanCollapse) {
+  Mesh second = Cube();
+  for (V& p : second.vertices) p.x() += 1 + 1e-7 * std::sqrt(6.0);
+  Mesh mesh = Append(Cube(), second);
+  for (V& p : mesh.vertices) p = Rotation() * p;
+  const Mesh original = mesh;
+  ASSERT_FALSE(CheckMesh(mesh, MeshCheckOptions{}).is_float_robust);
+  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh);
+  EXPECT_GT(stats.problems_before, 0);
+  EXPECT_EQ(stats.problems_after, 0);
+  EXPECT_EQ(stats.collapses, 0);
+  EXPECT_GT(stats.moves, 0);
+  ExpectValidAndRobust(mesh);
+  ASSERT_EQ(mesh.vertices.size(), original.vertices.size());
+  ASSERT_EQ(mesh.faces.size(), original.faces.size());
+  // Each vertex is where it was or a few moves away (in more than one round, or along the
+  // normals of the wall and of a side face).
+  for (const V& p : mesh.vertices) {
+    double nearest = INFINITY;
+    for (const V& q : original.vertices) nearest = std::min(nearest, (p - q).norm());
+    EXPECT_LE(nearest, 4 * 2 * stats.tolerance);
+  }
+}
+
 TEST(FloatCleanup, OptionsAreChecked) {
   Mesh mesh = Icosahedron();
   FloatCleanupOptions bad;
