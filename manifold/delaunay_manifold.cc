@@ -248,8 +248,9 @@ InsertionStats DelaunayManifold::Impl::Insert(const std::vector<RayPoint>& point
 void DelaunayManifold::Impl::BeginInsert() {
   MS_CHECK(built_) << "Insert before Build";
   MS_CHECK(!open_batch_) << "BeginInsert with a batch open";
-  // Cells created in this batch carry its number; their ray counts are rebuilt once at the
-  // end (shrinking and the discard rule do not depend on weights, only growing does).
+  // Cells created in a part carry its number; their ray counts are rebuilt ray by ray as the
+  // parts go (EndPart) and at the end (shrinking and the discard rule do not depend on
+  // weights, only growing does, once, in FinishInsert).
   open_batch_ = StartBatch();
   open_stats_ = InsertionStats();
 }
@@ -259,12 +260,17 @@ void DelaunayManifold::Impl::InsertPart(const std::vector<RayPoint>& points) {
   CheckNewPoints(points);
   Timer timer;
   InsertionStats& stats = open_stats_;
+  InsertionBatch& batch = *open_batch_;
   stats.requested += static_cast<int64_t>(points.size());
+  batch.part = ++parts_;
+  batch.marked_in.emplace_back();
+  batch.first_new_id = static_cast<int32_t>(positions_.size());
   Progress progress("manifold: inserting points", static_cast<int64_t>(points.size()));
   for (size_t n = 0; n < points.size(); ++n) {
     progress.Update(static_cast<int64_t>(n));
-    InsertOne(points[n], &*open_batch_, &stats);
+    InsertOne(points[n], &batch, &stats);
   }
+  EndPart(&batch, &stats);
   stats.seconds_insertion += timer.Seconds();
 }
 
@@ -274,9 +280,12 @@ InsertionStats DelaunayManifold::Impl::FinishInsert() {
   open_batch_.reset();
   InsertionStats stats = open_stats_;
   Timer timer;
-  // The exact recount of the cells born in the batch.
-  RewalkOldRays(batch, &stats);
-  TraceNewRays(&batch, &stats);
+  // What is left of the recount: the rays marked in the last kRecountLag parts, or every ray.
+  if (batch.all_affected) {
+    RewalkAll(&batch, &stats);
+  } else {
+    RewalkMarked(&batch, batch.part, &stats);
+  }
   stats.seconds_insertion += timer.Seconds();
 
   timer.Restart();
@@ -314,8 +323,12 @@ void DelaunayManifold::Impl::CheckNewPoints(const std::vector<RayPoint>& points)
 DelaunayManifold::Impl::InsertionBatch DelaunayManifold::Impl::StartBatch() {
   InsertionBatch batch;
   batch.number = ++batch_;
+  batch.first_part = parts_ + 1;
+  batch.part = parts_;
   batch.first_new_id = static_cast<int32_t>(positions_.size());
   batch.ray_reach.assign(ray_index_->size(), 2.0f);
+  batch.ray_counted.assign(ray_index_->size(), parts_);
+  batch.ray_marked.assign(ray_index_->size(), 0);
   batch.box_slack = 1e-9 * (box_max_ - box_min_).norm();
   return batch;
 }
@@ -394,12 +407,12 @@ void DelaunayManifold::Impl::MarkRaysNear(InsertionBatch* batch, InsertionStats*
       hi = hi.cwiseMax(x);
     }
   }
-  // A candidate costs about what 1/20 of a whole re-walk does: past 20 candidates per ray,
-  // (large conflict regions: the box-only Steiner grid's long cells) every ray is walked.
+  // A candidate costs about what 1/20 of a whole re-walk does: past 20 candidates per ray in
+  // the batch (large conflict regions: the box-only Steiner grid's long cells) every ray is
+  // walked once, at the end of the batch.
   if (!batch->all_affected &&
       stats->candidate_rays > 20 * static_cast<int64_t>(ray_index_->size())) {
     batch->all_affected = true;
-    std::fill(batch->ray_reach.begin(), batch->ray_reach.end(), 0.0f);
   }
   std::vector<RayRef>& candidates = batch->candidates;
   candidates.clear();
@@ -413,6 +426,10 @@ void DelaunayManifold::Impl::MarkRaysNear(InsertionBatch* batch, InsertionStats*
       float& reach = batch->ray_reach[ray.id];
       // Rounded down (float), so the walk starts no later than the box.
       reach = std::min(reach, static_cast<float>(entry) - 1e-6f);
+      if (batch->ray_marked[ray.id] != batch->part) {
+        batch->ray_marked[ray.id] = batch->part;
+        batch->marked_in.back().push_back(ray);
+      }
     }
   }
 }
@@ -432,7 +449,7 @@ void DelaunayManifold::Impl::InsertPoint(const Point& p, const RayPoint& point,
   dt_.incident_cells(v, std::back_inserter(around));
   for (const Cell_handle& c : around) {
     c->info() = CellInfo{};
-    c->info().born = batch->number;
+    c->info().born = batch->part;
     for (int i = 0; i < 4; ++i) {
       ++c->vertex(i)->info().cells;
       c->vertex(i)->info().changed = batch->number;
@@ -445,27 +462,63 @@ void DelaunayManifold::Impl::InsertPoint(const Point& p, const RayPoint& point,
   batch->hint = v->cell();
 }
 
-// Every old ray that may cross a cell born in the batch is walked once and counted on those
-// cells only (the others keep their counts: their geometry did not change). The rays are
-// walked in the index's order (which keeps cells in cache).
-void DelaunayManifold::Impl::RewalkOldRays(const InsertionBatch& batch, InsertionStats* stats) {
-  const uint32_t born = batch.number;
-  const auto is_new = [&](const Cell_handle& c) { return c->info().born == born; };
+// The end of a part: the rays no part has marked for kRecountLag parts are walked (the holes
+// have moved on), then the part's new rays are traced and join the index.
+void DelaunayManifold::Impl::EndPart(InsertionBatch* batch, InsertionStats* stats) {
+  if (!batch->all_affected && batch->part >= batch->first_part + kRecountLag) {
+    RewalkMarked(batch, batch->part - kRecountLag, stats);
+  }
+  TraceNewRays(batch, stats);
+  const size_t rays = ray_index_->size();
+  batch->ray_reach.resize(rays, 2.0f);
+  batch->ray_counted.resize(rays, batch->part);  // traced: counted on every cell there is
+  batch->ray_marked.resize(rays, 0);
+}
+
+// Walks the pending rays whose last mark came from a part <= last_marked_by, camera by camera
+// (consecutive walks share cells in cache).
+void DelaunayManifold::Impl::RewalkMarked(InsertionBatch* batch, uint32_t last_marked_by,
+                                          InsertionStats* stats) {
+  std::vector<RayRef> due;
+  for (uint32_t q = batch->first_part; q <= last_marked_by; ++q) {
+    std::vector<RayRef>& bucket = batch->marked_in[q - batch->first_part];
+    for (const RayRef& ray : bucket) {
+      // Pending, and in the bucket of its last mark (not marked again since).
+      if (batch->ray_marked[ray.id] == q && batch->ray_reach[ray.id] <= 1.0f) due.push_back(ray);
+    }
+    std::vector<RayRef>().swap(bucket);
+  }
+  std::sort(due.begin(), due.end());
+  for (const RayRef& ray : due) RewalkRay(batch, ray, batch->ray_reach[ray.id], stats);
+}
+
+// Every ray from its camera on (a batch whose holes meet most rays).
+void DelaunayManifold::Impl::RewalkAll(InsertionBatch* batch, InsertionStats* stats) {
+  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) { RewalkRay(batch, ray, 0, stats); });
+  for (std::vector<RayRef>& bucket : batch->marked_in) std::vector<RayRef>().swap(bucket);
+}
+
+// One ray, counted on the cells born since its last walk (the others have its crossing
+// already, or their geometry did not change).
+void DelaunayManifold::Impl::RewalkRay(InsertionBatch* batch, const RayRef& ray, float reach,
+                                       InsertionStats* stats) {
+  const uint32_t after = batch->ray_counted[ray.id], upto = batch->part;
+  const auto is_new = [&](const Cell_handle& c) {
+    return c->info().born > after && c->info().born <= upto;
+  };
   const auto count_new_cells = [&](const Cell_handle& c, unsigned mask) {
     if (is_new(c)) labels_.CountCrossing(c, mask);
   };
-  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
-    const float reach = batch.ray_reach[ray.id];
-    if (reach > 1.0f) return;
-    const Vertex_handle target = vertex_of_point_[ray.point];
-    // Only the part of the ray from its first hole box on can cross a new cell: walk that
-    // part backwards from the point; where that is degenerate, the whole ray forwards.
-    if (reach <= 0 || !walker_.WalkBack(walker_.camera_point(ray.camera), target, reach, is_new,
-                                        count_new_cells, &stats->rewalk_steps)) {
-      stats->rewalk_steps += walker_.WalkFromCamera(ray.camera, target, count_new_cells);
-    }
-    ++stats->rewalked_rays;
-  });
+  const Vertex_handle target = vertex_of_point_[ray.point];
+  // Only the part of the ray from its first hole box on can cross a new cell: walk that part
+  // backwards from the point; where that is degenerate, the whole ray forwards.
+  if (reach <= 0 || !walker_.WalkBack(walker_.camera_point(ray.camera), target, reach, is_new,
+                                      count_new_cells, &stats->rewalk_steps)) {
+    stats->rewalk_steps += walker_.WalkFromCamera(ray.camera, target, count_new_cells);
+  }
+  ++stats->rewalked_rays;
+  batch->ray_counted[ray.id] = upto;
+  batch->ray_reach[ray.id] = 2.0f;
 }
 
 // The cameras of a duplicate that `vertex` does not have yet, for TraceNewRays (Steiner vertices
@@ -509,6 +562,7 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
       ++stats->new_rays;
     }
   }
+  gained.clear();
   ray_index_->Flush();
 }
 

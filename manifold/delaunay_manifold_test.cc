@@ -335,7 +335,9 @@ TEST(DelaunayManifold, InsertingABatchInPartsEqualsInsertingItWhole) {
     EXPECT_EQ(got.requested, expected.requested);
     EXPECT_EQ(got.inserted, expected.inserted);
     EXPECT_EQ(got.discarded_conflict, expected.discarded_conflict);
-    EXPECT_EQ(got.rewalked_rays, expected.rewalked_rays);
+    // An earlier part's new rays are traced at its end, and walked again where a later part's
+    // holes meet them: more re-walks than the whole batch's.
+    EXPECT_GE(got.rewalked_rays, expected.rewalked_rays);
     EXPECT_EQ(got.outside_cells, expected.outside_cells);
     ASSERT_GT(expected.inserted, 0);
     const Mesh a = whole.ExtractSurface(), b = parts.ExtractSurface();
@@ -343,6 +345,34 @@ TEST(DelaunayManifold, InsertingABatchInPartsEqualsInsertingItWhole) {
     ASSERT_EQ(a.vertices, b.vertices) << "batch " << batch;
     ASSERT_EQ(parts.Validate(true), "") << "batch " << batch;
     ASSERT_EQ(whole.Validate(true), "") << "batch " << batch;
+  }
+}
+
+// Many small parts, as a coordinator hands them over while its sweep runs: the recount of a ray
+// waits until kRecountLag parts have not marked it, then counts it on every cell born since its
+// last walk. Same manifold as the whole batch, and every count right.
+TEST(DelaunayManifold, ManySmallPartsEqualInsertingTheBatchWhole) {
+  RandomScene scene = SphereScene(200, 12, 8, 1.0);
+  DelaunayManifold whole(scene.cameras, ManifoldOptions{});
+  DelaunayManifold parts(scene.cameras, ManifoldOptions{});
+  whole.Build(scene.points);
+  parts.Build(scene.points);
+  for (int batch = 0; batch < 2; ++batch) {
+    const RandomScene more = SphereScene(120, 12, 300 + batch, 1.0 + 0.02 * (batch - 1));
+    const InsertionStats expected = whole.Insert(more.points);
+    parts.BeginInsert();
+    for (size_t k = 0; k < more.points.size(); k += 3) {  // 40 parts
+      parts.InsertPart(std::vector<RayPoint>(
+          more.points.begin() + k, more.points.begin() + std::min(k + 3, more.points.size())));
+    }
+    const InsertionStats got = parts.FinishInsert();
+    EXPECT_EQ(got.inserted, expected.inserted);
+    EXPECT_EQ(got.outside_cells, expected.outside_cells);
+    ASSERT_GT(expected.inserted, 0);
+    const Mesh a = whole.ExtractSurface(), b = parts.ExtractSurface();
+    ASSERT_EQ(a.faces, b.faces) << "batch " << batch;
+    ASSERT_EQ(a.vertices, b.vertices) << "batch " << batch;
+    ASSERT_EQ(parts.Validate(true), "") << "batch " << batch;
   }
 }
 

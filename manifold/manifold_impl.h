@@ -79,14 +79,27 @@ class DelaunayManifold::Impl {
  private:
   friend struct ManifoldTestAccess;
 
-  // One Insert call's state, shared by its steps.
+  // One Insert call's state, shared by its steps. A batch is inserted in one or more parts
+  // (InsertPart). The exact recount of the cells born in the batch is done ray by ray once no
+  // part has marked the ray for kRecountLag parts, and for the rest at the end (FinishInsert):
+  // a coordinator inserting parts while its sweep runs is left with little of it, and a ray
+  // near the holes of several consecutive parts is walked once for all of them.
   struct InsertionBatch {
-    uint32_t number = 0;       // cells born and vertices changed in the batch carry it
-    int32_t first_new_id = 0;  // id of the batch's first inserted point
-    // Per old ray (by its id in the ray index): the smallest parameter (0 at the camera, 1 at
-    // the point) where it may enter a new cell; > 1: none.
+    uint32_t number = 0;       // vertices changed in the batch carry it (for regrowing)
+    uint32_t first_part = 0;   // parts first_part, first_part + 1, ...: cells carry theirs
+    uint32_t part = 0;         // the current part (CellInfo::born of the cells it makes)
+    int32_t first_new_id = 0;  // id of the current part's first inserted point
+    // Per ray in the index (by its id):
+    //   reach: the smallest parameter (0 at the camera, 1 at the point) where it may enter a
+    //     cell born since its last walk; > 1: none (not pending);
+    //   counted: it has been counted on every cell born in parts <= counted;
+    //   marked: the last part that marked it.
     std::vector<float> ray_reach;
-    bool all_affected = false;  // every old ray from its camera on
+    std::vector<uint32_t> ray_counted, ray_marked;
+    // The rays each part marked (by part - first_part); a ray is walked from the bucket of the
+    // last part that marked it.
+    std::vector<std::vector<RayRef>> marked_in;
+    bool all_affected = false;  // every ray is walked from its camera on, at the end
     // Slack for the segment/box test: rounding in the box and the clipping, scene-relative.
     double box_slack = 0;
     Cell_handle hint;  // where locating the next point starts
@@ -127,14 +140,20 @@ class DelaunayManifold::Impl {
                           Cell_handle* located, InsertionStats* stats);
   // Shrinks O around D; false if D still meets O (the point is then discarded).
   bool ShrinkAround(const InsertionBatch& batch, InsertionStats* stats);
-  // Lowers the reach of the old rays that may cross D (for RewalkOldRays).
+  // Lowers the reach of the rays that may cross D and marks them (for RewalkMarked).
   void MarkRaysNear(InsertionBatch* batch, InsertionStats* stats);
-  // Replaces D by the star of the new point; the new cells are born in this batch.
+  // Replaces D by the star of the new point; the new cells are born in the current part.
   void InsertPoint(const Point& p, const RayPoint& point, InsertionBatch* batch,
                    InsertionStats* stats);
-  // Exact ray counts on the cells born in the batch: the old rays that may cross one, walked
-  // again and counted on those cells only, then the new points' rays, counted everywhere.
-  void RewalkOldRays(const InsertionBatch& batch, InsertionStats* stats);
+  // Exact ray counts on the cells born in the batch: each marked ray walked again and counted
+  // on the cells born since its last walk (RewalkMarked: at the end of a part, the rays last
+  // marked kRecountLag parts ago; at the end of the batch, all that are left), and the new
+  // points' rays, counted everywhere and filed in the index at the end of their part.
+  static constexpr uint32_t kRecountLag = 8;
+  void EndPart(InsertionBatch* batch, InsertionStats* stats);
+  void RewalkMarked(InsertionBatch* batch, uint32_t last_marked_by, InsertionStats* stats);
+  void RewalkAll(InsertionBatch* batch, InsertionStats* stats);
+  void RewalkRay(InsertionBatch* batch, const RayRef& ray, float reach, InsertionStats* stats);
   void TraceNewRays(InsertionBatch* batch, InsertionStats* stats);
   void GainCameras(const Vertex_handle& vertex, const std::vector<int32_t>& cameras,
                    InsertionBatch* batch);
@@ -163,6 +182,7 @@ class DelaunayManifold::Impl {
   MergeTolerance merge_;               // near-duplicate input points (set by Build)
   MergeTolerance new_point_merge_;     // near-duplicate new points (set by Build)
   uint32_t batch_ = 0;                 // insertion batches so far
+  uint32_t parts_ = 0;                 // insertion parts so far (CellInfo::born)
   // The batch between BeginInsert and FinishInsert, and what its parts counted so far.
   std::optional<InsertionBatch> open_batch_;
   InsertionStats open_stats_;

@@ -35,7 +35,7 @@ struct CellInfo {
   // Of those, the rays that spread w2 across face i to the neighbour there (see Weight).
   int32_t spread[4] = {0, 0, 0, 0};
   uint32_t stamp = 0;    // visit marker for walks and set building (RayWalker::NextStamp)
-  uint32_t born = 0;     // insertion batch that created the cell (0: the initial build)
+  uint32_t born = 0;     // insertion part that created the cell (0: the initial build)
   bool outside = false;  // in O
   bool queued = false;   // in the growing queue
   bool has_camera = false;
