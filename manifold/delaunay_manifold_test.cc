@@ -314,6 +314,33 @@ TEST(DelaunayManifold, RandomInsertionsKeepTheSurfaceManifold) {
   }
 }
 
+// Inserts `points` into `whole` in one call and into `parts` cut at `cuts` (offsets from 0 to
+// points.size()), and expects the same insertion, the same manifold and every count right.
+void ExpectPartsEqualWhole(DelaunayManifold* whole, DelaunayManifold* parts,
+                           const std::vector<RayPoint>& points, const std::vector<size_t>& cuts,
+                           int batch) {
+  const InsertionStats expected = whole->Insert(points);
+  parts->BeginInsert();
+  for (size_t k = 0; k + 1 < cuts.size(); ++k) {
+    parts->InsertPart(
+        std::vector<RayPoint>(points.begin() + cuts[k], points.begin() + cuts[k + 1]));
+  }
+  const InsertionStats got = parts->FinishInsert();
+  EXPECT_EQ(got.requested, expected.requested) << "batch " << batch;
+  EXPECT_EQ(got.inserted, expected.inserted) << "batch " << batch;
+  EXPECT_EQ(got.discarded_conflict, expected.discarded_conflict) << "batch " << batch;
+  // An earlier part's new rays are traced at its end, and walked again where a later part's
+  // holes meet them: more re-walks than the whole batch's.
+  EXPECT_GE(got.rewalked_rays, expected.rewalked_rays) << "batch " << batch;
+  EXPECT_EQ(got.outside_cells, expected.outside_cells) << "batch " << batch;
+  ASSERT_GT(expected.inserted, 0) << "batch " << batch;
+  const Mesh a = whole->ExtractSurface(), b = parts->ExtractSurface();
+  ASSERT_EQ(a.faces, b.faces) << "batch " << batch;
+  ASSERT_EQ(a.vertices, b.vertices) << "batch " << batch;
+  ASSERT_EQ(parts->Validate(true), "") << "batch " << batch;
+  ASSERT_EQ(whole->Validate(true), "") << "batch " << batch;
+}
+
 // The coordinator inserts a batch in pieces while the sweep is still running: Begin, parts in
 // order, Finish must be exactly Insert of the whole batch.
 TEST(DelaunayManifold, InsertingABatchInPartsEqualsInsertingItWhole) {
@@ -324,33 +351,14 @@ TEST(DelaunayManifold, InsertingABatchInPartsEqualsInsertingItWhole) {
   parts.Build(scene.points);
   for (int batch = 0; batch < 3; ++batch) {
     const RandomScene more = SphereScene(90, 10, 77 + batch, 1.0 + 0.02 * (batch - 1));
-    const InsertionStats expected = whole.Insert(more.points);
-    parts.BeginInsert();
-    const size_t cuts[] = {0, 1, 40, 40, more.points.size()};  // an empty part too
-    for (size_t k = 0; k + 1 < std::size(cuts); ++k) {
-      parts.InsertPart(
-          std::vector<RayPoint>(more.points.begin() + cuts[k], more.points.begin() + cuts[k + 1]));
-    }
-    const InsertionStats got = parts.FinishInsert();
-    EXPECT_EQ(got.requested, expected.requested);
-    EXPECT_EQ(got.inserted, expected.inserted);
-    EXPECT_EQ(got.discarded_conflict, expected.discarded_conflict);
-    // An earlier part's new rays are traced at its end, and walked again where a later part's
-    // holes meet them: more re-walks than the whole batch's.
-    EXPECT_GE(got.rewalked_rays, expected.rewalked_rays);
-    EXPECT_EQ(got.outside_cells, expected.outside_cells);
-    ASSERT_GT(expected.inserted, 0);
-    const Mesh a = whole.ExtractSurface(), b = parts.ExtractSurface();
-    ASSERT_EQ(a.faces, b.faces) << "batch " << batch;
-    ASSERT_EQ(a.vertices, b.vertices) << "batch " << batch;
-    ASSERT_EQ(parts.Validate(true), "") << "batch " << batch;
-    ASSERT_EQ(whole.Validate(true), "") << "batch " << batch;
+    // An empty part too.
+    ExpectPartsEqualWhole(&whole, &parts, more.points, {0, 1, 40, 40, more.points.size()}, batch);
   }
 }
 
 // Many small parts, as a coordinator hands them over while its sweep runs: the recount of a ray
 // waits until kRecountLag parts have not marked it, then counts it on every cell born since its
-// last walk. Same manifold as the whole batch, and every count right.
+// last walk.
 TEST(DelaunayManifold, ManySmallPartsEqualInsertingTheBatchWhole) {
   RandomScene scene = SphereScene(200, 12, 8, 1.0);
   DelaunayManifold whole(scene.cameras, ManifoldOptions{});
@@ -359,20 +367,10 @@ TEST(DelaunayManifold, ManySmallPartsEqualInsertingTheBatchWhole) {
   parts.Build(scene.points);
   for (int batch = 0; batch < 2; ++batch) {
     const RandomScene more = SphereScene(120, 12, 300 + batch, 1.0 + 0.02 * (batch - 1));
-    const InsertionStats expected = whole.Insert(more.points);
-    parts.BeginInsert();
-    for (size_t k = 0; k < more.points.size(); k += 3) {  // 40 parts
-      parts.InsertPart(std::vector<RayPoint>(
-          more.points.begin() + k, more.points.begin() + std::min(k + 3, more.points.size())));
-    }
-    const InsertionStats got = parts.FinishInsert();
-    EXPECT_EQ(got.inserted, expected.inserted);
-    EXPECT_EQ(got.outside_cells, expected.outside_cells);
-    ASSERT_GT(expected.inserted, 0);
-    const Mesh a = whole.ExtractSurface(), b = parts.ExtractSurface();
-    ASSERT_EQ(a.faces, b.faces) << "batch " << batch;
-    ASSERT_EQ(a.vertices, b.vertices) << "batch " << batch;
-    ASSERT_EQ(parts.Validate(true), "") << "batch " << batch;
+    std::vector<size_t> cuts;  // 40 parts of 3 points
+    for (size_t k = 0; k < more.points.size(); k += 3) cuts.push_back(k);
+    cuts.push_back(more.points.size());
+    ExpectPartsEqualWhole(&whole, &parts, more.points, cuts, batch);
   }
 }
 

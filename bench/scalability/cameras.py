@@ -21,20 +21,15 @@ camera against cameras for each step, with the least-squares line of the total a
              --data ../shared/data [--cameras 5 10 15 20 25 30]
 """
 import argparse
-import csv
 import json
 import os
 import shutil
-import subprocess
 import sys
+
+from bench_common import run, write_figures
 
 STEPS = ["seconds_jobs", "seconds_sweep", "seconds_insert", "seconds_extract",
          "seconds_checkpoint"]
-
-
-def run(cmd, log):
-    print("+ " + " ".join(cmd), flush=True)
-    subprocess.run(cmd, check=True, stdout=log, stderr=subprocess.STDOUT)
 
 
 def castle_subset(data, n, out):
@@ -202,18 +197,15 @@ def main():
     line = fit(ns, [p["seconds_iteration"] for p in per_n]) if len(ns) > 1 else (0, 0, 1)
     per_camera = [p["seconds_iteration"] / p["cameras"] for p in per_n]
     spread = max(abs(x / (sum(per_camera) / len(per_camera)) - 1) for x in per_camera)
-    result = {"scene": args.scene, "iterations": args.iterations, "workers": args.workers,
-              "image_size": [args.width, args.height] if args.scene == "city" else "full",
-              "options": args.sweep, "per_cameras": per_n, "rows": rows,
-              "fit_total_vs_cameras": {"intercept_s": line[0], "slope_s_per_camera": line[1],
-                                       "r2": line[2]},
-              "per_camera_spread": spread}
-    with open(os.path.join(args.out, "cameras.json"), "w") as f:
-        json.dump(result, f, indent=1)
-    with open(os.path.join(args.out, "cameras.csv"), "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        writer.writeheader()
-        writer.writerows(rows)
+    # The images' own size; reconstruct sweeps them at --sweep.max-image-dimension (default
+    # 1600: castle-P30's 3072x2048 at 1536x1024) unless `options` says otherwise.
+    setup = {"scene": args.scene, "iterations": args.iterations, "workers": args.workers,
+             "image_size": [args.width, args.height] if args.scene == "city" else [3072, 2048],
+             "options": args.sweep, "per_cameras": per_n,
+             "fit_total_vs_cameras": {"intercept_s": line[0], "slope_s_per_camera": line[1],
+                                      "r2": line[2]},
+             "per_camera_spread": spread}
+    write_figures(args.out, "cameras", setup, rows)
     print(f"fit: {line[0]:.2f} s + {line[1]:.3f} s x cameras, R^2 {line[2]:.3f}; seconds per "
           f"camera within ±{100 * spread:.0f}% of their mean")
     plot(per_n, line, os.path.join(args.out, "cameras.png"),

@@ -20,28 +20,17 @@ every worker is busy the whole iteration, lower for the coordinator's serial ste
 the jobs, inserting, extracting, checkpointing) and for the tail of the sweep.
 """
 import argparse
-import csv
 import filecmp
 import json
 import os
 import shutil
-import socket
 import subprocess
 import sys
 import time
 
+from bench_common import free_port, run, write_figures
+
 SERIAL = ["seconds_jobs", "seconds_insert", "seconds_extract", "seconds_checkpoint"]
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def run(cmd, log):
-    print("+ " + " ".join(cmd), flush=True)
-    subprocess.run(cmd, check=True, stdout=log, stderr=subprocess.STDOUT)
 
 
 def peak_rss_kib(time_file):
@@ -200,14 +189,9 @@ def main():
             f"efficiency {r['efficiency']:.2f}, serial {r['seconds_serial']:.2f} s"
             for r in mine) + f"; RSS {rss / 1024:.0f} MiB ({time.time() - started:.0f} s)",
             flush=True)
-    with open(os.path.join(args.out, "capacity.json"), "w") as f:
-        json.dump({"views": args.views, "delay_s": args.delay, "iterations": args.iterations,
-                   "image_size": [args.width, args.height], "sweep": args.sweep, "rows": rows},
-                  f, indent=1)
-    with open(os.path.join(args.out, "capacity.csv"), "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_figures(args.out, "capacity",
+                  {"views": args.views, "delay_s": args.delay, "iterations": args.iterations,
+                   "image_size": [args.width, args.height], "sweep": args.sweep}, rows)
     plot(rows, os.path.join(args.out, "capacity.png"), args.delay, args.views)
     print(f"wrote {args.out}/capacity.json, capacity.csv, capacity.png")
 

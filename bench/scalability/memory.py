@@ -15,23 +15,17 @@ Bytes per point are divided by the scene's sparse points (the coordinator's own 
 merging is in the log).
 """
 import argparse
-import csv
-import json
 import os
 import re
+import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
 
+from bench_common import write_figures
+
 MIB = 1024.0 * 1024.0
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def status_bytes(pid, field):
@@ -56,14 +50,14 @@ def synthesise(args, views, points):
 def measure(args, views, points):
     scene = synthesise(args, views, points)
     out = os.path.join(args.out, f"coordinator_{views}_{points}")
-    subprocess.run(["rm", "-rf", out], check=True)
+    shutil.rmtree(out, ignore_errors=True)
     os.makedirs(out)
     log_path = os.path.join(out, "coordinator.log")
     start = time.monotonic()
     with open(log_path, "w") as log:
         coordinator = subprocess.Popen(
             [args.manisweep, "coordinator", "--input", scene, "--output", out, "--no-images",
-             "--bind", f"tcp://127.0.0.1:{free_port()}"], stdout=log, stderr=subprocess.STDOUT)
+             "--bind", "tcp://127.0.0.1:*"], stdout=log, stderr=subprocess.STDOUT)
         jobs_line = None
         while jobs_line is None:
             time.sleep(0.5)
@@ -123,12 +117,7 @@ def main():
         except ValueError:
             sys.exit(f"--scenes: {spec} is not VIEWS:POINTS")
         rows.append(measure(args, views, points))
-    with open(os.path.join(args.out, "memory.json"), "w") as f:
-        json.dump(rows, f, indent=1)
-    with open(os.path.join(args.out, "memory.csv"), "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_figures(args.out, "memory", {"scenes": args.scenes}, rows)
     print(f"wrote {args.out}/memory.json, memory.csv")
 
 

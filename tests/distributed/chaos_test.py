@@ -11,13 +11,12 @@ import argparse
 import filecmp
 import os
 import random
-import shutil
 import signal
 import subprocess
 import sys
 import time
 
-from run_helpers import HEARTBEAT, SWEEP, free_port, make_scene, start_worker
+from run_helpers import HEARTBEAT, SWEEP, free_port, fresh_workdir, make_scene, start_worker
 
 
 def main():
@@ -30,9 +29,7 @@ def main():
     parser.add_argument("--time-limit", type=float, default=240)
     args = parser.parse_args()
     ms, work = args.manisweep, args.workdir
-    shutil.rmtree(work, ignore_errors=True)
-    os.makedirs(work)
-    logs = open(os.path.join(work, "processes.log"), "w")
+    logs = fresh_workdir(work)
 
     def run(cmd):
         subprocess.run(cmd, check=True, stdout=logs, stderr=subprocess.STDOUT)

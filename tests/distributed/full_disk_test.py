@@ -9,11 +9,10 @@ space back must finish to the mesh of an undisturbed run, byte for byte.
 import argparse
 import filecmp
 import os
-import shutil
 import subprocess
 import sys
 
-from run_helpers import HEARTBEAT, SWEEP, free_port, make_scene, start_worker
+from run_helpers import HEARTBEAT, SWEEP, free_port, fresh_workdir, make_scene, start_worker
 
 
 def main():
@@ -22,9 +21,7 @@ def main():
     parser.add_argument("--workdir", required=True)
     args = parser.parse_args()
     ms, work = args.manisweep, args.workdir
-    shutil.rmtree(work, ignore_errors=True)
-    os.makedirs(work)
-    log = open(os.path.join(work, "processes.log"), "w")
+    log = fresh_workdir(work)
     scene = make_scene(ms, work, log)
     iterations = ["--max-iterations", "6"]
     subprocess.run([ms, "reconstruct", "--input", scene, "--output", os.path.join(work, "undisturbed"),

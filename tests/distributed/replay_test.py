@@ -12,11 +12,10 @@ import argparse
 import filecmp
 import json
 import os
-import shutil
 import subprocess
 import sys
 
-from run_helpers import HEARTBEAT, SWEEP, free_port, make_scene, start_worker
+from run_helpers import HEARTBEAT, SWEEP, free_port, fresh_workdir, make_scene, start_worker
 
 ITERATIONS = ["--max-iterations", "4"]
 
@@ -27,9 +26,7 @@ def main():
     parser.add_argument("--workdir", required=True)
     args = parser.parse_args()
     ms, work = args.manisweep, args.workdir
-    shutil.rmtree(work, ignore_errors=True)
-    os.makedirs(work)
-    logs = open(os.path.join(work, "processes.log"), "w")
+    logs = fresh_workdir(work)
     scene = make_scene(ms, work, logs)
     recorded = os.path.join(work, "recorded")
     subprocess.run([ms, "reconstruct", "--input", scene, "--output", recorded, "--workers", "2"]

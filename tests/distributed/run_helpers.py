@@ -1,6 +1,8 @@
-"""What the process-level Python tests here share (chaos_test.py, full_disk_test.py): a free
-loopback port, the small scene's sweep options, and workers that reconnect fast."""
+"""What the process-level Python tests here share (chaos_test.py, full_disk_test.py,
+replay_test.py): a fresh work folder, a free loopback port, the small scene's sweep options, and
+workers that reconnect fast."""
 import os
+import shutil
 import socket
 import subprocess
 
@@ -8,6 +10,13 @@ import subprocess
 SWEEP = ["--sweep.tile-size-px", "10", "--sweep.gaussian-sigma-px", "4"]
 # Fast failure detection for the coordinator; workers use the same heartbeat.
 HEARTBEAT = ["--heartbeat-interval", "0.1", "--liveness", "8"]
+
+
+def fresh_workdir(work):
+    """Empties `work` and returns its processes.log, open for writing."""
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    return open(os.path.join(work, "processes.log"), "w")
 
 
 def free_port():
