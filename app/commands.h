@@ -34,5 +34,6 @@ void RegisterCoordinatorCommand(CLI::App& app);
 void RegisterWorkerCommand(CLI::App& app);
 void RegisterKeygenCommand(CLI::App& app);
 void RegisterColmapTriangulateCommand(CLI::App& app);
+void RegisterRefineCommand(CLI::App& app);
 
 }  // namespace ms::app

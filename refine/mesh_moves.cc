@@ -1,0 +1,142 @@
+#include "refine/mesh_moves.h"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+
+#include "mesh/mesh_checker.h"
+
+namespace ms {
+
+std::vector<std::vector<int32_t>> VertexNeighbours(const Mesh& mesh) {
+  std::vector<std::vector<int32_t>> neighbours(mesh.vertices.size());
+  for (const auto& f : mesh.faces) {
+    for (int k = 0; k < 3; ++k) {
+      neighbours[f[k]].push_back(f[(k + 1) % 3]);
+      neighbours[f[k]].push_back(f[(k + 2) % 3]);
+    }
+  }
+  for (auto& n : neighbours) {
+    std::sort(n.begin(), n.end());
+    n.erase(std::unique(n.begin(), n.end()), n.end());
+  }
+  return neighbours;
+}
+
+std::vector<Eigen::Vector3d> ThinPlateGradient(
+    const Mesh& mesh, const std::vector<std::vector<int32_t>>& neighbours) {
+  const size_t n = mesh.vertices.size();
+  std::vector<Eigen::Vector3d> umbrella(n, Eigen::Vector3d::Zero());
+  for (size_t v = 0; v < n; ++v) {
+    if (neighbours[v].empty()) continue;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (int32_t u : neighbours[v]) mean += mesh.vertices[u];
+    umbrella[v] = mean / static_cast<double>(neighbours[v].size()) - mesh.vertices[v];
+  }
+  std::vector<Eigen::Vector3d> gradient(n, Eigen::Vector3d::Zero());
+  for (size_t v = 0; v < n; ++v) {
+    if (neighbours[v].empty()) continue;
+    Eigen::Vector3d g = -umbrella[v];
+    for (int32_t u : neighbours[v]) {
+      g += umbrella[u] / static_cast<double>(neighbours[u].size());
+    }
+    gradient[v] = g;
+  }
+  return gradient;
+}
+
+namespace {
+
+Eigen::Vector3d FaceCross(const std::vector<Eigen::Vector3d>& p, const std::array<int32_t, 3>& f) {
+  return (p[f[1]] - p[f[0]]).cross(p[f[2]] - p[f[0]]);
+}
+
+// Vertices of faces that the move from `before` to `mesh` turned too far (or flipped).
+void MarkTurnedFaces(const Mesh& mesh, const std::vector<Eigen::Vector3d>& before,
+                     const std::vector<uint8_t>& moving, double cos_limit,
+                     std::vector<uint8_t>* trouble) {
+  for (const auto& f : mesh.faces) {
+    if (!moving[f[0]] && !moving[f[1]] && !moving[f[2]]) continue;
+    const Eigen::Vector3d n0 = FaceCross(before, f), n1 = FaceCross(mesh.vertices, f);
+    if (n0.dot(n1) <= cos_limit * n0.norm() * n1.norm()) {
+      for (int32_t v : f) (*trouble)[v] = 1;
+    }
+  }
+}
+
+// Vertices of the checker's problems that involve a moving vertex: face pairs that intersect
+// exactly (adjacent ones included: a fold), or that come within the tolerance or intersect in
+// double precision (sharing no vertex), and vertices within the tolerance.
+void MarkCheckerProblems(const Mesh& mesh, const std::vector<uint8_t>& moving, double tolerance,
+                         std::vector<uint8_t>* trouble) {
+  MeshCheckOptions check;
+  check.allow_boundary = true;
+  check.float_tolerance_abs = tolerance;
+  check.max_examples = INT_MAX;
+  check.max_self_intersections = INT64_MAX;
+  const MeshReport report = CheckMesh(mesh, check);
+  const auto mark_faces = [&](const std::array<int64_t, 2>& pair) {
+    const auto& a = mesh.faces[pair[0]];
+    const auto& b = mesh.faces[pair[1]];
+    bool involved = false;
+    for (int k = 0; k < 3; ++k) involved = involved || moving[a[k]] || moving[b[k]];
+    if (!involved) return;
+    for (int k = 0; k < 3; ++k) (*trouble)[a[k]] = (*trouble)[b[k]] = 1;
+  };
+  for (const auto& pair : report.self_intersection_examples) mark_faces(pair);
+  const FloatRobustnessReport& f = report.float_robustness;
+  for (const auto& pair : f.close_face_pair_examples) mark_faces(pair);
+  for (const auto& pair : f.float_intersection_examples) mark_faces(pair);
+  for (const auto& pair : f.near_vertex_examples) {
+    if (moving[pair[0]] || moving[pair[1]]) (*trouble)[pair[0]] = (*trouble)[pair[1]] = 1;
+  }
+  for (int64_t face : report.degenerate_face_examples) {
+    const auto& a = mesh.faces[face];
+    if (moving[a[0]] || moving[a[1]] || moving[a[2]]) {
+      for (int k = 0; k < 3; ++k) (*trouble)[a[k]] = 1;
+    }
+  }
+}
+
+}  // namespace
+
+MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& displacement,
+                             const MoveOptions& options) {
+  const size_t n = mesh->vertices.size();
+  const std::vector<Eigen::Vector3d> before = mesh->vertices;
+  std::vector<double> scale(n, 1.0);
+  std::vector<int> halvings(n, 0);
+  const double cos_limit = std::cos(options.max_face_turn_deg * M_PI / 180);
+  MoveStats stats;
+  while (true) {
+    std::vector<uint8_t> moving(n, 0);
+    for (size_t v = 0; v < n; ++v) {
+      moving[v] = scale[v] > 0 && displacement[v] != Eigen::Vector3d::Zero();
+      mesh->vertices[v] = before[v] + scale[v] * displacement[v];
+    }
+    std::vector<uint8_t> trouble(n, 0);
+    MarkTurnedFaces(*mesh, before, moving, cos_limit, &trouble);
+    MarkCheckerProblems(*mesh, moving, options.tolerance, &trouble);
+    ++stats.rounds;
+    bool any = false;
+    for (size_t v = 0; v < n; ++v) {
+      if (!trouble[v] || !moving[v]) continue;
+      any = true;
+      scale[v] = ++halvings[v] > options.max_halvings ? 0.0 : scale[v] / 2;
+    }
+    if (!any) break;
+  }
+  for (size_t v = 0; v < n; ++v) {
+    if (displacement[v] == Eigen::Vector3d::Zero()) continue;
+    if (scale[v] == 0) {
+      ++stats.refused;
+      continue;
+    }
+    ++stats.moved;
+    if (scale[v] < 1) ++stats.halved;
+    stats.largest = std::max(stats.largest, scale[v] * displacement[v].norm());
+  }
+  return stats;
+}
+
+}  // namespace ms

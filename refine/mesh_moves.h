@@ -1,0 +1,47 @@
+// Moving the vertices of a mesh without breaking it (docs/refine.md "Keeping the manifold"):
+// the thin-plate regulariser's gradient, and moves that are halved or refused where they would
+// make the mesh self-intersect, bring two faces (or two vertices) within the floating-point
+// tolerance, or turn a face too far. The faces are never changed, so a closed 2-manifold stays
+// one; with the checks, it also stays free of self-intersections, exactly and in double
+// precision (the tolerance test is stricter than either).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+#include "mesh/mesh.h"
+
+namespace ms {
+
+// Neighbours of every vertex along the faces' edges (sorted, unique).
+std::vector<std::vector<int32_t>> VertexNeighbours(const Mesh& mesh);
+
+// Gradient of the thin-plate energy E = 1/2 sum_v |L(v)|^2, L(v) = mean of v's neighbours - v
+// (the umbrella operator): dE/dv = -L(v) + sum over neighbours u of L(u) / deg(u).
+std::vector<Eigen::Vector3d> ThinPlateGradient(const Mesh& mesh,
+                                               const std::vector<std::vector<int32_t>>& neighbours);
+
+struct MoveOptions {
+  double tolerance = 0;           // absolute: faces sharing no vertex stay farther apart than this
+  double max_face_turn_deg = 60;  // a face's normal turns by at most this
+  int max_halvings = 4;           // a refused move is halved this many times, then dropped
+};
+
+struct MoveStats {
+  int64_t moved = 0;    // vertices that moved (by their full or a halved displacement)
+  int64_t halved = 0;   // of those, moved by less than asked
+  int64_t refused = 0;  // vertices that did not move though asked to
+  int rounds = 0;       // checks of the whole mesh
+  double largest = 0;   // largest move made (mesh units)
+};
+
+// Adds displacement[v] to every vertex, halving it (then dropping it) for the vertices of
+// faces that a check finds in trouble after the move, and checking again until no trouble
+// involves a moved vertex. Trouble the mesh had before (between vertices that do not move) is
+// left alone.
+MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& displacement,
+                             const MoveOptions& options);
+
+}  // namespace ms

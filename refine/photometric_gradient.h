@@ -1,0 +1,53 @@
+// The photometric energy of a mesh for one pair of cameras and its gradient with respect to the
+// mesh's vertices (docs/refine.md), in the image-domain form of Vu et al. (PAMI 2012) after
+// Pons et al. (IJCV 2007): the neighbour's image is reprojected into the reference camera
+// through the mesh, and
+//   E = sum over the reference's pixels p with a defined ZNCC of (1 - ZNCC_p),
+// ZNCC_p over a Gaussian window. Each pixel's depth along its ray depends on the vertices of
+// the face it sees; the chain rule goes image value -> depth along the ray -> vertex position:
+//   dE/dv = sum_p dE/dJ(p) * dJ/dd(p) * phi_v(p) * n_f / (n_f . r_p),
+// phi_v the barycentric weight, n_f the face's normal, r_p the unit ray. Changes of visibility
+// and of the set of covered pixels are ignored (they are not differentiable). This is the exact
+// C++ reference: double precision, rasterised by the sweep's software rules.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <opencv2/core/mat.hpp>
+#include <vector>
+
+#include "mesh/mesh.h"
+#include "refine/refine_options.h"
+#include "scene/camera.h"
+
+namespace ms {
+
+// A camera at one scale: a pinhole view (no distortion) and its gray image in [0, 1] (CV_64F),
+// of the view's size.
+struct RefineView {
+  int camera = -1;
+  View view;
+  cv::Mat image;
+};
+
+// What one pair adds up; the refiner sums pairs in a fixed order.
+struct PairGradient {
+  double energy = 0;   // sum of (1 - ZNCC) over defined pixels
+  int64_t pixels = 0;  // pixels with a defined ZNCC
+  // Per vertex: dE/dv; H_v = sum_p phi_v |d(pixel in the neighbour)/dd|^2 / (n_f . r_p)^2, the
+  // squared parallax rate (pixels^2 per unit^2) that scales the step; W_v = sum_p phi_v.
+  std::vector<Eigen::Vector3d> gradient;
+  std::vector<double> parallax_rate2;
+  std::vector<double> weight;
+
+  void Resize(size_t vertices);
+  void Add(const PairGradient& other);  // sums, vertex by vertex
+};
+
+// `reference` and `neighbour` are at the same scale. Faces of `mesh` are drawn as they are
+// (both orientations); the reference's pixel sees the nearest.
+PairGradient ComputePairGradient(const Mesh& mesh, const RefineView& reference,
+                                 const RefineView& neighbour, const RefineOptions& options);
+
+}  // namespace ms

@@ -1,0 +1,16 @@
+// Options of photometric refinement (docs/refine.md). The list is refine/refine_options_def.h;
+// base/options.h derives the checks and the command line from it.
+#pragma once
+
+#include "base/options.h"
+
+namespace ms {
+
+struct RefineOptions {
+  static constexpr const char* kOptionGroup = "refine";
+#define MS_OPTION_LIST "refine/refine_options_def.h"
+#include "base/option_group_members.h"
+  void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
+};
+
+}  // namespace ms

@@ -1,0 +1,147 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <opencv2/core.hpp>
+
+#include "mesh/float_robustness.h"
+#include "mesh/mesh_checker.h"
+#include "refine/mesh_moves.h"
+#include "refine/photometric_gradient.h"
+#include "refine/refiner.h"
+#include "sweep/sweep_test_scene.h"
+
+namespace ms {
+namespace {
+
+RefineView NoiseView(const View& view, uint64_t seed) {
+  RefineView out;
+  out.view = view;
+  BlurredNoiseImage(view.intrinsics.width, view.intrinsics.height, seed)
+      .convertTo(out.image, CV_64F);
+  return out;
+}
+
+// A bumpy 8 x 8 grid over [-1, 1]^2 (z up to 0.05), so no two faces are coplanar.
+Mesh BumpyGrid() {
+  Mesh mesh = MakeFlatSquare(0, 1, 8);
+  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    mesh.vertices[v].z() = 0.05 * std::sin(1.7 * v) * std::cos(0.9 * v);
+  }
+  return mesh;
+}
+
+double PairEnergy(const Mesh& mesh, const RefineView& a, const RefineView& b,
+                  const RefineOptions& options) {
+  return ComputePairGradient(mesh, a, b, options).energy;
+}
+
+// The analytic gradient is the derivative of the energy the same function computes: central
+// differences over vertices in the middle of the image, along x, y and z.
+TEST(PhotometricGradient, MatchesFiniteDifferencesOfTheEnergy) {
+  // Off axis: from (0, 0, 3) the grid's diagonal edges project onto rows of pixel centres,
+  // where the energy has a kink (each such pixel changes face as a vertex moves).
+  const RefineView a = NoiseView(LookAtView({0.03, -0.02, 3}, {0.01, 0.02, 0}, 160, 120, 150), 1);
+  const RefineView b = NoiseView(LookAtView({0.6, 0.1, 2.9}, {0, 0, 0}, 160, 120, 150), 2);
+  RefineOptions options;
+  options.gaussian_sigma_px = 2;
+  const Mesh mesh = BumpyGrid();
+  const PairGradient g = ComputePairGradient(mesh, a, b, options);
+  ASSERT_GT(g.pixels, 5000);
+  const double h = 1e-7;
+  int checked = 0;
+  for (int v : {30, 40, 41, 49}) {  // interior vertices of the 9 x 9 grid
+    ASSERT_GT(g.weight[v], 10);
+    for (int axis = 0; axis < 3; ++axis) {
+      Mesh plus = mesh, minus = mesh;
+      plus.vertices[v][axis] += h;
+      minus.vertices[v][axis] -= h;
+      const double numeric =
+          (PairEnergy(plus, a, b, options) - PairEnergy(minus, a, b, options)) / (2 * h);
+      const double analytic = g.gradient[v][axis];
+      EXPECT_NEAR(analytic, numeric, 1e-3 * std::abs(numeric) + 1e-3)
+          << "vertex " << v << " axis " << axis;
+      ++checked;
+    }
+    // Moving a vertex along a face's plane changes no depth: the gradient is not zero only
+    // because the faces around it are not coplanar; it is never tangential to all of them.
+    EXPECT_GT(g.gradient[v].norm(), 0);
+  }
+  EXPECT_EQ(checked, 12);
+}
+
+// The thin-plate gradient is the derivative of 1/2 sum |L(v)|^2.
+TEST(MeshMoves, ThinPlateGradientMatchesFiniteDifferences) {
+  const Mesh mesh = BumpyGrid();
+  const auto neighbours = VertexNeighbours(mesh);
+  const auto energy = [&](const Mesh& m) {
+    double e = 0;
+    for (size_t v = 0; v < m.vertices.size(); ++v) {
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (int32_t u : neighbours[v]) mean += m.vertices[u];
+      e += 0.5 * (mean / neighbours[v].size() - m.vertices[v]).squaredNorm();
+    }
+    return e;
+  };
+  const auto gradient = ThinPlateGradient(mesh, neighbours);
+  for (int v : {0, 5, 40}) {
+    for (int axis = 0; axis < 3; ++axis) {
+      Mesh plus = mesh, minus = mesh;
+      plus.vertices[v][axis] += 1e-6;
+      minus.vertices[v][axis] -= 1e-6;
+      EXPECT_NEAR(gradient[v][axis], (energy(plus) - energy(minus)) / 2e-6, 1e-6);
+    }
+  }
+}
+
+// A move that would push a vertex through the opposite sheet is refused; the others are made.
+TEST(MeshMoves, AMoveThroughAnotherFaceIsRefused) {
+  Mesh mesh = MakeFlatSquare(0, 1, 4);
+  const Mesh upper = MakeFlatSquare(0.1, 1, 4);
+  const int32_t offset = static_cast<int32_t>(mesh.vertices.size());
+  for (const auto& v : upper.vertices) mesh.vertices.push_back(v);
+  for (const auto& f : upper.faces)
+    mesh.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  std::vector<Eigen::Vector3d> move(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  move[12] = {0, 0, 0.3};  // centre of the lower sheet, through the upper one
+  move[0] = {0, 0, 0.02};  // a free move far from it
+  MoveOptions options;
+  options.tolerance = 1e-6;
+  const Eigen::Vector3d centre = mesh.vertices[12];
+  const MoveStats stats = MoveVerticesSafely(&mesh, move, options);
+  EXPECT_EQ(stats.refused + stats.halved, 1);
+  EXPECT_LT(mesh.vertices[12].z(), 0.1);  // halved to below the sheet, or not moved
+  EXPECT_EQ(mesh.vertices[0].z(), 0.02);
+  EXPECT_EQ(mesh.vertices[12].x(), centre.x());
+  MeshCheckOptions check;
+  check.allow_boundary = true;
+  EXPECT_TRUE(CheckMesh(mesh, check).is_valid);
+}
+
+// The pyramid scene with its apex pulled down to two thirds of its height: refinement from the
+// images alone (no smoothing) brings it back, and the mesh stays free of self-intersections.
+TEST(RefineMesh, PullsAFlattenedApexBackToTheTruth) {
+  PyramidSceneOptions scene_options;
+  scene_options.width = 320;
+  scene_options.height = 240;
+  const PyramidScene scene = MakePyramidScene(scene_options);
+  Mesh mesh = scene.truth;
+  ASSERT_DOUBLE_EQ(mesh.vertices[0].z(), scene.pyramid_height);
+  mesh.vertices[0].z() = scene.pyramid_height * 2 / 3;
+  RefineOptions options;
+  options.iterations = 60;
+  options.levels = 2;
+  options.smoothness = 0;
+  const RefineStats stats =
+      RefineMesh(&mesh, scene.cameras, {{0, 1}, {0, 2}, {1, 0}, {2, 0}}, options);
+  ASSERT_EQ(stats.iterations.size(), 60u);
+  EXPECT_LT(stats.iterations.back().energy, 0.5 * stats.iterations.front().energy);
+  EXPECT_NEAR(mesh.vertices[0].z(), scene.pyramid_height, 0.01);
+  EXPECT_NEAR(mesh.vertices[0].x(), 0, 0.01);
+  EXPECT_NEAR(mesh.vertices[0].y(), 0, 0.01);
+  MeshCheckOptions check;
+  check.allow_boundary = true;
+  EXPECT_TRUE(CheckMesh(mesh, check).is_valid);
+}
+
+}  // namespace
+}  // namespace ms

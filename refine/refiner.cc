@@ -1,0 +1,165 @@
+#include "refine/refiner.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "base/error.h"
+#include "base/log.h"
+#include "base/parallel_for.h"
+#include "mesh/float_robustness.h"
+#include "refine/mesh_moves.h"
+#include "refine/photometric_gradient.h"
+
+namespace ms {
+namespace {
+
+// Camera `camera` at pyramid level `level` (0: as given): INTER_AREA resizing and intrinsics
+// scaled by the size ratios, exact with the corner-origin convention (as the sweep).
+RefineView ViewAtLevel(const SweepCamera& camera, int level) {
+  RefineView out;
+  out.camera = camera.id;
+  out.view = camera.view;
+  Intrinsics& k = out.view.intrinsics;
+  const cv::Size size = SweptImageSize(k.width, k.height, level);
+  const double sx = static_cast<double>(size.width) / k.width;
+  const double sy = static_cast<double>(size.height) / k.height;
+  k.fx *= sx;
+  k.cx *= sx;
+  k.fy *= sy;
+  k.cy *= sy;
+  k.width = size.width;
+  k.height = size.height;
+  cv::Mat resized;
+  if (level == 0) {
+    resized = camera.image;
+  } else {
+    cv::resize(camera.image, resized, size, 0, 0, cv::INTER_AREA);
+  }
+  resized.convertTo(out.image, CV_64F);
+  return out;
+}
+
+// The finest level: images halved until their longest side fits max_image_dimension.
+int FinestLevel(const std::vector<SweepCamera>& cameras, const RefineOptions& options) {
+  int longest = 0;
+  for (const SweepCamera& c : cameras) {
+    longest = std::max({longest, c.view.intrinsics.width, c.view.intrinsics.height});
+  }
+  int level = 0;
+  if (options.max_image_dimension > 0) {
+    while ((longest >> level) > options.max_image_dimension && level < 12) ++level;
+  }
+  return level;
+}
+
+// The gradient of all pairs, summed in pair order whatever the threads did.
+PairGradient SumPairs(const Mesh& mesh, const std::vector<RefineView>& views,
+                      const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options) {
+  std::vector<PairGradient> per_pair(pairs.size());
+  ParallelFor(
+      pairs.size(),
+      [&](size_t i) {
+        per_pair[i] =
+            ComputePairGradient(mesh, views[pairs[i].first], views[pairs[i].second], options);
+      },
+      options.threads);
+  PairGradient total;
+  total.Resize(mesh.vertices.size());
+  for (const PairGradient& g : per_pair) total.Add(g);
+  return total;
+}
+
+// The step of docs/refine.md: -step x g / H per vertex (a Gauss-Newton scale), at most
+// max_step_px pixels of reprojection shift, plus the thin plate's -smoothness x dE_s/dv.
+std::vector<Eigen::Vector3d> Displacements(const Mesh& mesh, const PairGradient& data,
+                                           const std::vector<std::vector<int32_t>>& neighbours,
+                                           const RefineOptions& options) {
+  std::vector<Eigen::Vector3d> move(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  const double sigma2 = options.gaussian_sigma_px * options.gaussian_sigma_px;
+  for (size_t v = 0; v < move.size(); ++v) {
+    const double h = data.parallax_rate2[v];
+    if (!(h > 0)) continue;
+    Eigen::Vector3d d = -options.step * sigma2 * data.gradient[v] / h;
+    // One pixel of reprojection shift at this vertex, as a depth change: sqrt(W / H).
+    const double limit = options.max_step_px * std::sqrt(data.weight[v] / h);
+    const double length = d.norm();
+    if (length > limit) d *= limit / length;
+    move[v] = d;
+  }
+  if (options.smoothness > 0) {
+    const std::vector<Eigen::Vector3d> thin_plate = ThinPlateGradient(mesh, neighbours);
+    for (size_t v = 0; v < move.size(); ++v) move[v] -= options.smoothness * thin_plate[v];
+  }
+  return move;
+}
+
+}  // namespace
+
+std::vector<std::pair<int, int>> RefinePairs(const Scene& scene, const NeighbourOptions& options) {
+  std::vector<std::pair<int, int>> pairs;
+  for (int c = 0; c < static_cast<int>(scene.views.size()); ++c) {
+    for (int n : SelectNeighbours(scene, c, options)) pairs.emplace_back(c, n);
+  }
+  return pairs;
+}
+
+RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
+                       const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
+                       const std::function<void(const RefineIteration&)>& progress) {
+  options.Check();
+  for (const auto& [a, b] : pairs) {
+    const int n = static_cast<int>(cameras.size());
+    if (a < 0 || a >= n || b < 0 || b >= n || a == b) {
+      throw InputError(
+          fmt::format("refine: camera pair ({}, {}) out of range ({} cameras)", a, b, n));
+    }
+  }
+  RefineStats stats;
+  Timer total;
+  if (mesh->faces.empty() || pairs.empty()) return stats;
+  const std::vector<std::vector<int32_t>> neighbours = VertexNeighbours(*mesh);
+  MoveOptions move_options;
+  // The cleanup's margin over check-mesh's tolerance (mesh/float_cleanup.h), fixed for the
+  // whole refinement so it does not drift with the mesh's extent.
+  move_options.tolerance =
+      2 * FloatCheckTolerance(*mesh, std::vector<uint8_t>(mesh->faces.size(), 1));
+  move_options.max_face_turn_deg = options.max_face_turn_deg;
+  move_options.max_halvings = options.max_halvings;
+
+  const int finest = FinestLevel(cameras, options);
+  const int per_level = options.iterations / options.levels;
+  int iteration = 0;
+  for (int l = options.levels - 1; l >= 0; --l) {
+    const int level = finest + l;
+    const int count = l == 0 ? options.iterations - per_level * (options.levels - 1) : per_level;
+    if (count <= 0) continue;
+    std::vector<RefineView> views;
+    views.reserve(cameras.size());
+    for (const SweepCamera& c : cameras) views.push_back(ViewAtLevel(c, level));
+    for (int i = 0; i < count; ++i) {
+      Timer timer;
+      const PairGradient data = SumPairs(*mesh, views, pairs, options);
+      const MoveStats moved =
+          MoveVerticesSafely(mesh, Displacements(*mesh, data, neighbours, options), move_options);
+      RefineIteration it;
+      it.level = level;
+      it.iteration = ++iteration;
+      it.pixels = data.pixels;
+      it.energy = data.pixels > 0 ? data.energy / static_cast<double>(data.pixels) : 0;
+      it.moved = moved.moved;
+      it.halved = moved.halved;
+      it.refused = moved.refused;
+      it.largest_move = moved.largest;
+      it.seconds = timer.Seconds();
+      stats.iterations.push_back(it);
+      if (progress) progress(it);
+    }
+  }
+  stats.seconds = total.Seconds();
+  return stats;
+}
+
+}  // namespace ms

@@ -1,0 +1,48 @@
+// Photometric refinement of a mesh that keeps it a closed 2-manifold without self-intersections
+// (docs/refine.md): coarse-to-fine gradient descent on the pairwise ZNCC energy
+// (refine/photometric_gradient.h) plus a thin-plate term, every step applied by
+// MoveVerticesSafely (refine/mesh_moves.h). The faces are never changed.
+//
+//   RefineStats stats = RefineMesh(&mesh, cameras, RefinePairs(scene, neighbours), options,
+//                                  [](const RefineIteration& it) { log(it); });
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <utility>
+#include <vector>
+
+#include "mesh/mesh.h"
+#include "refine/refine_options.h"
+#include "scene/scene.h"
+#include "scene/view_selection.h"
+#include "sweep/sweep_kernel.h"
+
+namespace ms {
+
+struct RefineIteration {
+  int level = 0;       // pyramid level (0: full size)
+  int iteration = 0;   // 1-based, over all levels
+  double energy = 0;   // mean (1 - ZNCC) over the defined pixels, before the step
+  int64_t pixels = 0;  // defined pixels over all pairs
+  int64_t moved = 0, halved = 0, refused = 0;
+  double largest_move = 0;  // mesh units
+  double seconds = 0;
+};
+
+struct RefineStats {
+  std::vector<RefineIteration> iterations;
+  double seconds = 0;
+};
+
+// Every camera with each of its neighbours (scene/view_selection.h), in camera order.
+std::vector<std::pair<int, int>> RefinePairs(const Scene& scene, const NeighbourOptions& options);
+
+// `cameras[i]` is camera i at full size (gray float, no distortion: LoadSweepCamera); `pairs`
+// index `cameras` as (reference, neighbour). `mesh` should be a closed 2-manifold robust in
+// floating point (what `reconstruct` writes); its faces stay as they are.
+RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
+                       const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
+                       const std::function<void(const RefineIteration&)>& progress = {});
+
+}  // namespace ms
