@@ -18,7 +18,7 @@ LAYERS = [
     ["gl"],
     ["proto"],
     ["manifold", "sweep"],
-    ["coordinator", "worker", "tools"],
+    ["coordinator", "worker", "tools", "refine"],
     ["app"],
     ["bench", "tests"],
 ]

@@ -10,6 +10,7 @@
 
 #include "app/commands.h"
 #include "app/option_registration.h"
+#include "app/refine_run.h"
 #include "base/error.h"
 #include "base/log.h"
 #include "mesh/mesh_checker.h"
@@ -28,22 +29,26 @@ struct RefineCommandOptions {
   NeighbourOptions neighbours;
 };
 
-void RunRefine(const RefineCommandOptions& options) {
-  options.refine.Check();
-  options.neighbours.Check();
-  Scene scene = ReadScene(options.input);
+}  // namespace
+
+void RefineMeshFile(const std::string& input, const std::string& mesh_path,
+                    const std::string& output, const RefineOptions& refine,
+                    const NeighbourOptions& neighbours, bool ascii) {
+  refine.Check();
+  neighbours.Check();
+  Scene scene = ReadScene(input);
   scene.Validate();
-  Mesh mesh = ReadMesh(options.mesh);
-  if (mesh.faces.empty()) throw InputError(options.mesh + ": the mesh has no faces");
+  Mesh mesh = ReadMesh(mesh_path);
+  if (mesh.faces.empty()) throw InputError(mesh_path + ": the mesh has no faces");
   MeshCheckOptions check;
   check.allow_float_issues = true;  // reported below; refinement leaves such spots alone
   const MeshReport before = CheckMesh(mesh, check);
   if (!before.is_closed_manifold) {
-    throw InputError(options.mesh + ": not a closed 2-manifold (run `manisweep check-mesh " +
-                     options.mesh + "`); refine keeps a closed manifold closed, so it needs one");
+    throw InputError(mesh_path + ": not a closed 2-manifold (run `manisweep check-mesh " +
+                     mesh_path + "`); refine keeps a closed manifold closed, so it needs one");
   }
-  const std::vector<std::pair<int, int>> pairs = RefinePairs(scene, options.neighbours);
-  if (pairs.empty()) throw InputError(options.input + ": no camera has a neighbour to refine with");
+  const std::vector<std::pair<int, int>> pairs = RefinePairs(scene, neighbours);
+  if (pairs.empty()) throw InputError(input + ": no camera has a neighbour to refine with");
   std::vector<SweepCamera> cameras;
   cameras.reserve(scene.views.size());
   for (size_t c = 0; c < scene.views.size(); ++c) {
@@ -51,33 +56,33 @@ void RunRefine(const RefineCommandOptions& options) {
   }
   spdlog::info(
       "refining {} ({} vertices, {} faces) with {} camera pairs, {} iterations over {} levels",
-      options.mesh, mesh.NumVertices(), mesh.NumFaces(), pairs.size(), options.refine.iterations,
-      options.refine.levels);
+      mesh_path, mesh.NumVertices(), mesh.NumFaces(), pairs.size(), refine.iterations,
+      refine.levels);
   const RefineStats stats =
-      RefineMesh(&mesh, cameras, pairs, options.refine, [](const RefineIteration& it) {
+      RefineMesh(&mesh, cameras, pairs, refine, [](const RefineIteration& it) {
         spdlog::info(
-            "iteration {} (level {}): energy {:.4f} over {} pixels; {} vertices moved ({} "
-            "halved, {} refused), largest {:.3g}; {:.2f} s",
-            it.iteration, it.level, it.energy, it.pixels, it.moved, it.halved, it.refused,
-            it.largest_move, it.seconds);
+            "iteration {} (level {}): energy {:.4f} over {} pixels{}; step x{:.3g}: {} vertices "
+            "moved ({} halved, {} refused), largest {:.3g}; {:.2f} s",
+            it.iteration, it.level, it.energy, it.pixels,
+            it.rejected ? " (higher: last step undone)" : "", it.step_scale, it.moved, it.halved,
+            it.refused, it.largest_move, it.seconds);
       });
   MeshWriteOptions write_options;
-  write_options.binary = !options.ascii;
-  WriteMesh(mesh, options.output, write_options);
+  write_options.binary = !ascii;
+  WriteMesh(mesh, output, write_options);
   const MeshReport after = CheckMesh(mesh);
-  std::printf("refined %s -> %s: %d iterations, %.1f s; check-mesh: %s\n", options.mesh.c_str(),
-              options.output.c_str(), static_cast<int>(stats.iterations.size()), stats.seconds,
+  std::printf("refined %s -> %s: %d iterations, %.1f s, final energy %.4f; check-mesh: %s\n",
+              mesh_path.c_str(), output.c_str(), static_cast<int>(stats.iterations.size()),
+              stats.seconds, stats.final_energy,
               after.is_valid ? "valid (closed 2-manifold, no self-intersection, float-robust)"
                              : "NOT VALID");
   if (!after.is_valid) {
     for (const std::string& problem : after.Problems()) std::printf("  %s\n", problem.c_str());
-    if (after.is_closed_manifold && before.is_valid) {
+    if (before.is_valid) {
       throw InternalError("refinement made a valid mesh invalid");
     }
   }
 }
-
-}  // namespace
 
 void RegisterRefineCommand(CLI::App& app) {
   auto options = std::make_shared<RefineCommandOptions>();
@@ -94,7 +99,10 @@ void RegisterRefineCommand(CLI::App& app) {
   cmd->add_flag("--ascii", options->ascii, "write ASCII PLY instead of binary");
   AddOptionGroup(cmd, &options->refine);
   AddOptionGroup(cmd, &options->neighbours);
-  cmd->callback([options] { RunRefine(*options); });
+  cmd->callback([options] {
+    RefineMeshFile(options->input, options->mesh, options->output, options->refine,
+                   options->neighbours, options->ascii);
+  });
 }
 
 }  // namespace ms::app

@@ -73,25 +73,26 @@ PairGradient SumPairs(const Mesh& mesh, const std::vector<RefineView>& views,
 }
 
 // The step of docs/refine.md: -step x g / H per vertex (a Gauss-Newton scale), at most
-// max_step_px pixels of reprojection shift, plus the thin plate's -smoothness x dE_s/dv.
+// max_step_px pixels of reprojection shift, plus the thin plate's -smoothness x dE_s/dv; all
+// times `scale` (backtracking, in (0, 1]).
 std::vector<Eigen::Vector3d> Displacements(const Mesh& mesh, const PairGradient& data,
                                            const std::vector<std::vector<int32_t>>& neighbours,
-                                           const RefineOptions& options) {
+                                           const RefineOptions& options, double scale) {
   std::vector<Eigen::Vector3d> move(mesh.vertices.size(), Eigen::Vector3d::Zero());
   const double sigma2 = options.gaussian_sigma_px * options.gaussian_sigma_px;
   for (size_t v = 0; v < move.size(); ++v) {
     const double h = data.parallax_rate2[v];
     if (!(h > 0)) continue;
-    Eigen::Vector3d d = -options.step * sigma2 * data.gradient[v] / h;
+    Eigen::Vector3d d = -scale * options.step * sigma2 * data.gradient[v] / h;
     // One pixel of reprojection shift at this vertex, as a depth change: sqrt(W / H).
-    const double limit = options.max_step_px * std::sqrt(data.weight[v] / h);
+    const double limit = scale * options.max_step_px * std::sqrt(data.weight[v] / h);
     const double length = d.norm();
     if (length > limit) d *= limit / length;
     move[v] = d;
   }
   if (options.smoothness > 0) {
     const std::vector<Eigen::Vector3d> thin_plate = ThinPlateGradient(mesh, neighbours);
-    for (size_t v = 0; v < move.size(); ++v) move[v] -= options.smoothness * thin_plate[v];
+    for (size_t v = 0; v < move.size(); ++v) move[v] -= scale * options.smoothness * thin_plate[v];
   }
   return move;
 }
@@ -139,16 +140,34 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     std::vector<RefineView> views;
     views.reserve(cameras.size());
     for (const SweepCamera& c : cameras) views.push_back(ViewAtLevel(c, level));
+    // Backtracking: a step that raised the energy is undone and retried at half the length;
+    // after a step that lowered it, the length grows back (by 1.25, up to the full step).
+    double scale = 1;
+    std::vector<Eigen::Vector3d> accepted;
+    PairGradient accepted_data;
+    double accepted_energy = 0;
     for (int i = 0; i < count; ++i) {
       Timer timer;
-      const PairGradient data = SumPairs(*mesh, views, pairs, options);
-      const MoveStats moved =
-          MoveVerticesSafely(mesh, Displacements(*mesh, data, neighbours, options), move_options);
+      PairGradient data = SumPairs(*mesh, views, pairs, options);
       RefineIteration it;
       it.level = level;
       it.iteration = ++iteration;
       it.pixels = data.pixels;
       it.energy = data.pixels > 0 ? data.energy / static_cast<double>(data.pixels) : 0;
+      if (!accepted.empty() && it.energy > accepted_energy) {
+        it.rejected = true;
+        mesh->vertices = accepted;
+        data = accepted_data;
+        scale /= 2;
+      } else {
+        if (!accepted.empty()) scale = std::min(1.0, scale * 1.25);
+        accepted = mesh->vertices;
+        accepted_data = data;
+        accepted_energy = it.energy;
+      }
+      it.step_scale = scale;
+      const MoveStats moved = MoveVerticesSafely(
+          mesh, Displacements(*mesh, data, neighbours, options, scale), move_options);
       it.moved = moved.moved;
       it.halved = moved.halved;
       it.refused = moved.refused;
@@ -156,6 +175,12 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
       it.seconds = timer.Seconds();
       stats.iterations.push_back(it);
       if (progress) progress(it);
+    }
+    if (l == 0 && !accepted.empty()) {  // the last step is kept only if it lowered the energy
+      const PairGradient last = SumPairs(*mesh, views, pairs, options);
+      const double energy = last.pixels > 0 ? last.energy / static_cast<double>(last.pixels) : 0;
+      if (energy > accepted_energy) mesh->vertices = accepted;
+      stats.final_energy = std::min(energy, accepted_energy);
     }
   }
   stats.seconds = total.Seconds();

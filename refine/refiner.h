@@ -21,10 +21,13 @@
 namespace ms {
 
 struct RefineIteration {
-  int level = 0;       // pyramid level (0: full size)
-  int iteration = 0;   // 1-based, over all levels
-  double energy = 0;   // mean (1 - ZNCC) over the defined pixels, before the step
-  int64_t pixels = 0;  // defined pixels over all pairs
+  int level = 0;      // pyramid level (0: full size)
+  int iteration = 0;  // 1-based, over all levels
+  double energy = 0;  // mean (1 - ZNCC) over the defined pixels, before the step
+  // The previous step raised the energy: it was undone, and this one is half as long.
+  bool rejected = false;
+  double step_scale = 1;  // of the step options (backtracking), in (0, 1]
+  int64_t pixels = 0;     // defined pixels over all pairs
   int64_t moved = 0, halved = 0, refused = 0;
   double largest_move = 0;  // mesh units
   double seconds = 0;
@@ -32,6 +35,7 @@ struct RefineIteration {
 
 struct RefineStats {
   std::vector<RefineIteration> iterations;
+  double final_energy = 0;  // mean (1 - ZNCC) of the returned mesh at the finest level
   double seconds = 0;
 };
 

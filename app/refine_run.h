@@ -1,0 +1,17 @@
+// The refinement of a mesh file as `manisweep refine` and `reconstruct --refine` run it:
+// read the scene, its images and the mesh (a closed 2-manifold), refine (refine/refiner.h),
+// write the result and report check-mesh's verdict on it. Throws InputError for bad input.
+#pragma once
+
+#include <string>
+
+#include "refine/refine_options.h"
+#include "scene/view_selection.h"
+
+namespace ms::app {
+
+void RefineMeshFile(const std::string& input, const std::string& mesh_path,
+                    const std::string& output, const RefineOptions& refine,
+                    const NeighbourOptions& neighbours, bool ascii = false);
+
+}  // namespace ms::app
