@@ -44,4 +44,11 @@ MS_OPTION(int, max_halvings, 4, "max-halvings", "halvings of a refused move befo
           InRange(0, 30))
 MS_OPTION(double, max_face_turn_deg, 60, "max-face-turn-deg",
           "a move may turn a face's normal by at most this many degrees", InRange(1, 179))
+// Remeshing (refine/remesh.h): at the start of every level, edges longer than max_edge_px
+// pixels of that level (in the camera that sees them finest) are split at their midpoints, so
+// that detail finer than the starting mesh can appear; 0 turns it off.
+MS_OPTION(double, max_edge_px, 0, "max-edge-px",
+          "split edges longer than this many pixels of the level (0: no remeshing)", AtLeast(0))
+MS_OPTION(int64_t, max_vertices, 2000000, "max-vertices",
+          "remeshing adds no vertex beyond this many", AtLeast(1))
 MS_OPTION(int, threads, 0, "threads", "threads for the camera pairs (0: one per core)", AtLeast(0))

@@ -5,9 +5,11 @@
 
 #include "mesh/float_robustness.h"
 #include "mesh/mesh_checker.h"
+#include "mesh/test_meshes.h"
 #include "refine/mesh_moves.h"
 #include "refine/photometric_gradient.h"
 #include "refine/refiner.h"
+#include "refine/remesh.h"
 #include "sweep/sweep_test_scene.h"
 
 namespace ms {
@@ -159,6 +161,43 @@ TEST(RefineMesh, ThreadsDoNotChangeTheResult) {
   RefineMesh(&two, scene.cameras, {{0, 1}, {0, 2}, {1, 0}, {2, 0}}, options);
   ASSERT_NE(one.vertices[0], start.vertices[0]);
   for (size_t v = 0; v < one.vertices.size(); ++v) EXPECT_EQ(one.vertices[v], two.vertices[v]);
+}
+
+// Splitting keeps a closed 2-manifold closed, valid and in place: every edge ends at most as long
+// as asked (the icosahedron's creases included: no split refused), the surface area does not
+// change, and Euler's formula still gives genus 0.
+TEST(Remesh, SplitLongEdgesKeepsAClosedValidMeshInPlace) {
+  Mesh mesh = test_meshes::Icosahedron();
+  const double area = mesh.SurfaceArea();
+  const double limit = 0.3;
+  // The refiner's tolerance: twice check-mesh's.
+  const double tolerance =
+      2 * FloatCheckTolerance(mesh, std::vector<uint8_t>(mesh.faces.size(), 1));
+  const SplitStats stats = SplitLongEdges(
+      &mesh, [&](const Eigen::Vector3d&) { return limit; }, 1000000, tolerance);
+  EXPECT_EQ(stats.refused, 0);
+  EXPECT_GT(stats.splits, 100);
+  EXPECT_EQ(mesh.NumVertices(), 12 + static_cast<size_t>(stats.splits));
+  EXPECT_EQ(mesh.NumFaces(), 20 + 2 * static_cast<size_t>(stats.splits));
+  EXPECT_NEAR(mesh.SurfaceArea(), area, 1e-3 * area);  // split points are 8 tolerances off
+  for (const auto& f : mesh.faces) {
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_LE((mesh.vertices[f[k]] - mesh.vertices[f[(k + 1) % 3]]).norm(), limit);
+    }
+  }
+  const MeshReport report = CheckMesh(mesh);
+  EXPECT_TRUE(report.is_valid);
+  ASSERT_TRUE(report.genus.has_value());
+  EXPECT_EQ(*report.genus, 0);
+}
+
+// The vertex budget stops splitting.
+TEST(Remesh, SplittingStopsAtTheVertexBudget) {
+  Mesh mesh = test_meshes::Icosahedron();
+  SplitLongEdges(
+      &mesh, [](const Eigen::Vector3d&) { return 0.01; }, 50, 1e-9);
+  EXPECT_EQ(mesh.NumVertices(), 50u);
+  EXPECT_TRUE(CheckMesh(mesh).is_valid);
 }
 
 }  // namespace

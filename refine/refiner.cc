@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 
 #include "base/error.h"
@@ -12,6 +13,7 @@
 #include "mesh/float_robustness.h"
 #include "refine/mesh_moves.h"
 #include "refine/photometric_gradient.h"
+#include "refine/remesh.h"
 
 namespace ms {
 namespace {
@@ -97,6 +99,21 @@ std::vector<Eigen::Vector3d> Displacements(const Mesh& mesh, const PairGradient&
   return move;
 }
 
+// The size of a pixel at x (scene units) in the camera that sees it finest: the smallest
+// z / f over the views x projects into; +infinity where none does.
+double Footprint(const std::vector<RefineView>& views, const Eigen::Vector3d& x) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const RefineView& v : views) {
+    const Eigen::Vector3d y = v.view.ToCamera(x);
+    if (!(y.z() > 0)) continue;
+    const Intrinsics& k = v.view.intrinsics;
+    const double u = k.fx * y.x() / y.z() + k.cx, w = k.fy * y.y() / y.z() + k.cy;
+    if (u < 0 || w < 0 || u > k.width || w > k.height) continue;
+    best = std::min(best, y.z() / std::max(k.fx, k.fy));
+  }
+  return best;
+}
+
 }  // namespace
 
 std::vector<std::pair<int, int>> RefinePairs(const Scene& scene, const NeighbourOptions& options) {
@@ -121,7 +138,6 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
   RefineStats stats;
   Timer total;
   if (mesh->faces.empty() || pairs.empty()) return stats;
-  const std::vector<std::vector<int32_t>> neighbours = VertexNeighbours(*mesh);
   MoveOptions move_options;
   // The cleanup's margin over check-mesh's tolerance (mesh/float_cleanup.h), fixed for the
   // whole refinement so it does not drift with the mesh's extent.
@@ -140,6 +156,14 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     std::vector<RefineView> views;
     views.reserve(cameras.size());
     for (const SweepCamera& c : cameras) views.push_back(ViewAtLevel(c, level));
+    if (options.max_edge_px > 0) {
+      const SplitStats split = SplitLongEdges(
+          mesh, [&](const Eigen::Vector3d& x) { return options.max_edge_px * Footprint(views, x); },
+          options.max_vertices, move_options.tolerance);
+      stats.splits += split.splits;
+      stats.splits_refused += split.refused;
+    }
+    const std::vector<std::vector<int32_t>> neighbours = VertexNeighbours(*mesh);
     // Backtracking: a step that raised the energy is undone and retried at half the length;
     // after a step that lowered it, the length grows back (by 1.25, up to the full step).
     double scale = 1;

@@ -35,7 +35,9 @@ struct RefineIteration {
 
 struct RefineStats {
   std::vector<RefineIteration> iterations;
-  double final_energy = 0;  // mean (1 - ZNCC) of the returned mesh at the finest level
+  double final_energy = 0;     // mean (1 - ZNCC) of the returned mesh at the finest level
+  int64_t splits = 0;          // edges split by remeshing (vertices added)
+  int64_t splits_refused = 0;  // splits the checker objected to (undone)
   double seconds = 0;
 };
 

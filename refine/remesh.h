@@ -1,0 +1,34 @@
+// Remeshing during refinement (docs/refine.md "Remeshing"): edges longer than the image
+// resolution asks for are split at their midpoints, so detail finer than the starting mesh can
+// appear. A split replaces the two faces of an edge by four, so a closed 2-manifold stays one.
+// The new vertex is the edge's midpoint moved 8 tolerances off it along the faces' mean normal:
+// exactly on the edge, chains of splits along a crease leave collinear vertices whose faces
+// double-precision tests (Open3D's among them) find touching. Each pass of splits is checked as
+// moves are (exact self-intersections, the floating-point tolerance), and the splits whose faces
+// the checker objects to are undone and not tried again.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+
+#include "mesh/mesh.h"
+
+namespace ms {
+
+struct SplitStats {
+  int64_t splits = 0;   // edges split (vertices added)
+  int64_t refused = 0;  // splits undone because the checker objected
+  int rounds = 0;       // passes over the edges
+};
+
+// Splits every edge longer than max_length(midpoint), longest first, repeating over the new
+// edges until none is too long (or all that are were refused), or the mesh has max_vertices
+// vertices. Unreferenced vertices are removed at the end. `tolerance` is the
+// absolute floating-point tolerance of the check (as MoveOptions::tolerance). Every edge must
+// be in exactly two faces (a closed 2-manifold).
+SplitStats SplitLongEdges(Mesh* mesh,
+                          const std::function<double(const Eigen::Vector3d&)>& max_length,
+                          int64_t max_vertices, double tolerance);
+
+}  // namespace ms
