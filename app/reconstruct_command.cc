@@ -234,7 +234,7 @@ void RunReconstruct(ReconstructCommandOptions& options) {
   if (options.refine) {
     RefineMeshFile(setup.input, result.final_mesh,
                    (fs::path(setup.output_dir) / "refined.ply").string(), options.refine_options,
-                   setup.neighbours);
+                   setup.neighbours, false, setup.run.resume);
   }
   if (default_scene) ReportDefaultSceneAccuracy(setup.output_dir, default_dir);
 }

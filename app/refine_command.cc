@@ -5,16 +5,19 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "app/commands.h"
 #include "app/option_registration.h"
+#include "app/process_control.h"
 #include "app/refine_run.h"
 #include "base/error.h"
 #include "base/log.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
+#include "refine/refine_checkpoint.h"
 #include "refine/refiner.h"
 #include "scene/scene_io.h"
 #include "sweep/sweep_images.h"
@@ -25,6 +28,7 @@ namespace {
 struct RefineCommandOptions {
   std::string input, mesh, output;
   bool ascii = false;
+  bool resume = false;
   RefineOptions refine;
   NeighbourOptions neighbours;
 };
@@ -33,12 +37,15 @@ struct RefineCommandOptions {
 
 void RefineMeshFile(const std::string& input, const std::string& mesh_path,
                     const std::string& output, const RefineOptions& refine,
-                    const NeighbourOptions& neighbours, bool ascii) {
+                    const NeighbourOptions& neighbours, bool ascii, bool resume) {
   refine.Check();
   neighbours.Check();
   Scene scene = ReadScene(input);
   scene.Validate();
   Mesh mesh = ReadMesh(mesh_path);
+  // What a checkpoint is valid for: the same scene, starting mesh and options.
+  const std::string fingerprint = fmt::format("input={} mesh={} {} {}", input, mesh_path,
+                                              OptionGroupText(refine), OptionGroupText(neighbours));
   if (mesh.faces.empty()) throw InputError(mesh_path + ": the mesh has no faces");
   MeshCheckOptions check;
   check.allow_float_issues = true;  // reported below; refinement leaves such spots alone
@@ -58,18 +65,39 @@ void RefineMeshFile(const std::string& input, const std::string& mesh_path,
       "refining {} ({} vertices, {} faces) with {} camera pairs, {} iterations over {} levels",
       mesh_path, mesh.NumVertices(), mesh.NumFaces(), pairs.size(), refine.iterations,
       refine.levels);
-  const RefineStats stats =
-      RefineMesh(&mesh, cameras, pairs, refine, [](const RefineIteration& it) {
+  std::optional<RefineCheckpoint> checkpoint;
+  if (resume) checkpoint = ReadRefineCheckpoint(output, fingerprint);
+  if (checkpoint) {
+    spdlog::info("resuming from the checkpoint beside {}: {} iterations done", output,
+                 checkpoint->state.iterations_done);
+    mesh = std::move(checkpoint->mesh);
+  } else if (resume) {
+    spdlog::info("no checkpoint beside {}: starting afresh", output);
+  }
+  InstallStopSignals();
+  const auto save = [&](const Mesh& current, const RefineState& state) {
+    WriteRefineCheckpoint(output, current, state, fingerprint);
+    if (StopRequested()) {
+      spdlog::warn("interrupted after iteration {}; continue with the same command and --resume",
+                   state.iterations_done);
+      throw CommandExit(kExitInterrupted);
+    }
+  };
+  const RefineStats stats = RefineMesh(
+      &mesh, cameras, pairs, refine,
+      [](const RefineIteration& it) {
         spdlog::info(
             "iteration {} (level {}): energy {:.4f} over {} pixels{}; step x{:.3g}: {} vertices "
             "moved ({} halved, {} refused), largest {:.3g}; {:.2f} s",
             it.iteration, it.level, it.energy, it.pixels,
             it.rejected ? " (higher: last step undone)" : "", it.step_scale, it.moved, it.halved,
             it.refused, it.largest_move, it.seconds);
-      });
+      },
+      checkpoint ? &checkpoint->state : nullptr, save);
   MeshWriteOptions write_options;
   write_options.binary = !ascii;
   WriteMesh(mesh, output, write_options);
+  RemoveRefineCheckpoint(output);
   const MeshReport after = CheckMesh(mesh);
   std::printf("refined %s -> %s: %d iterations, %.1f s, final energy %.4f; check-mesh: %s\n",
               mesh_path.c_str(), output.c_str(), static_cast<int>(stats.iterations.size()),
@@ -97,11 +125,14 @@ void RegisterRefineCommand(CLI::App& app) {
   cmd->add_option("-o,--output", options->output, "refined mesh to write (.ply or .obj)")
       ->required();
   cmd->add_flag("--ascii", options->ascii, "write ASCII PLY instead of binary");
+  cmd->add_flag("--resume", options->resume,
+                "continue from the checkpoint beside --output (OUTPUT.checkpoint.*, written after "
+                "every iteration); starts afresh if there is none");
   AddOptionGroup(cmd, &options->refine);
   AddOptionGroup(cmd, &options->neighbours);
   cmd->callback([options] {
     RefineMeshFile(options->input, options->mesh, options->output, options->refine,
-                   options->neighbours, options->ascii);
+                   options->neighbours, options->ascii, options->resume);
   });
 }
 

@@ -200,5 +200,38 @@ TEST(Remesh, SplittingStopsAtTheVertexBudget) {
   EXPECT_TRUE(CheckMesh(mesh).is_valid);
 }
 
+// A refinement resumed from a checkpoint ends with the mesh of an uninterrupted one, bit for bit,
+// remeshing and backtracking included (the checkpoint is taken inside the second level).
+TEST(RefineMesh, ResumingFromACheckpointGivesTheSameMesh) {
+  const PyramidScene scene = MakePyramidScene();
+  Mesh start = scene.truth;
+  start.vertices[0].z() *= 0.7;
+  RefineOptions options;
+  options.iterations = 8;
+  options.levels = 2;
+  options.max_edge_px = 40;
+  const std::vector<std::pair<int, int>> pairs = {{0, 1}, {0, 2}, {1, 0}, {2, 0}};
+  Mesh whole = start;
+  Mesh saved_mesh;
+  RefineState saved;
+  const RefineStats stats = RefineMesh(&whole, scene.cameras, pairs, options, {}, nullptr,
+                                       [&](const Mesh& mesh, const RefineState& state) {
+                                         if (state.iterations_done == 6) {
+                                           saved_mesh = mesh;
+                                           saved = state;
+                                         }
+                                       });
+  ASSERT_GT(stats.splits, 0);
+  ASSERT_EQ(saved.level_index, 1);
+  ASSERT_EQ(saved.iteration_in_level, 2);
+  Mesh resumed = saved_mesh;
+  const RefineStats rest = RefineMesh(&resumed, scene.cameras, pairs, options, {}, &saved);
+  ASSERT_EQ(rest.iterations.size(), 2u);
+  EXPECT_EQ(rest.iterations.front().iteration, 7);
+  ASSERT_EQ(resumed.faces, whole.faces);
+  for (size_t v = 0; v < whole.vertices.size(); ++v)
+    EXPECT_EQ(resumed.vertices[v], whole.vertices[v]);
+}
+
 }  // namespace
 }  // namespace ms

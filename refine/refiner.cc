@@ -126,7 +126,9 @@ std::vector<std::pair<int, int>> RefinePairs(const Scene& scene, const Neighbour
 
 RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
                        const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
-                       const std::function<void(const RefineIteration&)>& progress) {
+                       const std::function<void(const RefineIteration&)>& progress,
+                       const RefineState* resume,
+                       const std::function<void(const Mesh&, const RefineState&)>& checkpoint) {
   options.Check();
   for (const auto& [a, b] : pairs) {
     const int n = static_cast<int>(cameras.size());
@@ -142,21 +144,24 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
   // The cleanup's margin over check-mesh's tolerance (mesh/float_cleanup.h), fixed for the
   // whole refinement so it does not drift with the mesh's extent.
   move_options.tolerance =
-      2 * FloatCheckTolerance(*mesh, std::vector<uint8_t>(mesh->faces.size(), 1));
+      resume ? resume->tolerance
+             : 2 * FloatCheckTolerance(*mesh, std::vector<uint8_t>(mesh->faces.size(), 1));
   move_options.max_face_turn_deg = options.max_face_turn_deg;
   move_options.max_halvings = options.max_halvings;
 
   const int finest = FinestLevel(cameras, options);
   const int per_level = options.iterations / options.levels;
-  int iteration = 0;
-  for (int l = options.levels - 1; l >= 0; --l) {
+  int iteration = resume ? resume->iterations_done : 0;
+  for (int li = 0; li < options.levels; ++li) {
+    const int l = options.levels - 1 - li;  // coarsest first
     const int level = finest + l;
     const int count = l == 0 ? options.iterations - per_level * (options.levels - 1) : per_level;
-    if (count <= 0) continue;
+    const bool resumed = resume && li == resume->level_index;
+    if (count <= 0 || (resume && li < resume->level_index)) continue;
     std::vector<RefineView> views;
     views.reserve(cameras.size());
     for (const SweepCamera& c : cameras) views.push_back(ViewAtLevel(c, level));
-    if (options.max_edge_px > 0) {
+    if (options.max_edge_px > 0 && !resumed) {  // a resumed level was split before
       const SplitStats split = SplitLongEdges(
           mesh, [&](const Eigen::Vector3d& x) { return options.max_edge_px * Footprint(views, x); },
           options.max_vertices, move_options.tolerance);
@@ -166,11 +171,17 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     const std::vector<std::vector<int32_t>> neighbours = VertexNeighbours(*mesh);
     // Backtracking: a step that raised the energy is undone and retried at half the length;
     // after a step that lowered it, the length grows back (by 1.25, up to the full step).
-    double scale = 1;
-    std::vector<Eigen::Vector3d> accepted;
+    double scale = resumed ? resume->scale : 1;
+    std::vector<Eigen::Vector3d> accepted =
+        resumed ? resume->accepted : std::vector<Eigen::Vector3d>();
+    double accepted_energy = resumed ? resume->accepted_energy : 0;
     PairGradient accepted_data;
-    double accepted_energy = 0;
-    for (int i = 0; i < count; ++i) {
+    if (!accepted.empty()) {  // the gradient there, as the interrupted run had it
+      Mesh at_accepted = *mesh;
+      at_accepted.vertices = accepted;
+      accepted_data = SumPairs(at_accepted, views, pairs, options);
+    }
+    for (int i = resumed ? resume->iteration_in_level : 0; i < count; ++i) {
       Timer timer;
       PairGradient data = SumPairs(*mesh, views, pairs, options);
       RefineIteration it;
@@ -199,6 +210,17 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
       it.seconds = timer.Seconds();
       stats.iterations.push_back(it);
       if (progress) progress(it);
+      if (checkpoint) {
+        RefineState state;
+        state.level_index = li;
+        state.iteration_in_level = i + 1;
+        state.iterations_done = iteration;
+        state.scale = scale;
+        state.accepted_energy = accepted_energy;
+        state.accepted = accepted;
+        state.tolerance = move_options.tolerance;
+        checkpoint(*mesh, state);
+      }
     }
     if (l == 0 && !accepted.empty()) {  // the last step is kept only if it lowered the energy
       const PairGradient last = SumPairs(*mesh, views, pairs, options);

@@ -7,6 +7,7 @@
 //                                  [](const RefineIteration& it) { log(it); });
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <functional>
 #include <utility>
@@ -41,14 +42,31 @@ struct RefineStats {
   double seconds = 0;
 };
 
+// Where a refinement stands between two iterations: what a checkpoint holds besides the mesh
+// (whose faces remeshing may have changed), so that resuming gives the mesh an uninterrupted
+// run gives, bit for bit.
+struct RefineState {
+  int level_index = 0;         // levels begun, from the coarsest, minus 1
+  int iteration_in_level = 0;  // iterations done at that level
+  int iterations_done = 0;     // over all levels
+  double scale = 1;            // backtracking's step scale
+  double accepted_energy = 0;
+  std::vector<Eigen::Vector3d> accepted;  // the last accepted vertices; empty before the first
+  double tolerance = 0;                   // of the checks, fixed at the start
+};
+
 // Every camera with each of its neighbours (scene/view_selection.h), in camera order.
 std::vector<std::pair<int, int>> RefinePairs(const Scene& scene, const NeighbourOptions& options);
 
 // `cameras[i]` is camera i at full size (gray float, no distortion: LoadSweepCamera); `pairs`
 // index `cameras` as (reference, neighbour). `mesh` should be a closed 2-manifold robust in
 // floating point (what `reconstruct` writes); its faces stay as they are.
+// With `resume` (a checkpoint's state, `mesh` being the checkpoint's mesh) it goes on from
+// there; `checkpoint` is called after every iteration with the mesh and the state to resume from.
 RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
                        const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
-                       const std::function<void(const RefineIteration&)>& progress = {});
+                       const std::function<void(const RefineIteration&)>& progress = {},
+                       const RefineState* resume = nullptr,
+                       const std::function<void(const Mesh&, const RefineState&)>& checkpoint = {});
 
 }  // namespace ms

@@ -50,22 +50,24 @@ Problems CheckerProblems(const Mesh& mesh, double tolerance) {
 struct Split {
   Edge edge;
   int32_t m;
+  int num_faces;  // 2, or 1 on a boundary
   int32_t faces[2], added[2];
   std::array<int32_t, 3> old_faces[2];
 };
 
-// The split point: the edge's midpoint, moved off the edge along the mean of its two faces'
+// The split point: the edge's midpoint, moved off the edge along the mean of its faces'
 // normals by `offset`. Exactly on the edge, a chain of splits along a crease leaves collinear
 // vertices whose faces double-precision tests (Open3D's among them) find touching.
-Eigen::Vector3d SplitPoint(const Mesh& mesh, const Edge& edge, const std::array<int32_t, 3>& f0,
-                           const std::array<int32_t, 3>& f1, double offset) {
+Eigen::Vector3d SplitPoint(const Mesh& mesh, const Edge& edge, const std::vector<int32_t>& faces,
+                           double offset) {
   const Eigen::Vector3d mid = 0.5 * (mesh.vertices[edge.first] + mesh.vertices[edge.second]);
   const auto normal = [&](const std::array<int32_t, 3>& f) {
     return (mesh.vertices[f[1]] - mesh.vertices[f[0]])
         .cross(mesh.vertices[f[2]] - mesh.vertices[f[0]])
         .normalized();
   };
-  const Eigen::Vector3d n = normal(f0) + normal(f1);
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  for (int32_t f : faces) n += normal(mesh.faces[f]);
   return n.norm() > 1e-6 ? Eigen::Vector3d(mid + offset * n.normalized()) : mid;
 }
 
@@ -83,7 +85,7 @@ std::vector<Split> SplitPass(Mesh* mesh,
   }
   std::vector<std::pair<double, Edge>> long_edges;
   for (const auto& [edge, faces] : faces_of) {
-    if (faces.size() != 2) throw InternalError("SplitLongEdges: an edge is not in two faces");
+    if (faces.size() > 2) throw InternalError("SplitLongEdges: an edge is in more than two faces");
     if (refused.count(edge)) continue;
     const Eigen::Vector3d& a = mesh->vertices[edge.first];
     const Eigen::Vector3d& b = mesh->vertices[edge.second];
@@ -98,13 +100,13 @@ std::vector<Split> SplitPass(Mesh* mesh,
   for (const auto& [length, edge] : long_edges) {
     if (static_cast<int64_t>(mesh->vertices.size()) >= max_vertices) break;
     const std::vector<int32_t>& faces = faces_of[edge];
-    if (touched[faces[0]] || touched[faces[1]]) continue;
+    if (touched[faces[0]] || (faces.size() == 2 && touched[faces[1]])) continue;
     Split s;
     s.edge = edge;
     s.m = static_cast<int32_t>(mesh->vertices.size());
-    mesh->vertices.push_back(
-        SplitPoint(*mesh, edge, mesh->faces[faces[0]], mesh->faces[faces[1]], offset));
-    for (int i = 0; i < 2; ++i) {
+    s.num_faces = static_cast<int>(faces.size());
+    mesh->vertices.push_back(SplitPoint(*mesh, edge, faces, offset));
+    for (int i = 0; i < s.num_faces; ++i) {
       // Rotate the face so that the split edge comes first: (u, v, w) with {u, v} = edge
       // becomes (u, m, w) and (m, v, w), keeping its orientation.
       const int32_t f = faces[i];
@@ -137,7 +139,7 @@ int64_t UndoTroubledSplits(Mesh* mesh, const std::vector<Split>& splits, double 
     std::map<int32_t, size_t> by_vertex;
     for (size_t i = 0; i < splits.size(); ++i) {
       if (!alive[i]) continue;
-      for (int k = 0; k < 2; ++k) {
+      for (int k = 0; k < splits[i].num_faces; ++k) {
         by_face[splits[i].faces[k]] = i;
         by_face[splits[i].added[k]] = i;
       }
@@ -153,7 +155,7 @@ int64_t UndoTroubledSplits(Mesh* mesh, const std::vector<Split>& splits, double 
     if (bad.empty()) break;  // what is left was there before the pass
     for (size_t i : bad) {
       const Split& s = splits[i];
-      for (int k = 0; k < 2; ++k) {
+      for (int k = 0; k < s.num_faces; ++k) {
         mesh->faces[s.faces[k]] = s.old_faces[k];
         mesh->faces[s.added[k]] = {s.m, s.m, s.m};  // dead: removed below
       }
@@ -175,7 +177,7 @@ int64_t UndoTroubledSplits(Mesh* mesh, const std::vector<Split>& splits, double 
     for (size_t i = 0; i < splits.size(); ++i) {
       if (!alive[i]) continue;
       auto& s = const_cast<Split&>(splits[i]);
-      for (int k = 0; k < 2; ++k) {
+      for (int k = 0; k < s.num_faces; ++k) {
         s.faces[k] = static_cast<int32_t>(new_index[s.faces[k]]);
         s.added[k] = static_cast<int32_t>(new_index[s.added[k]]);
       }

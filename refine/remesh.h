@@ -24,9 +24,9 @@ struct SplitStats {
 
 // Splits every edge longer than max_length(midpoint), longest first, repeating over the new
 // edges until none is too long (or all that are were refused), or the mesh has max_vertices
-// vertices. Unreferenced vertices are removed at the end. `tolerance` is the
-// absolute floating-point tolerance of the check (as MoveOptions::tolerance). Every edge must
-// be in exactly two faces (a closed 2-manifold).
+// vertices. Unreferenced vertices are removed at the end. `tolerance` is the absolute
+// floating-point tolerance of the check (as MoveOptions::tolerance). Every edge must be in
+// two faces, or one on a boundary.
 SplitStats SplitLongEdges(Mesh* mesh,
                           const std::function<double(const Eigen::Vector3d&)>& max_length,
                           int64_t max_vertices, double tolerance);

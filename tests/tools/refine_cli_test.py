@@ -2,13 +2,15 @@
 """End-to-end test of `manisweep refine` (docs/refine.md): on a small synthetic pyramid,
 `reconstruct --refine` writes a refined mesh that is valid for check-mesh and for Open3D
 (watertight, no self-intersecting pair), with a lower photometric energy and a lower depth error
-than the swept mesh it started from; bad inputs (an open mesh, a truncated
+than the swept mesh it started from, and one interrupted and resumed ends as one that was not;
+bad inputs (an open mesh, a truncated
 file, a missing image) end with exit 2 and one line naming the file. Exit 0 when all hold.
 """
 import argparse
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 
@@ -68,6 +70,33 @@ def main():
     good = r.returncode == 0 and len(mae) == 2 and mae["refined"] < mae["final"]
     print(("ok  " if good else "FAIL"), "MAE final -> refined:", mae or r.stderr[-2000:])
     ok = ok and good
+    # Ctrl-C after the third iteration, then --resume: the same mesh as an uninterrupted run,
+    # byte for byte, and no checkpoint left behind.
+    final_mesh = os.path.join(out, "final.ply")
+    straight = os.path.join(args.workdir, "straight.ply")
+    args_refine = ["--refine.iterations", "6", "--refine.levels", "2", "--refine.max-edge-px", "20"]
+    r = run([ms, "refine", "-i", scene, "-m", final_mesh, "-o", straight] + args_refine)
+    ok = r.returncode == 0 and ok
+    resumed = os.path.join(args.workdir, "resumed.ply")
+    p = subprocess.Popen([ms, "refine", "-i", scene, "-m", final_mesh, "-o", resumed] + args_refine,
+                         stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+    for line in p.stderr:
+        if "iteration 3 " in line:
+            p.send_signal(signal.SIGINT)
+            break
+    p.stderr.read()
+    interrupted = p.wait(timeout=120)
+    had_checkpoint = os.path.exists(resumed + ".checkpoint.json")
+    r = run([ms, "refine", "-i", scene, "-m", final_mesh, "-o", resumed, "--resume"] + args_refine)
+    same = (r.returncode == 0 and os.path.exists(resumed) and
+            open(resumed, "rb").read() == open(straight, "rb").read())
+    good = (interrupted == 130 and had_checkpoint and same and "resuming" in r.stderr and
+            not os.path.exists(resumed + ".checkpoint.json"))
+    print(("ok  " if good else "FAIL"),
+          f"interrupt (exit {interrupted}, checkpoint {had_checkpoint}) and --resume: "
+          f"{'the same mesh' if same else 'a different mesh'}")
+    ok = ok and good
+
     check = run([ms, "check-mesh", refined])
     verdict = run([sys.executable, args.verdict, refined])
     print(("ok  " if check.returncode == 0 else "FAIL"), "check-mesh exit", check.returncode)

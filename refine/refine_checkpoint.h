@@ -1,0 +1,34 @@
+// Checkpoints of `manisweep refine` (docs/refine.md "Checkpoints"): beside the output mesh O,
+//   O.checkpoint.ply           the mesh as it stands (faces included: remeshing changes them)
+//   O.checkpoint.accepted.ply  the last accepted vertices (backtracking), when there are any
+//   O.checkpoint.json          the rest of RefineState, and the options it was made with
+// each written atomically, the JSON last, so a checkpoint is whole or absent. Doubles are
+// written exactly (binary PLY, round-trip JSON), so a resumed run ends with the same mesh.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "mesh/mesh.h"
+#include "refine/refiner.h"
+
+namespace ms {
+
+struct RefineCheckpoint {
+  Mesh mesh;
+  RefineState state;
+};
+
+// `fingerprint` names what the checkpoint is valid for (input, mesh and options).
+void WriteRefineCheckpoint(const std::string& output, const Mesh& mesh, const RefineState& state,
+                           const std::string& fingerprint);
+
+// The checkpoint beside `output`, or nothing if there is none. Throws InputError if it is
+// unreadable or was made for another fingerprint (naming what differs).
+std::optional<RefineCheckpoint> ReadRefineCheckpoint(const std::string& output,
+                                                     const std::string& fingerprint);
+
+// Removes the checkpoint files (after a refinement that finished).
+void RemoveRefineCheckpoint(const std::string& output);
+
+}  // namespace ms
