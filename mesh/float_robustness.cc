@@ -340,6 +340,26 @@ void MeasureFaces(const Mesh& mesh, const std::vector<uint8_t>& usable, FloatRob
   }
 }
 
+// Calls callback(x, y) for every pair of intersecting boxes, or with `focus` (flags indexed by
+// the boxes' info) only for pairs with a flagged box; a pair of two flagged boxes may come twice
+// (callers deduplicate).
+template <typename Box, typename Callback>
+void ForIntersectingBoxes(std::vector<Box>& boxes, const std::vector<uint8_t>& focus,
+                          Callback&& callback) {
+  if (focus.empty()) {
+    CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), callback);
+    return;
+  }
+  std::vector<Box> flagged;
+  for (const Box& b : boxes) {
+    if (focus[b.info()]) flagged.push_back(b);
+  }
+  CGAL::box_intersection_d(flagged.begin(), flagged.end(), boxes.begin(), boxes.end(),
+                           [&](const Box& x, const Box& y) {
+                             if (x.info() != y.info()) callback(x, y);
+                           });
+}
+
 void FindNearVertices(const Mesh& mesh, const std::vector<uint8_t>& referenced,
                       const FloatRobustnessOptions& options, FloatRobustnessReport* r) {
   using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, int32_t>;
@@ -362,8 +382,18 @@ void FindNearVertices(const Mesh& mesh, const std::vector<uint8_t>& referenced,
     found.push_back({{a, b}, d});
     if (static_cast<int64_t>(found.size()) >= options.max_pairs) throw StopSearch{};
   };
+  std::vector<uint8_t> focus;  // the vertices of flagged faces
+  if (!options.focus_faces.empty()) {
+    focus.assign(mesh.vertices.size(), 0);
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      if (!options.focus_faces[f]) continue;
+      for (int32_t v : mesh.faces[f]) {
+        if (v >= 0 && static_cast<size_t>(v) < focus.size()) focus[v] = 1;
+      }
+    }
+  }
   try {
-    CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), callback);
+    ForIntersectingBoxes(boxes, focus, callback);
   } catch (const StopSearch&) {
     r->near_vertex_pairs_truncated = true;
   }
@@ -430,7 +460,7 @@ void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
     if (close_full && crossing_full) throw StopSearch{};
   };
   try {
-    CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), callback);
+    ForIntersectingBoxes(boxes, options.focus_faces, callback);
   } catch (const StopSearch&) {
   }
   r->close_face_pairs_truncated = close_full;
@@ -515,6 +545,10 @@ double FloatCheckTolerance(const Mesh& mesh, const std::vector<uint8_t>& usable,
 FloatRobustnessReport CheckFloatRobustness(const Mesh& mesh, const std::vector<uint8_t>& usable,
                                            const FloatRobustnessOptions& options) {
   options.Check();
+  if (!options.focus_faces.empty() && options.focus_faces.size() != mesh.faces.size()) {
+    throw InputError(fmt::format("float check: {} focus flags for {} faces",
+                                 options.focus_faces.size(), mesh.faces.size()));
+  }
   FloatRobustnessReport r;
   std::vector<uint8_t> referenced;
   Eigen::Vector3d lo, hi;

@@ -185,7 +185,18 @@ void FindSelfIntersections(const Mesh& mesh, const std::vector<Point>& points,
     }
   };
   try {
-    CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), callback);
+    if (options.focus_faces.empty()) {
+      CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), callback);
+    } else {  // flagged faces against all; a pair of two flagged ones comes twice (deduplicated)
+      std::vector<Box> focus;
+      for (const Box& b : boxes) {
+        if (options.focus_faces[b.info()]) focus.push_back(b);
+      }
+      CGAL::box_intersection_d(focus.begin(), focus.end(), boxes.begin(), boxes.end(),
+                               [&](const Box& x, const Box& y) {
+                                 if (x.info() != y.info()) callback(x, y);
+                               });
+    }
   } catch (const StopSearch&) {
     report->self_intersections_truncated = true;
   }
@@ -225,6 +236,7 @@ FloatRobustnessOptions FloatOptions(const MeshCheckOptions& options) {
   f.check_face_pairs = options.check_self_intersections;
   f.max_examples = options.max_examples;
   f.max_pairs = options.max_self_intersections;
+  f.focus_faces = options.focus_faces;
   return f;
 }
 
@@ -246,6 +258,10 @@ void MeshCheckOptions::Check() const {
 
 MeshReport CheckMesh(const Mesh& mesh, const MeshCheckOptions& options) {
   options.Check();
+  if (!options.focus_faces.empty() && options.focus_faces.size() != mesh.faces.size()) {
+    throw InputError(fmt::format("mesh check: {} focus flags for {} faces",
+                                 options.focus_faces.size(), mesh.faces.size()));
+  }
   const int max_ex = options.max_examples;
   MeshReport r;
   r.allow_boundary = options.allow_boundary;

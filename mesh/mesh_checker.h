@@ -30,7 +30,11 @@ struct MeshCheckOptions {
   double float_tolerance = 1e-6;    // --float-tolerance: relative to the bounding-box diagonal
   double float_tolerance_abs = 0;   // --float-tolerance-abs: > 0 replaces it (mesh units)
   bool allow_float_issues = false;  // --allow-float-issues: reported, but valid regardless
-  void Check() const;               // throws InputError naming the field
+  // Empty: every face pair. Otherwise one flag per face: the pair searches (exact and float)
+  // test only pairs with a flagged face (FloatRobustnessOptions::focus_faces); the counts are
+  // then those of the flagged faces only, not a verdict on the mesh.
+  std::vector<uint8_t> focus_faces;
+  void Check() const;  // throws InputError naming the field
 };
 
 // One connected component: faces that share vertices, directly or through other faces.

@@ -8,6 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -155,6 +156,31 @@ TEST(MeshChecker, ClosedConvexSolidsAreValidGenusZero) {
   }
   EXPECT_NEAR(*Check(Tetrahedron()).components[0].signed_volume, 1.0 / 6.0, 1e-12);
   EXPECT_NEAR(*Check(Cube()).components[0].signed_volume, 1.0, 1e-12);
+}
+
+// A focused check tests only the pairs with a flagged face: the same crossing pairs as the full
+// check when the flagged faces are those of a crossing tetrahedron, none when they are a far one's.
+TEST(MeshChecker, FocusedCheckTestsOnlyPairsWithAFlaggedFace) {
+  const Mesh a = test_meshes::Corner({0, 0, 0}, 1);
+  const Mesh crossing = Append(a, test_meshes::Corner({0.2, 0.2, 0.2}, 1));
+  const Mesh mesh = Append(crossing, test_meshes::Corner({10, 10, 10}, 1));
+  MeshCheckOptions options;
+  const MeshReport full = CheckMesh(mesh, options);
+  ASSERT_GT(full.num_self_intersections, 0);
+  options.focus_faces.assign(mesh.NumFaces(), 0);
+  for (size_t f = 0; f < a.NumFaces(); ++f) options.focus_faces[f] = 1;
+  const MeshReport first = CheckMesh(mesh, options);
+  EXPECT_EQ(first.num_self_intersections, full.num_self_intersections);
+  EXPECT_EQ(first.float_robustness.num_float_intersections,
+            full.float_robustness.num_float_intersections);
+  std::fill(options.focus_faces.begin(), options.focus_faces.end(), 0);
+  for (size_t f = crossing.NumFaces(); f < mesh.NumFaces(); ++f) options.focus_faces[f] = 1;
+  const MeshReport far = CheckMesh(mesh, options);
+  EXPECT_EQ(far.num_self_intersections, 0);
+  EXPECT_EQ(far.float_robustness.num_float_intersections, 0);
+  EXPECT_EQ(far.float_robustness.num_close_face_pairs, 0);
+  options.focus_faces.pop_back();
+  EXPECT_THROW(CheckMesh(mesh, options), InputError);
 }
 
 TEST(MeshChecker, TorusHasGenusOne) {

@@ -68,8 +68,9 @@ void MarkTurnedFaces(const Mesh& mesh, const std::vector<Eigen::Vector3d>& befor
 // exactly (adjacent ones included: a fold), or that come within the tolerance or intersect in
 // double precision (sharing no vertex), and vertices within the tolerance.
 void MarkCheckerProblems(const Mesh& mesh, const std::vector<uint8_t>& moving, double tolerance,
-                         std::vector<uint8_t>* trouble) {
+                         const std::vector<uint8_t>& focus, std::vector<uint8_t>* trouble) {
   MeshCheckOptions check;
+  check.focus_faces = focus;
   check.allow_boundary = true;
   check.float_tolerance_abs = tolerance;
   check.max_examples = INT_MAX;
@@ -108,20 +109,32 @@ MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& dis
   std::vector<int> halvings(n, 0);
   const double cos_limit = std::cos(options.max_face_turn_deg * M_PI / 180);
   MoveStats stats;
+  // Only faces whose corners changed since the last check can have new problems: the first
+  // check looks at the faces of moving vertices, each later one at those of vertices whose move
+  // was just halved or dropped (against all faces).
+  std::vector<uint8_t> changed(n, 0);
+  for (size_t v = 0; v < n; ++v) changed[v] = displacement[v] != Eigen::Vector3d::Zero();
   while (true) {
     std::vector<uint8_t> moving(n, 0);
     for (size_t v = 0; v < n; ++v) {
       moving[v] = scale[v] > 0 && displacement[v] != Eigen::Vector3d::Zero();
       mesh->vertices[v] = before[v] + scale[v] * displacement[v];
     }
+    std::vector<uint8_t> focus(mesh->faces.size(), 0);
+    for (size_t f = 0; f < mesh->faces.size(); ++f) {
+      const auto& t = mesh->faces[f];
+      focus[f] = changed[t[0]] || changed[t[1]] || changed[t[2]];
+    }
     std::vector<uint8_t> trouble(n, 0);
     MarkTurnedFaces(*mesh, before, moving, cos_limit, &trouble);
-    MarkCheckerProblems(*mesh, moving, options.tolerance, &trouble);
+    MarkCheckerProblems(*mesh, moving, options.tolerance, focus, &trouble);
     ++stats.rounds;
     bool any = false;
+    std::fill(changed.begin(), changed.end(), 0);
     for (size_t v = 0; v < n; ++v) {
       if (!trouble[v] || !moving[v]) continue;
       any = true;
+      changed[v] = 1;
       scale[v] = ++halvings[v] > options.max_halvings ? 0.0 : scale[v] / 2;
     }
     if (!any) break;

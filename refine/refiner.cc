@@ -201,8 +201,11 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
         accepted_energy = it.energy;
       }
       it.step_scale = scale;
+      Timer check_timer;
       const MoveStats moved = MoveVerticesSafely(
           mesh, Displacements(*mesh, data, neighbours, options, scale), move_options);
+      it.checks = moved.rounds;
+      it.check_seconds = check_timer.Seconds();
       it.moved = moved.moved;
       it.halved = moved.halved;
       it.refused = moved.refused;

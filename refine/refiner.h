@@ -30,7 +30,9 @@ struct RefineIteration {
   double step_scale = 1;  // of the step options (backtracking), in (0, 1]
   int64_t pixels = 0;     // defined pixels over all pairs
   int64_t moved = 0, halved = 0, refused = 0;
-  double largest_move = 0;  // mesh units
+  double largest_move = 0;   // mesh units
+  int checks = 0;            // checker passes over the whole mesh for this step
+  double check_seconds = 0;  // their time
   double seconds = 0;
 };
 

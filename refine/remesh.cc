@@ -26,8 +26,9 @@ struct Problems {
   bool Empty() const { return faces.empty() && vertices.empty(); }
 };
 
-Problems CheckerProblems(const Mesh& mesh, double tolerance) {
+Problems CheckerProblems(const Mesh& mesh, double tolerance, const std::vector<uint8_t>& focus) {
   MeshCheckOptions check;
+  check.focus_faces = focus;
   check.float_tolerance_abs = tolerance;
   check.max_examples = INT_MAX;
   check.max_self_intersections = INT64_MAX;
@@ -131,8 +132,13 @@ int64_t UndoTroubledSplits(Mesh* mesh, const std::vector<Split>& splits, double 
                            std::set<Edge>* refused) {
   int64_t undone = 0;
   std::vector<uint8_t> alive(splits.size(), 1);
+  // The faces the pass changed; later, those of undone splits (their old faces are back).
+  std::vector<uint8_t> focus(mesh->faces.size(), 0);
+  for (const Split& s : splits) {
+    for (int k = 0; k < s.num_faces; ++k) focus[s.faces[k]] = focus[s.added[k]] = 1;
+  }
   while (true) {
-    const Problems problems = CheckerProblems(*mesh, tolerance);
+    const Problems problems = CheckerProblems(*mesh, tolerance, focus);
     if (problems.Empty()) break;
     // The split that made each face or vertex.
     std::map<int64_t, size_t> by_face;
@@ -153,9 +159,11 @@ int64_t UndoTroubledSplits(Mesh* mesh, const std::vector<Split>& splits, double 
       if (auto it = by_vertex.find(v); it != by_vertex.end()) bad.insert(it->second);
     }
     if (bad.empty()) break;  // what is left was there before the pass
+    std::vector<uint8_t> restored(mesh->faces.size(), 0);
     for (size_t i : bad) {
       const Split& s = splits[i];
       for (int k = 0; k < s.num_faces; ++k) {
+        restored[s.faces[k]] = 1;
         mesh->faces[s.faces[k]] = s.old_faces[k];
         mesh->faces[s.added[k]] = {s.m, s.m, s.m};  // dead: removed below
       }
@@ -167,11 +175,13 @@ int64_t UndoTroubledSplits(Mesh* mesh, const std::vector<Split>& splits, double 
     // remaining splits' faces shift, so renumber them).
     std::vector<int64_t> new_index(mesh->faces.size(), -1);
     std::vector<std::array<int32_t, 3>> kept;
+    focus.clear();
     for (size_t f = 0; f < mesh->faces.size(); ++f) {
       const auto& t = mesh->faces[f];
       if (t[0] == t[1] && t[1] == t[2]) continue;
       new_index[f] = static_cast<int64_t>(kept.size());
       kept.push_back(t);
+      focus.push_back(restored[f]);
     }
     mesh->faces = std::move(kept);
     for (size_t i = 0; i < splits.size(); ++i) {
