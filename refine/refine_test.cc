@@ -161,6 +161,9 @@ TEST(RefineMesh, ThreadsDoNotChangeTheResult) {
   RefineMesh(&two, scene.cameras, {{0, 1}, {0, 2}, {1, 0}, {2, 0}}, options);
   ASSERT_NE(one.vertices[0], start.vertices[0]);
   for (size_t v = 0; v < one.vertices.size(); ++v) EXPECT_EQ(one.vertices[v], two.vertices[v]);
+  MeshCheckOptions check;
+  check.allow_boundary = true;
+  EXPECT_TRUE(CheckMesh(one, check).is_valid);
 }
 
 // Splitting keeps a closed 2-manifold closed, valid and in place: every edge ends at most as long
@@ -231,6 +234,9 @@ TEST(RefineMesh, ResumingFromACheckpointGivesTheSameMesh) {
   ASSERT_EQ(resumed.faces, whole.faces);
   for (size_t v = 0; v < whole.vertices.size(); ++v)
     EXPECT_EQ(resumed.vertices[v], whole.vertices[v]);
+  MeshCheckOptions check;
+  check.allow_boundary = true;
+  EXPECT_TRUE(CheckMesh(whole, check).is_valid);
 }
 
 }  // namespace
