@@ -3,6 +3,7 @@
 #include <cmath>
 #include <opencv2/core.hpp>
 
+#include "base/error.h"
 #include "mesh/float_robustness.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/test_meshes.h"
@@ -237,6 +238,17 @@ TEST(RefineMesh, ResumingFromACheckpointGivesTheSameMesh) {
   MeshCheckOptions check;
   check.allow_boundary = true;
   EXPECT_TRUE(CheckMesh(whole, check).is_valid);
+}
+
+// A mesh no camera sees (another scene's, or misplaced) is an input error, not a silent no-op.
+TEST(RefineMesh, AMeshNoCameraSeesIsAnInputError) {
+  const PyramidScene scene = MakePyramidScene();
+  Mesh elsewhere = scene.truth;
+  for (Eigen::Vector3d& v : elsewhere.vertices) v.x() += 1000;
+  RefineOptions options;
+  options.iterations = 2;
+  options.levels = 1;
+  EXPECT_THROW(RefineMesh(&elsewhere, scene.cameras, {{0, 1}, {1, 0}}, options), InputError);
 }
 
 }  // namespace

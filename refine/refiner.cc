@@ -189,6 +189,11 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
       it.iteration = ++iteration;
       it.pixels = data.pixels;
       it.energy = data.pixels > 0 ? data.energy / static_cast<double>(data.pixels) : 0;
+      if (iteration == 1 && data.pixels == 0) {
+        throw InputError(
+            "refine: no pixel of any camera pair has a defined ZNCC at the first level: no camera "
+            "sees the mesh (is it the mesh of this scene?) or the images are textureless there");
+      }
       if (!accepted.empty() && it.energy > accepted_energy) {
         it.rejected = true;
         mesh->vertices = accepted;
