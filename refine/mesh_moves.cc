@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <initializer_list>
 
 #include "mesh/mesh_checker.h"
 
@@ -45,6 +46,26 @@ std::vector<Eigen::Vector3d> ThinPlateGradient(
   return gradient;
 }
 
+CheckerProblems FindCheckerProblems(const Mesh& mesh, double tolerance,
+                                    const std::vector<uint8_t>& focus) {
+  MeshCheckOptions check;
+  check.focus_faces = focus;
+  check.allow_boundary = true;
+  check.float_tolerance_abs = tolerance;
+  check.max_examples = INT_MAX;
+  check.max_self_intersections = INT64_MAX;
+  MeshReport report = CheckMesh(mesh, check);
+  FloatRobustnessReport& f = report.float_robustness;
+  CheckerProblems p;
+  p.face_pairs = std::move(report.self_intersection_examples);
+  for (const auto* pairs : {&f.close_face_pair_examples, &f.float_intersection_examples}) {
+    p.face_pairs.insert(p.face_pairs.end(), pairs->begin(), pairs->end());
+  }
+  p.degenerate_faces = std::move(report.degenerate_face_examples);
+  p.vertex_pairs = std::move(f.near_vertex_examples);
+  return p;
+}
+
 namespace {
 
 Eigen::Vector3d FaceCross(const std::vector<Eigen::Vector3d>& p, const std::array<int32_t, 3>& f) {
@@ -64,39 +85,24 @@ void MarkTurnedFaces(const Mesh& mesh, const std::vector<Eigen::Vector3d>& befor
   }
 }
 
-// Vertices of the checker's problems that involve a moving vertex: face pairs that intersect
-// exactly (adjacent ones included: a fold), or that come within the tolerance or intersect in
-// double precision (sharing no vertex), and vertices within the tolerance.
+// Vertices of the checker's problems that involve a moving vertex.
 void MarkCheckerProblems(const Mesh& mesh, const std::vector<uint8_t>& moving, double tolerance,
                          const std::vector<uint8_t>& focus, std::vector<uint8_t>* trouble) {
-  MeshCheckOptions check;
-  check.focus_faces = focus;
-  check.allow_boundary = true;
-  check.float_tolerance_abs = tolerance;
-  check.max_examples = INT_MAX;
-  check.max_self_intersections = INT64_MAX;
-  const MeshReport report = CheckMesh(mesh, check);
-  const auto mark_faces = [&](const std::array<int64_t, 2>& pair) {
-    const auto& a = mesh.faces[pair[0]];
-    const auto& b = mesh.faces[pair[1]];
+  const CheckerProblems problems = FindCheckerProblems(mesh, tolerance, focus);
+  const auto mark = [&](std::initializer_list<int32_t> vertices) {
     bool involved = false;
-    for (int k = 0; k < 3; ++k) involved = involved || moving[a[k]] || moving[b[k]];
+    for (int32_t v : vertices) involved = involved || moving[v];
     if (!involved) return;
-    for (int k = 0; k < 3; ++k) (*trouble)[a[k]] = (*trouble)[b[k]] = 1;
+    for (int32_t v : vertices) (*trouble)[v] = 1;
   };
-  for (const auto& pair : report.self_intersection_examples) mark_faces(pair);
-  const FloatRobustnessReport& f = report.float_robustness;
-  for (const auto& pair : f.close_face_pair_examples) mark_faces(pair);
-  for (const auto& pair : f.float_intersection_examples) mark_faces(pair);
-  for (const auto& pair : f.near_vertex_examples) {
-    if (moving[pair[0]] || moving[pair[1]]) (*trouble)[pair[0]] = (*trouble)[pair[1]] = 1;
+  for (const auto& [f, g] : problems.face_pairs) {
+    const auto &a = mesh.faces[f], &b = mesh.faces[g];
+    mark({a[0], a[1], a[2], b[0], b[1], b[2]});
   }
-  for (int64_t face : report.degenerate_face_examples) {
-    const auto& a = mesh.faces[face];
-    if (moving[a[0]] || moving[a[1]] || moving[a[2]]) {
-      for (int k = 0; k < 3; ++k) (*trouble)[a[k]] = 1;
-    }
+  for (int64_t f : problems.degenerate_faces) {
+    mark({mesh.faces[f][0], mesh.faces[f][1], mesh.faces[f][2]});
   }
+  for (const auto& [u, v] : problems.vertex_pairs) mark({u, v});
 }
 
 }  // namespace

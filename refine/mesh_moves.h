@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -22,6 +23,22 @@ std::vector<std::vector<int32_t>> VertexNeighbours(const Mesh& mesh);
 // (the umbrella operator): dE/dv = -L(v) + sum over neighbours u of L(u) / deg(u).
 std::vector<Eigen::Vector3d> ThinPlateGradient(const Mesh& mesh,
                                                const std::vector<std::vector<int32_t>>& neighbours);
+
+// What the checker (mesh/mesh_checker.h) objects to, looking at pairs with a face flagged in
+// `focus` (empty: all; MeshCheckOptions::focus_faces) with `tolerance` as its absolute float
+// tolerance: face pairs that intersect exactly (adjacent ones included: a fold), come within the
+// tolerance or intersect in double precision (sharing no vertex); degenerate faces; vertex pairs
+// within the tolerance. Moves and splits (refine/remesh.h) are undone on what it lists.
+struct CheckerProblems {
+  std::vector<std::array<int64_t, 2>> face_pairs;
+  std::vector<int64_t> degenerate_faces;
+  std::vector<std::array<int32_t, 2>> vertex_pairs;
+  bool Empty() const {
+    return face_pairs.empty() && degenerate_faces.empty() && vertex_pairs.empty();
+  }
+};
+CheckerProblems FindCheckerProblems(const Mesh& mesh, double tolerance,
+                                    const std::vector<uint8_t>& focus);
 
 struct MoveOptions {
   double tolerance = 0;           // absolute: faces sharing no vertex stay farther apart than this

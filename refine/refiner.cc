@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <opencv2/imgproc.hpp>
 
 #include "base/error.h"
 #include "base/log.h"
@@ -18,29 +17,13 @@
 namespace ms {
 namespace {
 
-// Camera `camera` at pyramid level `level` (0: as given): INTER_AREA resizing and intrinsics
-// scaled by the size ratios, exact with the corner-origin convention (as the sweep).
+// Camera `camera` at pyramid level `level`, as the sweep scales it, its image in double.
 RefineView ViewAtLevel(const SweepCamera& camera, int level) {
+  const SweepCamera scaled = CameraAtPyramidLevel(camera, level);
   RefineView out;
-  out.camera = camera.id;
-  out.view = camera.view;
-  Intrinsics& k = out.view.intrinsics;
-  const cv::Size size = SweptImageSize(k.width, k.height, level);
-  const double sx = static_cast<double>(size.width) / k.width;
-  const double sy = static_cast<double>(size.height) / k.height;
-  k.fx *= sx;
-  k.cx *= sx;
-  k.fy *= sy;
-  k.cy *= sy;
-  k.width = size.width;
-  k.height = size.height;
-  cv::Mat resized;
-  if (level == 0) {
-    resized = camera.image;
-  } else {
-    cv::resize(camera.image, resized, size, 0, 0, cv::INTER_AREA);
-  }
-  resized.convertTo(out.image, CV_64F);
+  out.camera = scaled.id;
+  out.view = scaled.view;
+  scaled.image.convertTo(out.image, CV_64F);
   return out;
 }
 
@@ -50,11 +33,7 @@ int FinestLevel(const std::vector<SweepCamera>& cameras, const RefineOptions& op
   for (const SweepCamera& c : cameras) {
     longest = std::max({longest, c.view.intrinsics.width, c.view.intrinsics.height});
   }
-  int level = 0;
-  if (options.max_image_dimension > 0) {
-    while ((longest >> level) > options.max_image_dimension && level < 12) ++level;
-  }
-  return level;
+  return PyramidLevelToFit(longest, options.max_image_dimension);
 }
 
 // The gradient of all pairs, summed in pair order whatever the threads did.

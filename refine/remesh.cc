@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "base/error.h"
-#include "mesh/mesh_checker.h"
+#include "refine/mesh_moves.h"
 
 namespace ms {
 namespace {
@@ -17,34 +17,6 @@ namespace {
 using Edge = std::pair<int32_t, int32_t>;  // (smaller, larger) vertex index
 
 Edge Key(int32_t a, int32_t b) { return a < b ? Edge{a, b} : Edge{b, a}; }
-
-// The faces of the checker's problems (exact self-intersections, close face pairs and
-// double-precision intersections) and the vertices of its near-vertex pairs and degenerate faces.
-struct Problems {
-  std::vector<int64_t> faces;
-  std::vector<int32_t> vertices;
-  bool Empty() const { return faces.empty() && vertices.empty(); }
-};
-
-Problems CheckerProblems(const Mesh& mesh, double tolerance, const std::vector<uint8_t>& focus) {
-  MeshCheckOptions check;
-  check.focus_faces = focus;
-  check.float_tolerance_abs = tolerance;
-  check.max_examples = INT_MAX;
-  check.max_self_intersections = INT64_MAX;
-  const MeshReport r = CheckMesh(mesh, check);
-  const FloatRobustnessReport& f = r.float_robustness;
-  Problems p;
-  for (const auto* pairs : {&r.self_intersection_examples, &f.close_face_pair_examples,
-                            &f.float_intersection_examples}) {
-    for (const auto& pair : *pairs) p.faces.insert(p.faces.end(), pair.begin(), pair.end());
-  }
-  for (int64_t face : r.degenerate_face_examples) p.faces.push_back(face);
-  for (const auto& pair : f.near_vertex_examples) {
-    p.vertices.insert(p.vertices.end(), pair.begin(), pair.end());
-  }
-  return p;
-}
 
 // One split: edge (u, v) of faces f0 and f1 at the new vertex m; faces f0 and f1 were changed
 // and faces added0 and added1 appended.
@@ -126,10 +98,12 @@ std::vector<Split> SplitPass(Mesh* mesh,
   return splits;
 }
 
-// Undoes the splits of this pass whose faces or new vertex the checker objects to (that the mesh
-// before the pass did not have: `baseline`), until it objects to none; returns how many.
-int64_t UndoTroubledSplits(Mesh* mesh, const std::vector<Split>& splits, double tolerance,
+// Undoes the splits of this pass whose faces or new vertex the checker objects to, until it
+// objects to none of them (what is left was there before the pass); the remaining splits' face
+// indices follow the removal of the undone ones' faces. Returns how many were undone.
+int64_t UndoTroubledSplits(Mesh* mesh, std::vector<Split>* splits_ptr, double tolerance,
                            std::set<Edge>* refused) {
+  std::vector<Split>& splits = *splits_ptr;  // face indices are renumbered as faces go
   int64_t undone = 0;
   std::vector<uint8_t> alive(splits.size(), 1);
   // The faces the pass changed; later, those of undone splits (their old faces are back).
@@ -138,7 +112,7 @@ int64_t UndoTroubledSplits(Mesh* mesh, const std::vector<Split>& splits, double 
     for (int k = 0; k < s.num_faces; ++k) focus[s.faces[k]] = focus[s.added[k]] = 1;
   }
   while (true) {
-    const Problems problems = CheckerProblems(*mesh, tolerance, focus);
+    const CheckerProblems problems = FindCheckerProblems(*mesh, tolerance, focus);
     if (problems.Empty()) break;
     // The split that made each face or vertex.
     std::map<int64_t, size_t> by_face;
@@ -152,11 +126,20 @@ int64_t UndoTroubledSplits(Mesh* mesh, const std::vector<Split>& splits, double 
       by_vertex[splits[i].m] = i;
     }
     std::set<size_t> bad;
-    for (int64_t f : problems.faces) {
+    const auto bad_face = [&](int64_t f) {
       if (auto it = by_face.find(f); it != by_face.end()) bad.insert(it->second);
-    }
-    for (int32_t v : problems.vertices) {
+    };
+    const auto bad_vertex = [&](int32_t v) {
       if (auto it = by_vertex.find(v); it != by_vertex.end()) bad.insert(it->second);
+    };
+    for (const auto& [f, g] : problems.face_pairs) {
+      bad_face(f);
+      bad_face(g);
+    }
+    for (int64_t f : problems.degenerate_faces) bad_face(f);
+    for (const auto& [u, v] : problems.vertex_pairs) {
+      bad_vertex(u);
+      bad_vertex(v);
     }
     if (bad.empty()) break;  // what is left was there before the pass
     std::vector<uint8_t> restored(mesh->faces.size(), 0);
@@ -186,7 +169,7 @@ int64_t UndoTroubledSplits(Mesh* mesh, const std::vector<Split>& splits, double 
     mesh->faces = std::move(kept);
     for (size_t i = 0; i < splits.size(); ++i) {
       if (!alive[i]) continue;
-      auto& s = const_cast<Split&>(splits[i]);
+      Split& s = splits[i];
       for (int k = 0; k < s.num_faces; ++k) {
         s.faces[k] = static_cast<int32_t>(new_index[s.faces[k]]);
         s.added[k] = static_cast<int32_t>(new_index[s.added[k]]);
@@ -207,7 +190,7 @@ SplitStats SplitLongEdges(Mesh* mesh,
     std::vector<Split> splits = SplitPass(mesh, max_length, max_vertices, refused, 8 * tolerance);
     ++stats.rounds;
     if (splits.empty()) break;
-    const int64_t undone = UndoTroubledSplits(mesh, splits, tolerance, &refused);
+    const int64_t undone = UndoTroubledSplits(mesh, &splits, tolerance, &refused);
     stats.splits += static_cast<int64_t>(splits.size()) - undone;
     stats.refused += undone;
   }

@@ -273,13 +273,34 @@ SweepPoint MakeSweepPoint(const TileWinner& winner, const PreparedSweep& prep) {
   return point;
 }
 
-int SweepPyramidLevel(int longest_side, const SweepOptions& options) {
-  if (options.pyramid_level >= 0) return options.pyramid_level;
+int PyramidLevelToFit(int longest_side, int max_image_dimension) {
   int level = 0;
-  if (options.max_image_dimension > 0) {
-    while ((longest_side >> level) > options.max_image_dimension && level < 12) ++level;
+  if (max_image_dimension > 0) {
+    while ((longest_side >> level) > max_image_dimension && level < 12) ++level;
   }
   return level;
+}
+
+int SweepPyramidLevel(int longest_side, const SweepOptions& options) {
+  if (options.pyramid_level >= 0) return options.pyramid_level;
+  return PyramidLevelToFit(longest_side, options.max_image_dimension);
+}
+
+SweepCamera CameraAtPyramidLevel(const SweepCamera& in, int level) {
+  SweepCamera out = in;
+  if (level == 0) return out;
+  Intrinsics& k = out.view.intrinsics;
+  const cv::Size size = SweptImageSize(k.width, k.height, level);
+  const double sx = static_cast<double>(size.width) / k.width;
+  const double sy = static_cast<double>(size.height) / k.height;
+  k.fx *= sx;
+  k.cx *= sx;
+  k.fy *= sy;
+  k.cy *= sy;
+  k.width = size.width;
+  k.height = size.height;
+  cv::resize(in.image, out.image, size, 0, 0, cv::INTER_AREA);
+  return out;
 }
 
 cv::Size SweptImageSize(int width, int height, int level) {
@@ -300,25 +321,10 @@ PreparedSweep PrepareSweep(const SweepJob& job) {
   }
   const int level = SweepPyramidLevel(longest, options);
   prep.pyramid_level = level;
-  const auto scale_camera = [level](const SweepCamera& in) {
-    SweepCamera out = in;
-    if (level == 0) return out;
-    Intrinsics& k = out.view.intrinsics;
-    const cv::Size swept = SweptImageSize(k.width, k.height, level);
-    const int width = swept.width, height = swept.height;
-    const double sx = static_cast<double>(width) / k.width;
-    const double sy = static_cast<double>(height) / k.height;
-    k.fx *= sx;
-    k.cx *= sx;
-    k.fy *= sy;
-    k.cy *= sy;
-    k.width = width;
-    k.height = height;
-    cv::resize(in.image, out.image, cv::Size(width, height), 0, 0, cv::INTER_AREA);
-    return out;
-  };
-  prep.camera = scale_camera(job.camera);
-  for (const SweepCamera& n : job.neighbours) prep.neighbours.push_back(scale_camera(n));
+  prep.camera = CameraAtPyramidLevel(job.camera, level);
+  for (const SweepCamera& n : job.neighbours) {
+    prep.neighbours.push_back(CameraAtPyramidLevel(n, level));
+  }
   prep.scale_x =
       static_cast<double>(prep.camera.view.intrinsics.width) / job.camera.view.intrinsics.width;
   prep.scale_y =

@@ -130,8 +130,14 @@ struct PreparedSweep {
 // The pyramid level of a job whose largest image side is `longest_side`: options.pyramid_level
 // if set, else the smallest level at which that side fits max_image_dimension (0: full size).
 int SweepPyramidLevel(int longest_side, const SweepOptions& options);
+// The smallest level at which `longest_side` fits max_image_dimension (0: any size, level 0).
+int PyramidLevelToFit(int longest_side, int max_image_dimension);
 // An image's size at a pyramid level, as PrepareSweep resizes it (rounded, at least 1 x 1).
 cv::Size SweptImageSize(int width, int height, int level);
+// The camera at a pyramid level: its image resized (cv::INTER_AREA) to SweptImageSize and its
+// intrinsics scaled by the size ratios (fx, cx by the width's, fy, cy by the height's: exact with
+// the corner-origin convention). Level 0 returns it as it is.
+SweepCamera CameraAtPyramidLevel(const SweepCamera& camera, int level);
 
 // Checks the job (CheckSweepJob), picks the pyramid level, resizes images (cv::INTER_AREA) and
 // scales intrinsics (fx, cx by the width ratio, fy, cy by the height ratio: exact with the
