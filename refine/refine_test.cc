@@ -16,6 +16,29 @@
 namespace ms {
 namespace {
 
+// The pyramid scene's camera pairs: camera 0 with each neighbour, and back.
+const std::vector<std::pair<int, int>> kPyramidPairs = {{0, 1}, {0, 2}, {1, 0}, {2, 0}};
+
+// The pyramid scene's true surface (open: a ring of ground) with its apex at `fraction` of its
+// height.
+Mesh LoweredApex(const PyramidScene& scene, double fraction) {
+  Mesh mesh = scene.truth;
+  mesh.vertices[0].z() = scene.pyramid_height * fraction;
+  return mesh;
+}
+
+// check-mesh's verdict, boundaries allowed (the pyramid scene's surface is open).
+bool ValidWithBoundary(const Mesh& mesh) {
+  MeshCheckOptions check;
+  check.allow_boundary = true;
+  return CheckMesh(mesh, check).is_valid;
+}
+
+void ExpectSameVertices(const Mesh& a, const Mesh& b) {
+  ASSERT_EQ(a.vertices.size(), b.vertices.size());
+  for (size_t v = 0; v < a.vertices.size(); ++v) EXPECT_EQ(a.vertices[v], b.vertices[v]);
+}
+
 RefineView NoiseView(const View& view, uint64_t seed) {
   RefineView out;
   out.view = view;
@@ -115,9 +138,7 @@ TEST(MeshMoves, AMoveThroughAnotherFaceIsRefused) {
   EXPECT_LT(mesh.vertices[12].z(), 0.1);  // halved to below the sheet, or not moved
   EXPECT_EQ(mesh.vertices[0].z(), 0.02);
   EXPECT_EQ(mesh.vertices[12].x(), centre.x());
-  MeshCheckOptions check;
-  check.allow_boundary = true;
-  EXPECT_TRUE(CheckMesh(mesh, check).is_valid);
+  EXPECT_TRUE(ValidWithBoundary(mesh));
 }
 
 // The pyramid scene with its apex pulled down to two thirds of its height: refinement from the
@@ -134,37 +155,31 @@ TEST(RefineMesh, PullsAFlattenedApexBackToTheTruth) {
   options.iterations = 60;
   options.levels = 2;
   options.smoothness = 0;
-  const RefineStats stats =
-      RefineMesh(&mesh, scene.cameras, {{0, 1}, {0, 2}, {1, 0}, {2, 0}}, options);
+  const RefineStats stats = RefineMesh(&mesh, scene.cameras, kPyramidPairs, options);
   ASSERT_EQ(stats.iterations.size(), 60u);
   EXPECT_LT(stats.iterations.back().energy, 0.5 * stats.iterations.front().energy);
   EXPECT_NEAR(mesh.vertices[0].z(), scene.pyramid_height, 0.01);
   EXPECT_NEAR(mesh.vertices[0].x(), 0, 0.01);
   EXPECT_NEAR(mesh.vertices[0].y(), 0, 0.01);
-  MeshCheckOptions check;
-  check.allow_boundary = true;
-  EXPECT_TRUE(CheckMesh(mesh, check).is_valid);
+  EXPECT_TRUE(ValidWithBoundary(mesh));
 }
 
 // Pairs are summed in pair order whatever the threads did: one thread and two give the same
 // mesh, bit for bit.
 TEST(RefineMesh, ThreadsDoNotChangeTheResult) {
   const PyramidScene scene = MakePyramidScene();
-  Mesh start = scene.truth;
-  start.vertices[0].z() *= 0.8;
+  const Mesh start = LoweredApex(scene, 0.8);
   RefineOptions options;
   options.iterations = 4;
   options.levels = 1;
   Mesh one = start, two = start;
   options.threads = 1;
-  RefineMesh(&one, scene.cameras, {{0, 1}, {0, 2}, {1, 0}, {2, 0}}, options);
+  RefineMesh(&one, scene.cameras, kPyramidPairs, options);
   options.threads = 2;
-  RefineMesh(&two, scene.cameras, {{0, 1}, {0, 2}, {1, 0}, {2, 0}}, options);
+  RefineMesh(&two, scene.cameras, kPyramidPairs, options);
   ASSERT_NE(one.vertices[0], start.vertices[0]);
-  for (size_t v = 0; v < one.vertices.size(); ++v) EXPECT_EQ(one.vertices[v], two.vertices[v]);
-  MeshCheckOptions check;
-  check.allow_boundary = true;
-  EXPECT_TRUE(CheckMesh(one, check).is_valid);
+  ExpectSameVertices(one, two);
+  EXPECT_TRUE(ValidWithBoundary(one));
 }
 
 // Splitting keeps a closed 2-manifold closed, valid and in place: every edge ends at most as long
@@ -208,17 +223,15 @@ TEST(Remesh, SplittingStopsAtTheVertexBudget) {
 // remeshing and backtracking included (the checkpoint is taken inside the second level).
 TEST(RefineMesh, ResumingFromACheckpointGivesTheSameMesh) {
   const PyramidScene scene = MakePyramidScene();
-  Mesh start = scene.truth;
-  start.vertices[0].z() *= 0.7;
+  const Mesh start = LoweredApex(scene, 0.7);
   RefineOptions options;
   options.iterations = 8;
   options.levels = 2;
   options.max_edge_px = 40;
-  const std::vector<std::pair<int, int>> pairs = {{0, 1}, {0, 2}, {1, 0}, {2, 0}};
   Mesh whole = start;
   Mesh saved_mesh;
   RefineState saved;
-  const RefineStats stats = RefineMesh(&whole, scene.cameras, pairs, options, {}, nullptr,
+  const RefineStats stats = RefineMesh(&whole, scene.cameras, kPyramidPairs, options, {}, nullptr,
                                        [&](const Mesh& mesh, const RefineState& state) {
                                          if (state.iterations_done == 6) {
                                            saved_mesh = mesh;
@@ -229,15 +242,12 @@ TEST(RefineMesh, ResumingFromACheckpointGivesTheSameMesh) {
   ASSERT_EQ(saved.level_index, 1);
   ASSERT_EQ(saved.iteration_in_level, 2);
   Mesh resumed = saved_mesh;
-  const RefineStats rest = RefineMesh(&resumed, scene.cameras, pairs, options, {}, &saved);
+  const RefineStats rest = RefineMesh(&resumed, scene.cameras, kPyramidPairs, options, {}, &saved);
   ASSERT_EQ(rest.iterations.size(), 2u);
   EXPECT_EQ(rest.iterations.front().iteration, 7);
   ASSERT_EQ(resumed.faces, whole.faces);
-  for (size_t v = 0; v < whole.vertices.size(); ++v)
-    EXPECT_EQ(resumed.vertices[v], whole.vertices[v]);
-  MeshCheckOptions check;
-  check.allow_boundary = true;
-  EXPECT_TRUE(CheckMesh(whole, check).is_valid);
+  ExpectSameVertices(resumed, whole);
+  EXPECT_TRUE(ValidWithBoundary(whole));
 }
 
 // A mesh no camera sees (another scene's, or misplaced) is an input error, not a silent no-op.
