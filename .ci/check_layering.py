@@ -18,7 +18,8 @@ LAYERS = [
     ["gl"],
     ["proto"],
     ["manifold", "sweep"],
-    ["coordinator", "worker", "tools", "refine"],
+    ["refine"],
+    ["coordinator", "worker", "tools"],
     ["app"],
     ["bench", "tests"],
 ]

@@ -1,12 +1,16 @@
 // `manisweep coordinator`: the coordinator process of a distributed run. Binds a ZeroMQ ROUTER,
 // builds the initial manifold, hands sweep jobs to the workers that connect, inserts their
-// points, checkpoints after every iteration (docs/distributed.md, proto/PROTOCOL.md).
+// points, checkpoints after every iteration (docs/distributed.md, proto/PROTOCOL.md); with
+// --refine, the same workers then compute the refinement's gradients (docs/refine.md).
+#include <filesystem>
 #include <memory>
 #include <string>
 
 #include "app/commands.h"
 #include "app/distributed_options.h"
+#include "app/option_registration.h"
 #include "app/process_control.h"
+#include "app/refine_run.h"
 #include "base/error.h"
 #include "base/log.h"
 #include "coordinator/coordinator.h"
@@ -21,10 +25,15 @@ struct CoordinatorCommandOptions {
   std::string curve_secret_key;
   std::string curve_public_keys;
   bool insecure = false;
+  bool refine = false;  // refine final.ply into refined.ply on the workers (docs/refine.md)
+  RefineOptions refine_options;
 };
 
 void RunCoordinator(CoordinatorCommandOptions& options) {
   options.run.Check();
+  if (options.refine && options.run.input.empty()) {
+    throw InputError("--refine: needs --input (the scene whose images refinement compares)");
+  }
   // Without CURVE any process that reaches the port can hand in points; beyond this machine
   // that takes an explicit choice.
   const bool reachable = !IsLocalOnlyEndpoint(options.bind);
@@ -47,9 +56,21 @@ void RunCoordinator(CoordinatorCommandOptions& options) {
   server.curve_secret_key_file = options.curve_secret_key;
   server.curve_public_keys_dir = options.curve_public_keys;
   std::unique_ptr<ServerTransport> transport = MakeZmqServer(server);
-  Coordinator coordinator(options.run, transport.get());
-  const CoordinatorResult result = coordinator.Run([] { return StopRequested(); });
+  options.run.keep_workers = options.refine;
+  CoordinatorResult result;
+  {
+    Coordinator coordinator(options.run, transport.get());
+    result = coordinator.Run([] { return StopRequested(); });
+  }
   if (result.status == "interrupted") throw CommandExit(kExitInterrupted);
+  if (options.refine) {
+    RefineWorkers workers{transport.get(), options.run.scheduler, options.run.Limits(),
+                          [] { return StopRequested(); }};
+    RefineMeshFile(options.run.input, result.final_mesh,
+                   (std::filesystem::path(options.run.output_dir) / "refined.ply").string(),
+                   options.refine_options, options.run.neighbours, false, options.run.run.resume,
+                   &workers);
+  }
 }
 
 }  // namespace
@@ -78,7 +99,11 @@ void RegisterCoordinatorCommand(CLI::App& app) {
   cmd->add_flag("--insecure", options->insecure,
                 "allow a network-reachable --bind without CURVE (anyone reaching the port can "
                 "send results)");
+  cmd->add_flag("--refine", options->refine,
+                "then refine final.ply photometrically into refined.ply on the same workers, "
+                "keeping it a closed 2-manifold (docs/refine.md)");
   AddRunOptions(cmd, &options->run);
+  AddOptionGroup(cmd, &options->refine_options);
   cmd->callback([options] { RunCoordinator(*options); });
 }
 

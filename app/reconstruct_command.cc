@@ -199,28 +199,34 @@ void RunReconstruct(ReconstructCommandOptions& options) {
                   options.max_restarts >= 0 ? options.max_restarts : 2 * workers);
 
   bool no_workers = false;
+  const auto stop_requested = [&] {
+    if (StopRequested()) return true;
+    if (!pool.Check()) {
+      no_workers = true;
+      return true;
+    }
+    return false;
+  };
+  // With --refine the workers stay after the sweep and compute the refinement's gradients.
+  setup.keep_workers = options.refine;
   CoordinatorResult result;
   {
     Coordinator coordinator(setup, transport.get());
     try {
-      result = coordinator.Run([&] {
-        if (StopRequested()) return true;
-        if (!pool.Check()) {
-          no_workers = true;
-          return true;
-        }
-        return false;
-      });
+      result = coordinator.Run(stop_requested);
     } catch (...) {
       pool.Stop(2.0);
       throw;
     }
   }
-  const int signalled = pool.Stop(5.0);
-  if (signalled > 0) spdlog::warn("{} worker(s) had to be stopped with a signal", signalled);
-  if (no_workers && !StopRequested()) {
-    throw InputError("every worker process died and none may be restarted; see the log above");
-  }
+  const auto stop_workers = [&] {
+    const int signalled = pool.Stop(5.0);
+    if (signalled > 0) spdlog::warn("{} worker(s) had to be stopped with a signal", signalled);
+    if (no_workers && !StopRequested()) {
+      throw InputError("every worker process died and none may be restarted; see the log above");
+    }
+  };
+  if (result.status == "interrupted" || !options.refine) stop_workers();
   if (result.status == "interrupted") {
     spdlog::warn("interrupted; continue with the same command and --resume");
     throw CommandExit(kExitInterrupted);
@@ -232,9 +238,16 @@ void RunReconstruct(ReconstructCommandOptions& options) {
       result.final_is_closed_manifold ? "closed 2-manifold" : "NOT a closed manifold",
       result.iterations, setup.output_dir, setup.output_dir);
   if (options.refine) {
-    RefineMeshFile(setup.input, result.final_mesh,
-                   (fs::path(setup.output_dir) / "refined.ply").string(), options.refine_options,
-                   setup.neighbours, false, setup.run.resume);
+    RefineWorkers workers{transport.get(), setup.scheduler, setup.Limits(), stop_requested};
+    try {
+      RefineMeshFile(setup.input, result.final_mesh,
+                     (fs::path(setup.output_dir) / "refined.ply").string(), options.refine_options,
+                     setup.neighbours, false, setup.run.resume, &workers);
+    } catch (...) {
+      pool.Stop(2.0);
+      throw;
+    }
+    stop_workers();
   }
   if (default_scene) ReportDefaultSceneAccuracy(setup.output_dir, default_dir);
 }

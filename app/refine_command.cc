@@ -1,6 +1,6 @@
 // `manisweep refine`: photometric refinement of a mesh (refine/refiner.h, docs/refine.md) that
-// keeps it a closed 2-manifold without self-intersections. Single process for now; the
-// per-pair gradients are independent and run on the machine's cores.
+// keeps it a closed 2-manifold without self-intersections. The per-pair gradients run on this
+// machine's cores, or on workers (RefineWorkers: `reconstruct --refine`, `coordinator --refine`).
 #include <fmt/format.h>
 
 #include <cstdio>
@@ -15,6 +15,7 @@
 #include "app/refine_run.h"
 #include "base/error.h"
 #include "base/log.h"
+#include "coordinator/refine_dispatcher.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
 #include "refine/refine_checkpoint.h"
@@ -37,11 +38,21 @@ struct RefineCommandOptions {
 
 void RefineMeshFile(const std::string& input, const std::string& mesh_path,
                     const std::string& output, const RefineOptions& refine,
-                    const NeighbourOptions& neighbours, bool ascii, bool resume) {
+                    const NeighbourOptions& neighbours, bool ascii, bool resume,
+                    const RefineWorkers* workers) {
   refine.Check();
   neighbours.Check();
   Scene scene = ReadScene(input);
   scene.Validate();
+  const std::vector<std::pair<int, int>> pairs = RefinePairs(scene, neighbours);
+  if (pairs.empty()) throw InputError(input + ": no camera has a neighbour to refine with");
+  // Started first: its loop answers the workers while the images and the mesh load.
+  std::unique_ptr<RefineDispatcher> dispatcher;
+  if (workers) {
+    dispatcher = std::make_unique<RefineDispatcher>(scene, pairs, refine, workers->transport,
+                                                    workers->scheduler, workers->limits,
+                                                    workers->stop_requested);
+  }
   Mesh mesh = ReadMesh(mesh_path);
   // What a checkpoint is valid for: the same scene, starting mesh and options.
   const std::string fingerprint = fmt::format("input={} mesh={} {} {}", input, mesh_path,
@@ -54,17 +65,16 @@ void RefineMeshFile(const std::string& input, const std::string& mesh_path,
     throw InputError(mesh_path + ": not a closed 2-manifold (run `manisweep check-mesh " +
                      mesh_path + "`); refine keeps a closed manifold closed, so it needs one");
   }
-  const std::vector<std::pair<int, int>> pairs = RefinePairs(scene, neighbours);
-  if (pairs.empty()) throw InputError(input + ": no camera has a neighbour to refine with");
   std::vector<SweepCamera> cameras;
   cameras.reserve(scene.views.size());
   for (size_t c = 0; c < scene.views.size(); ++c) {
     cameras.push_back(LoadSweepCamera(static_cast<int32_t>(c), scene.views[c]));
   }
   spdlog::info(
-      "refining {} ({} vertices, {} faces) with {} camera pairs, {} iterations over {} levels",
+      "refining {} ({} vertices, {} faces) with {} camera pairs, {} iterations over {} levels, "
+      "the gradients {}",
       mesh_path, mesh.NumVertices(), mesh.NumFaces(), pairs.size(), refine.iterations,
-      refine.levels);
+      refine.levels, dispatcher ? "on the workers" : "in this process");
   std::optional<RefineCheckpoint> checkpoint;
   if (resume) checkpoint = ReadRefineCheckpoint(output, fingerprint);
   if (checkpoint) {
@@ -83,17 +93,39 @@ void RefineMeshFile(const std::string& input, const std::string& mesh_path,
       throw CommandExit(kExitInterrupted);
     }
   };
-  const RefineStats stats = RefineMesh(
-      &mesh, cameras, pairs, refine,
-      [](const RefineIteration& it) {
-        spdlog::info(
-            "iteration {} (level {}): energy {:.4f} over {} pixels{}; step x{:.3g}: {} vertices "
-            "moved ({} halved, {} refused), largest {:.3g}; {:.2f} s ({} checks, {:.2f} s)",
-            it.iteration, it.level, it.energy, it.pixels,
-            it.rejected ? " (higher: last step undone)" : "", it.step_scale, it.moved, it.halved,
-            it.refused, it.largest_move, it.seconds, it.checks, it.check_seconds);
-      },
-      checkpoint ? &checkpoint->state : nullptr, save);
+  RefineHooks hooks;
+  hooks.progress = [](const RefineIteration& it) {
+    spdlog::info(
+        "iteration {} (level {}): energy {:.4f} over {} pixels{}; step x{:.3g}: {} vertices "
+        "moved ({} halved, {} refused), largest {:.3g}; {:.2f} s ({} checks, {:.2f} s)",
+        it.iteration, it.level, it.energy, it.pixels,
+        it.rejected ? " (higher: last step undone)" : "", it.step_scale, it.moved, it.halved,
+        it.refused, it.largest_move, it.seconds, it.checks, it.check_seconds);
+  };
+  if (checkpoint) hooks.resume = &checkpoint->state;
+  hooks.checkpoint = save;
+  if (dispatcher) hooks.pair_gradients = dispatcher->Source();
+  RefineStats stats;
+  try {
+    stats = RefineMesh(&mesh, cameras, pairs, refine, hooks);
+  } catch (const RefineInterrupted&) {
+    if (StopRequested()) {
+      spdlog::warn("interrupted; the last checkpoint stays: continue with --resume");
+      throw CommandExit(kExitInterrupted);
+    }
+    throw InputError(
+        "refinement stopped: no worker is left to compute the gradients (see the log above); "
+        "the last checkpoint stays: continue with --resume");
+  }
+  if (dispatcher) {
+    const RefineDispatchStats d = dispatcher->stats();
+    spdlog::info(
+        "refinement on workers: {} rounds, {} jobs ({} handed out again), {:.1f} MiB of jobs out, "
+        "{:.1f} MiB of gradients in; {:.1f} s waiting for rounds, {:.1f} s of worker time",
+        d.rounds, d.jobs, d.requeued, d.bytes_out / 1048576.0, d.bytes_in / 1048576.0, d.seconds,
+        d.worker_seconds);
+    dispatcher.reset();  // the workers are told to shut down
+  }
   MeshWriteOptions write_options;
   write_options.binary = !ascii;
   WriteMesh(mesh, output, write_options);

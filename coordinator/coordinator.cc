@@ -14,6 +14,7 @@
 #include "base/error.h"
 #include "base/log.h"
 #include "coordinator/insertion_batch.h"
+#include "coordinator/peer_talk.h"
 #include "coordinator/run_lifecycle.h"
 #include "proto/content_hash.h"
 #include "proto/wire.h"
@@ -21,50 +22,12 @@
 namespace ms {
 namespace {
 
-// A worker busy with a job of another session (a coordinator before a restart).
-constexpr uint64_t kForeignJob = std::numeric_limits<uint64_t>::max();
-
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+double Now() { return MonotonicSeconds(); }
 
 const CoordinatorOptions& Checked(const CoordinatorOptions& options) {
   options.Check();
   return options;
 }
-
-// Random per coordinator start: results of an older session are stale.
-uint64_t NewSessionId() {
-  std::random_device random;
-  const uint64_t session =
-      (uint64_t{random()} << 32) ^ random() ^ static_cast<uint64_t>(Now() * 1e6);
-  return session == 0 ? 1 : session;
-}
-
-// Transport identities are binary; logs show a short hash.
-std::string PeerTag(const std::string& peer) {
-  return "peer " + HashHex(HashBytes(peer)).substr(0, 8);
-}
-
-// Results that do not fit their jobs before a worker is sent away.
-constexpr int kMaxUnfitResults = 3;
-
-// Rate-limited warnings about junk from the network: the first few per kind, then every 1000th.
-class JunkLog {
- public:
-  void Warn(const std::string& kind, const std::string& line) {
-    const int64_t n = ++counts_[kind];
-    if (n <= 5 || n % 1000 == 0) {
-      spdlog::warn("{}{}", line,
-                   n == 5  ? " (further ones of this kind are logged every 1000th)"
-                   : n > 5 ? fmt::format(" ({} so far)", n)
-                           : "");
-    }
-  }
-
- private:
-  std::map<std::string, int64_t> counts_;
-};
 
 }  // namespace
 
@@ -213,7 +176,7 @@ class Coordinator::Impl {
       result.stop_reason = "interrupted";
       run_.WriteInterruptedSummary();
     } else {
-      Broadcast("the run is complete");
+      if (!options_.keep_workers) Broadcast("the run is complete");
       result = run_.final_result();
     }
     result.iterations = run_.completed_iterations();

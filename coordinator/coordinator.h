@@ -43,6 +43,9 @@ struct CoordinatorOptions {
   VisibleMeshOptions visible;
   SweepOptions sweep;  // sent with every job
   SchedulerOptions scheduler;
+  // The workers stay after a finished run (no Shutdown): refinement follows on them
+  // (coordinator/refine_dispatcher.h). Set by the commands, not a flag.
+  bool keep_workers = false;
   void Check() const;        // throws InputError naming the flag
   void CheckGroups() const;  // Check() without --input and --output
   WireLimits Limits() const { return WireLimitsFromMiB(run.max_message_mb); }

@@ -14,7 +14,8 @@
 namespace ms {
 
 // The version both sides put in every envelope and require in every envelope they read.
-constexpr uint32_t kProtocolVersion = 1;
+// 2: refinement jobs (Job.refine, Result.gradient).
+constexpr uint32_t kProtocolVersion = 2;
 
 enum class DecodeStatus {
   kOk,

@@ -231,18 +231,21 @@ TEST(RefineMesh, ResumingFromACheckpointGivesTheSameMesh) {
   Mesh whole = start;
   Mesh saved_mesh;
   RefineState saved;
-  const RefineStats stats = RefineMesh(&whole, scene.cameras, kPyramidPairs, options, {}, nullptr,
-                                       [&](const Mesh& mesh, const RefineState& state) {
-                                         if (state.iterations_done == 6) {
-                                           saved_mesh = mesh;
-                                           saved = state;
-                                         }
-                                       });
+  RefineHooks hooks;
+  hooks.checkpoint = [&](const Mesh& mesh, const RefineState& state) {
+    if (state.iterations_done == 6) {
+      saved_mesh = mesh;
+      saved = state;
+    }
+  };
+  const RefineStats stats = RefineMesh(&whole, scene.cameras, kPyramidPairs, options, hooks);
   ASSERT_GT(stats.splits, 0);
   ASSERT_EQ(saved.level_index, 1);
   ASSERT_EQ(saved.iteration_in_level, 2);
   Mesh resumed = saved_mesh;
-  const RefineStats rest = RefineMesh(&resumed, scene.cameras, kPyramidPairs, options, {}, &saved);
+  RefineHooks resume;
+  resume.resume = &saved;
+  const RefineStats rest = RefineMesh(&resumed, scene.cameras, kPyramidPairs, options, resume);
   ASSERT_EQ(rest.iterations.size(), 2u);
   EXPECT_EQ(rest.iterations.front().iteration, 7);
   ASSERT_EQ(resumed.faces, whole.faces);

@@ -17,16 +17,6 @@
 namespace ms {
 namespace {
 
-// Camera `camera` at pyramid level `level`, as the sweep scales it, its image in double.
-RefineView ViewAtLevel(const SweepCamera& camera, int level) {
-  const SweepCamera scaled = CameraAtPyramidLevel(camera, level);
-  RefineView out;
-  out.camera = scaled.id;
-  out.view = scaled.view;
-  scaled.image.convertTo(out.image, CV_64F);
-  return out;
-}
-
 // The finest level: images halved until their longest side fits max_image_dimension.
 int FinestLevel(const std::vector<SweepCamera>& cameras, const RefineOptions& options) {
   int longest = 0;
@@ -36,17 +26,27 @@ int FinestLevel(const std::vector<SweepCamera>& cameras, const RefineOptions& op
   return PyramidLevelToFit(longest, options.max_image_dimension);
 }
 
-// The gradient of all pairs, summed in pair order whatever the threads did.
-PairGradient SumPairs(const Mesh& mesh, const std::vector<RefineView>& views,
-                      const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options) {
+// The gradient of all pairs, summed in pair order whoever computed them (this process's
+// threads, or workers through `source`).
+PairGradient SumPairs(const Mesh& mesh, const std::vector<RefineView>& views, int level,
+                      const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
+                      const PairGradientSource& source) {
   std::vector<PairGradient> per_pair(pairs.size());
-  ParallelFor(
-      pairs.size(),
-      [&](size_t i) {
-        per_pair[i] =
-            ComputePairGradient(mesh, views[pairs[i].first], views[pairs[i].second], options);
-      },
-      options.threads);
+  if (source) {
+    if (!source(mesh, level, &per_pair)) throw RefineInterrupted();
+    if (per_pair.size() != pairs.size()) {
+      throw InternalError(
+          fmt::format("refine: {} pair gradients for {} pairs", per_pair.size(), pairs.size()));
+    }
+  } else {
+    ParallelFor(
+        pairs.size(),
+        [&](size_t i) {
+          per_pair[i] =
+              ComputePairGradient(mesh, views[pairs[i].first], views[pairs[i].second], options);
+        },
+        options.threads);
+  }
   PairGradient total;
   total.Resize(mesh.vertices.size());
   for (const PairGradient& g : per_pair) total.Add(g);
@@ -95,6 +95,15 @@ double Footprint(const std::vector<RefineView>& views, const Eigen::Vector3d& x)
 
 }  // namespace
 
+RefineView RefineViewAtLevel(const SweepCamera& camera, int level) {
+  const SweepCamera scaled = CameraAtPyramidLevel(camera, level);
+  RefineView out;
+  out.camera = scaled.id;
+  out.view = scaled.view;
+  scaled.image.convertTo(out.image, CV_64F);
+  return out;
+}
+
 std::vector<std::pair<int, int>> RefinePairs(const Scene& scene, const NeighbourOptions& options) {
   std::vector<std::pair<int, int>> pairs;
   for (int c = 0; c < static_cast<int>(scene.views.size()); ++c) {
@@ -105,9 +114,8 @@ std::vector<std::pair<int, int>> RefinePairs(const Scene& scene, const Neighbour
 
 RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
                        const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
-                       const std::function<void(const RefineIteration&)>& progress,
-                       const RefineState* resume,
-                       const std::function<void(const Mesh&, const RefineState&)>& checkpoint) {
+                       const RefineHooks& hooks) {
+  const RefineState* resume = hooks.resume;
   options.Check();
   for (const auto& [a, b] : pairs) {
     const int n = static_cast<int>(cameras.size());
@@ -139,7 +147,7 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     if (count <= 0 || (resume && li < resume->level_index)) continue;
     std::vector<RefineView> views;
     views.reserve(cameras.size());
-    for (const SweepCamera& c : cameras) views.push_back(ViewAtLevel(c, level));
+    for (const SweepCamera& c : cameras) views.push_back(RefineViewAtLevel(c, level));
     if (options.max_edge_px > 0 && !resumed) {  // a resumed level was split before
       const SplitStats split = SplitLongEdges(
           mesh, [&](const Eigen::Vector3d& x) { return options.max_edge_px * Footprint(views, x); },
@@ -158,11 +166,11 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     if (!accepted.empty()) {  // the gradient there, as the interrupted run had it
       Mesh at_accepted = *mesh;
       at_accepted.vertices = accepted;
-      accepted_data = SumPairs(at_accepted, views, pairs, options);
+      accepted_data = SumPairs(at_accepted, views, level, pairs, options, hooks.pair_gradients);
     }
     for (int i = resumed ? resume->iteration_in_level : 0; i < count; ++i) {
       Timer timer;
-      PairGradient data = SumPairs(*mesh, views, pairs, options);
+      PairGradient data = SumPairs(*mesh, views, level, pairs, options, hooks.pair_gradients);
       RefineIteration it;
       it.level = level;
       it.iteration = ++iteration;
@@ -196,8 +204,8 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
       it.largest_move = moved.largest;
       it.seconds = timer.Seconds();
       stats.iterations.push_back(it);
-      if (progress) progress(it);
-      if (checkpoint) {
+      if (hooks.progress) hooks.progress(it);
+      if (hooks.checkpoint) {
         RefineState state;
         state.level_index = li;
         state.iteration_in_level = i + 1;
@@ -206,11 +214,11 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
         state.accepted_energy = accepted_energy;
         state.accepted = accepted;
         state.tolerance = move_options.tolerance;
-        checkpoint(*mesh, state);
+        hooks.checkpoint(*mesh, state);
       }
     }
     if (l == 0 && !accepted.empty()) {  // the last step is kept only if it lowered the energy
-      const PairGradient last = SumPairs(*mesh, views, pairs, options);
+      const PairGradient last = SumPairs(*mesh, views, level, pairs, options, hooks.pair_gradients);
       const double energy = last.pixels > 0 ? last.energy / static_cast<double>(last.pixels) : 0;
       if (energy > accepted_energy) mesh->vertices = accepted;
       stats.final_energy = std::min(energy, accepted_energy);

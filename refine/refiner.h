@@ -3,17 +3,20 @@
 // (refine/photometric_gradient.h) plus a thin-plate term, every step applied by
 // MoveVerticesSafely (refine/mesh_moves.h). The faces are never changed.
 //
-//   RefineStats stats = RefineMesh(&mesh, cameras, RefinePairs(scene, neighbours), options,
-//                                  [](const RefineIteration& it) { log(it); });
+//   RefineHooks hooks;
+//   hooks.progress = [](const RefineIteration& it) { log(it); };
+//   RefineStats stats = RefineMesh(&mesh, cameras, RefinePairs(scene, neighbours), options, hooks);
 #pragma once
 
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
 #include "mesh/mesh.h"
+#include "refine/photometric_gradient.h"
 #include "refine/refine_options.h"
 #include "scene/scene.h"
 #include "scene/view_selection.h"
@@ -60,15 +63,38 @@ struct RefineState {
 // Every camera with each of its neighbours (scene/view_selection.h), in camera order.
 std::vector<std::pair<int, int>> RefinePairs(const Scene& scene, const NeighbourOptions& options);
 
+// Camera `camera` as refinement sees it at pyramid level `level` (the sweep's scaling), its
+// image in double. Workers and the local loop both make their views with this.
+RefineView RefineViewAtLevel(const SweepCamera& camera, int level);
+
+// The gradient of every pair of `pairs` for `mesh` at pyramid level `level`, in pair order
+// (the refiner sums them in that order). Returns false if interrupted: RefineMesh then throws
+// RefineInterrupted. The default computes them here on `threads`; the coordinator's
+// RefineDispatcher computes them on workers (docs/refine.md "Distributed").
+using PairGradientSource =
+    std::function<bool(const Mesh& mesh, int level, std::vector<PairGradient>* per_pair)>;
+
+// Thrown by RefineMesh when the pair gradient source was interrupted (Ctrl-C); the last
+// checkpoint stays valid.
+struct RefineInterrupted : std::runtime_error {
+  RefineInterrupted() : std::runtime_error("refinement interrupted") {}
+};
+
+// What a caller may add to RefineMesh, all optional.
+struct RefineHooks {
+  std::function<void(const RefineIteration&)> progress;  // after every iteration
+  // A checkpoint's state to go on from (the mesh passed being the checkpoint's mesh).
+  const RefineState* resume = nullptr;
+  // After every iteration: the mesh and the state to resume from.
+  std::function<void(const Mesh&, const RefineState&)> checkpoint;
+  PairGradientSource pair_gradients;  // empty: computed in this process
+};
+
 // `cameras[i]` is camera i at full size (gray float, no distortion: LoadSweepCamera); `pairs`
 // index `cameras` as (reference, neighbour). `mesh` should be a closed 2-manifold robust in
-// floating point (what `reconstruct` writes); its faces stay as they are.
-// With `resume` (a checkpoint's state, `mesh` being the checkpoint's mesh) it goes on from
-// there; `checkpoint` is called after every iteration with the mesh and the state to resume from.
+// floating point (what `reconstruct` writes); its faces stay as they are unless remeshing.
 RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
                        const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
-                       const std::function<void(const RefineIteration&)>& progress = {},
-                       const RefineState* resume = nullptr,
-                       const std::function<void(const Mesh&, const RefineState&)>& checkpoint = {});
+                       const RefineHooks& hooks = {});
 
 }  // namespace ms

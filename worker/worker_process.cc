@@ -16,6 +16,8 @@
 #include "base/log.h"
 #include "proto/content_hash.h"
 #include "proto/options_codec.h"
+#include "refine/refine_wire.h"
+#include "refine/refiner.h"
 #include "worker/job_codec.h"
 
 namespace ms {
@@ -142,13 +144,20 @@ class Worker::Impl {
  private:
   enum class Phase { kIdle, kFetching, kComputing };
 
+  // A refinement job: the pair (sweep.camera, sweep.neighbours[0]) at a pyramid level.
+  struct RefinePair {
+    int level = 0;
+    RefineOptions options;
+  };
+
   struct Current {
     wire::Job job;
-    SweepJob sweep;                  // views, mesh, options; images filled by the compute thread
-    std::vector<ImageRef> refs;      // one per camera: C, then the neighbours
-    std::vector<std::string> paths;  // local file of each camera's image ("" until fetched)
-    size_t fetch = 0;                // index into refs being fetched
-    std::string buffer;              // bytes fetched so far
+    SweepJob sweep;                    // views, mesh, options; images filled by the compute thread
+    std::optional<RefinePair> refine;  // set for refinement jobs (sweep.options unused)
+    std::vector<ImageRef> refs;        // one per camera: C, then the neighbours
+    std::vector<std::string> paths;    // local file of each camera's image ("" until fetched)
+    size_t fetch = 0;                  // index into refs being fetched
+    std::string buffer;                // bytes fetched so far
     double received_at = 0;
     double fetch_s = 0;
   };
@@ -273,8 +282,12 @@ class Worker::Impl {
         c.refs.push_back(RefFromWire(n.image()));
       }
       c.sweep.mesh = UnpackMesh(c.job.mesh(), what);
-      c.sweep.options = OptionsFromWire<SweepOptions>(c.job.options());
-      c.sweep.options.Check();
+      if (c.job.has_refine()) {
+        c.refine = ReadRefinePair(c.job, what);
+      } else {
+        c.sweep.options = OptionsFromWire<SweepOptions>(c.job.options());
+        c.sweep.options.Check();
+      }
       c.sweep.iteration = c.job.iteration();
     } catch (const InputError& e) {
       FailCurrent(wire::Error::BAD_JOB, e.what());
@@ -282,7 +295,7 @@ class Worker::Impl {
     }
     spdlog::info("{} started: {} neighbours, {} faces", what, c.sweep.neighbours.size(),
                  c.sweep.mesh.NumFaces());
-    if (!kernel_->NeedsImages()) {
+    if (!NeedsImages(c)) {
       c.fetch_s = 0;
       StartCompute();
       return;
@@ -291,13 +304,32 @@ class Worker::Impl {
       if (ref.hash == 0 && ref.size == 0) {
         FailCurrent(wire::Error::BAD_JOB,
                     "the job carries no image (the coordinator runs with --no-images); only "
-                    "--kernel replay takes such jobs");
+                    "--kernel replay takes such jobs, and no refinement job");
         return;
       }
     }
     for (const ImageRef& ref : c.refs) c.paths.push_back(cache_.Locate(ref));
     c.fetch = 0;
     NextFetchOrCompute();
+  }
+
+  // Refinement compares images whatever the sweep kernel (the replay kernel included).
+  bool NeedsImages(const Current& c) const { return c.refine || kernel_->NeedsImages(); }
+
+  static RefinePair ReadRefinePair(const wire::Job& job, const std::string& what) {
+    RefinePair pair;
+    pair.level = job.refine().pyramid_level();
+    if (pair.level < 0 || pair.level > 16) {
+      throw InputError(
+          fmt::format("{}: refinement pyramid level {} is not in [0, 16]", what, pair.level));
+    }
+    if (job.neighbours_size() != 1) {
+      throw InputError(fmt::format("{}: a refinement job needs exactly one neighbour, it has {}",
+                                   what, job.neighbours_size()));
+    }
+    pair.options = OptionsFromWire<RefineOptions>(job.refine().options());
+    pair.options.Check();
+    return pair;
   }
 
   void NextFetchOrCompute() {
@@ -382,7 +414,7 @@ class Worker::Impl {
     const uint64_t job_id = c.job.job_id();
     try {
       Timer images;
-      if (kernel_->NeedsImages()) {
+      if (NeedsImages(c)) {
         const View camera_view = c.sweep.camera.view;
         c.sweep.camera = cache_.Load(c.sweep.camera.id, camera_view, c.refs[0].hash, c.paths[0]);
         for (size_t i = 0; i < c.sweep.neighbours.size(); ++i) {
@@ -396,14 +428,21 @@ class Worker::Impl {
         std::this_thread::sleep_for(std::chrono::duration<double>(options_.debug_delay_s));
       }
       Timer sweep;
-      const SweepResult result = kernel_->Run(c.sweep);
       wire::Result* out = outcome_.mutable_result();
-      SweepResultToWire(result, out);
+      if (c.refine) {
+        const RefineView reference = RefineViewAtLevel(c.sweep.camera, c.refine->level);
+        const RefineView neighbour = RefineViewAtLevel(c.sweep.neighbours[0], c.refine->level);
+        PairGradientToWire(
+            ComputePairGradient(c.sweep.mesh, reference, neighbour, c.refine->options),
+            out->mutable_gradient());
+      } else {
+        SweepResultToWire(kernel_->Run(c.sweep), out);
+      }
       out->set_job_id(job_id);
       out->set_iteration(c.job.iteration());
       out->set_session_id(c.job.session_id());
       out->set_worker_id(id());
-      out->set_kernel(kernel_->Name());
+      out->set_kernel(c.refine ? "refine-reference" : kernel_->Name());
       out->set_images_seconds(images_s);
       out->set_sweep_seconds(sweep.Seconds());
     } catch (const InputError& e) {
@@ -427,9 +466,12 @@ class Worker::Impl {
       wire::Result* result = envelope.mutable_result();
       result->Swap(outcome_.mutable_result());
       result->set_total_seconds(Now() - c.received_at);
-      spdlog::info("job {} (iteration {}, camera {}): {} points; images {:.2f} s, sweep {:.2f} s",
+      spdlog::info("job {} (iteration {}, camera {}): {}; images {:.2f} s, {} {:.2f} s",
                    JobName(c.job.job_id()), c.job.iteration(), c.job.camera().id(),
-                   result->points_size(), result->images_seconds(), result->sweep_seconds());
+                   c.refine ? fmt::format("gradient over {} pixels", result->gradient().pixels())
+                            : fmt::format("{} points", result->points_size()),
+                   result->images_seconds(), c.refine ? "gradient" : "sweep",
+                   result->sweep_seconds());
       ++summary_.jobs;
       summary_.points += result->points_size();
     } else {

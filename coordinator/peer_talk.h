@@ -1,0 +1,60 @@
+// Small pieces the coordinator's network loops share (the sweep run's and refinement's): the
+// clock, session ids, how peers appear in logs, and rate-limited warnings about junk.
+#pragma once
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <random>
+#include <string>
+
+#include "proto/content_hash.h"
+
+namespace ms {
+
+// A worker busy with a job of another session (a coordinator before a restart, or the sweep
+// run before refinement): the scheduler keeps it out of the idle pool until it reports.
+constexpr uint64_t kForeignJob = std::numeric_limits<uint64_t>::max();
+
+inline double MonotonicSeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// Random per coordinator start: results of an older session are stale.
+inline uint64_t NewSessionId() {
+  std::random_device random;
+  const uint64_t session =
+      (uint64_t{random()} << 32) ^ random() ^ static_cast<uint64_t>(MonotonicSeconds() * 1e6);
+  return session == 0 ? 1 : session;
+}
+
+// Results that do not fit their jobs before a worker is sent away.
+constexpr int kMaxUnfitResults = 3;
+
+// Transport identities are binary; logs show a short hash.
+inline std::string PeerTag(const std::string& peer) {
+  return "peer " + HashHex(HashBytes(peer)).substr(0, 8);
+}
+
+// Rate-limited warnings about junk from the network: the first few per kind, then every 1000th.
+class JunkLog {
+ public:
+  void Warn(const std::string& kind, const std::string& line) {
+    const int64_t n = ++counts_[kind];
+    if (n <= 5 || n % 1000 == 0) {
+      spdlog::warn("{}{}", line,
+                   n == 5  ? " (further ones of this kind are logged every 1000th)"
+                   : n > 5 ? fmt::format(" ({} so far)", n)
+                           : "");
+    }
+  }
+
+ private:
+  std::map<std::string, int64_t> counts_;
+};
+
+}  // namespace ms

@@ -1,0 +1,427 @@
+#include "coordinator/refine_dispatcher.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <condition_variable>
+#include <map>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "base/error.h"
+#include "coordinator/image_catalog.h"
+#include "coordinator/peer_talk.h"
+#include "proto/options_codec.h"
+#include "proto/wire.h"
+#include "refine/refine_wire.h"
+
+namespace ms {
+
+class RefineDispatcher::Impl {
+ public:
+  Impl(const Scene& scene, std::vector<std::pair<int, int>> pairs, const RefineOptions& options,
+       ServerTransport* transport, const SchedulerOptions& scheduler, const WireLimits& limits,
+       std::function<bool()> stop_requested)
+      : scene_(scene),
+        pairs_(std::move(pairs)),
+        options_(options),
+        transport_(transport),
+        scheduler_options_(scheduler),
+        scheduler_(scheduler),
+        limits_(limits),
+        stop_requested_(std::move(stop_requested)),
+        catalog_(scene),
+        stamper_("coordinator"),
+        session_(NewSessionId()) {
+    loop_ = std::thread([this] { LoopGuarded(); });
+  }
+
+  ~Impl() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      quit_ = true;
+    }
+    loop_.join();
+  }
+
+  bool Compute(const Mesh& mesh, int level, std::vector<PairGradient>* per_pair) {
+    if (pairs_.empty()) {
+      per_pair->clear();
+      return true;
+    }
+    std::vector<wire::Job> jobs = BuildJobs(mesh, level);
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!error_.empty()) throw InputError(error_);
+    if (stopped_) return false;
+    request_ = std::move(jobs);
+    request_vertices_ = mesh.vertices.size();
+    done_ = false;
+    changed_.wait(lock, [&] { return done_ || stopped_ || !error_.empty(); });
+    if (!error_.empty()) throw InputError(error_);
+    if (!done_) return false;
+    *per_pair = std::move(finished_);
+    return true;
+  }
+
+  RefineDispatchStats stats() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return stats_;
+  }
+
+ private:
+  // ---- The caller's thread
+
+  std::vector<wire::Job> BuildJobs(const Mesh& mesh, int level) {
+    const uint32_t round = ++rounds_built_;
+    wire::Job common;
+    common.set_iteration(round);
+    common.set_session_id(session_);
+    common.set_lease_seconds(scheduler_options_.lease_s);
+    PackMesh(mesh, common.mutable_mesh());
+    common.mutable_refine()->set_pyramid_level(level);
+    OptionsToWire(options_, common.mutable_refine()->mutable_options());
+    std::vector<wire::Job> jobs;
+    jobs.reserve(pairs_.size());
+    for (size_t i = 0; i < pairs_.size(); ++i) {
+      wire::Job& job = jobs.emplace_back(common);
+      job.set_job_id(MakeJobId(round, static_cast<uint32_t>(i)));
+      SetCamera(pairs_[i].first, job.mutable_camera());
+      SetCamera(pairs_[i].second, job.add_neighbours());
+      const uint64_t bytes = job.ByteSizeLong();
+      if (bytes + 1024 > limits_.max_message_bytes) {  // room for the envelope
+        throw InputError(fmt::format(
+            "a refinement job ({} vertices, {} faces) is {} bytes, over the message limit of {} "
+            "bytes: raise --max-message-mb on the coordinator and the workers",
+            mesh.NumVertices(), mesh.NumFaces(), bytes, limits_.max_message_bytes));
+      }
+    }
+    return jobs;
+  }
+
+  void SetCamera(int v, wire::JobCamera* camera) const {
+    ViewToWire(v, scene_.views[v], camera);
+    const ImageRecord& record = catalog_.view(v);
+    wire::ImageRef* ref = camera->mutable_image();
+    ref->set_path(record.path);
+    ref->set_content_hash(record.hash);
+    ref->set_byte_size(record.size);
+  }
+
+  // ---- The loop's thread
+
+  void LoopGuarded() {
+    try {
+      Loop();
+    } catch (const std::exception& e) {
+      Fail(std::string("refinement's network loop failed: ") + e.what());
+    }
+    Broadcast("refinement is over");
+  }
+
+  void Fail(const std::string& message) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (error_.empty()) error_ = message;
+    changed_.notify_all();
+  }
+
+  void Loop() {
+    while (true) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (quit_) return;
+      }
+      PeerMessage message;
+      if (transport_->Receive(0.02, &message)) {
+        Handle(message);
+        for (int i = 0; i < 100 && transport_->Receive(0, &message); ++i) Handle(message);
+      }
+      const double now = MonotonicSeconds();
+      const JobScheduler::Expiry expiry = scheduler_.Expire(now);
+      for (const std::string& name : expiry.dead_workers) {
+        spdlog::warn("worker {} went silent: presumed dead", name);
+      }
+      for (uint64_t job : expiry.requeued) {
+        spdlog::warn("refinement job {} goes back to the queue", PairName(job));
+        ++stats_requeued_;
+      }
+      for (const std::string& peer : scheduler_.DueHeartbeats(now)) {
+        wire::Envelope envelope = stamper_.New();
+        envelope.mutable_heartbeat();
+        transport_->Send(peer, Serialize(envelope));
+      }
+      if (stop_requested_ && stop_requested_()) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stopped_ = true;
+        changed_.notify_all();
+      }
+      StartRoundIfAsked(now);
+      if (!active_) continue;
+      Dispatch(now);
+      if (scheduler_.IterationComplete()) FinishRound(now);
+    }
+  }
+
+  void StartRoundIfAsked(double now) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (request_.empty() || stopped_) return;
+    jobs_.clear();
+    std::vector<uint64_t> ids;
+    for (wire::Job& job : request_) {
+      ids.push_back(job.job_id());
+      jobs_.emplace(job.job_id(), std::move(job));
+    }
+    request_.clear();
+    round_ = JobIdIteration(ids.front());
+    round_vertices_ = request_vertices_;
+    gradients_.assign(pairs_.size(), PairGradient());
+    scheduler_.StartIteration(round_, ids);
+    stats_requeued_ = 0;
+    round_started_ = now;
+    active_ = true;
+  }
+
+  void FinishRound(double now) {
+    active_ = false;
+    std::lock_guard<std::mutex> lock(mutex_);
+    finished_ = std::move(gradients_);
+    done_ = true;
+    ++stats_.rounds;
+    stats_.requeued += stats_requeued_;
+    stats_.seconds += now - round_started_;
+    changed_.notify_all();
+  }
+
+  void Dispatch(double now) {
+    for (const JobScheduler::Assignment& a : scheduler_.Assign(now)) {
+      wire::Envelope envelope = stamper_.New();
+      *envelope.mutable_job() = jobs_.at(a.job_id);
+      const std::string bytes = Serialize(envelope);
+      transport_->Send(a.peer, bytes);
+      std::lock_guard<std::mutex> lock(mutex_);
+      stats_.bytes_out += static_cast<int64_t>(bytes.size());
+    }
+    if (scheduler_.exhausted_job()) {
+      const uint64_t job = *scheduler_.exhausted_job();
+      active_ = false;
+      Fail(fmt::format(
+          "the refinement job of camera pair {} was handed out {} times without a result "
+          "(workers died or failed on it; last failure: {})",
+          PairName(job), scheduler_options_.max_attempts,
+          last_failure_.count(job) ? last_failure_[job] : "none reported"));
+    }
+  }
+
+  // "(3, 4)": the pair of a job, as users know it.
+  std::string PairName(uint64_t job_id) const {
+    const uint32_t i = JobIdCamera(job_id);
+    if (i >= pairs_.size()) return JobName(job_id);
+    return fmt::format("({}, {})", pairs_[i].first, pairs_[i].second);
+  }
+
+  bool OfThisRound(uint64_t job_id) const { return active_ && jobs_.count(job_id) > 0; }
+
+  void Handle(const PeerMessage& message) {
+    const std::string who = PeerTag(message.peer);
+    if (sent_away_.count(message.peer)) return;
+    if (message.frames != 1) {
+      junk_.Warn("frames", fmt::format("dropped a message of {} frames from {} (expected 1)",
+                                       message.frames, who));
+      return;
+    }
+    wire::Envelope envelope;
+    std::string problem;
+    const DecodeStatus status = DecodeEnvelope(message.payload.data(), message.payload.size(),
+                                               limits_, &envelope, &problem);
+    if (status == DecodeStatus::kWrongVersion) {
+      junk_.Warn("version", fmt::format("refused worker {}: it speaks {}", who, problem));
+      wire::Envelope reply = stamper_.New();
+      reply.mutable_error()->set_code(wire::Error::VERSION_MISMATCH);
+      reply.mutable_error()->set_message(
+          fmt::format("this coordinator speaks protocol version {}, you sent {}", kProtocolVersion,
+                      envelope.protocol_version()));
+      transport_->Send(message.peer, Serialize(reply));
+      scheduler_.Remove(message.peer);
+      return;
+    }
+    if (status != DecodeStatus::kOk) {
+      junk_.Warn(DecodeStatusName(status), fmt::format("dropped a message from {} ({}): {}", who,
+                                                       DecodeStatusName(status), problem));
+      return;
+    }
+    const double now = MonotonicSeconds();
+    const std::string& sender = envelope.sender();
+    switch (envelope.body_case()) {
+      case wire::Envelope::kReady:
+        scheduler_.OnReady(message.peer, sender, now);
+        spdlog::info("worker {} ready for refinement; {} workers", sender,
+                     scheduler_.num_workers());
+        return;
+      case wire::Envelope::kHeartbeat: {
+        const wire::Heartbeat& h = envelope.heartbeat();
+        const bool ours = h.current_job_id() == 0 || h.session_id() == session_;
+        if (!scheduler_.IsKnown(message.peer)) {
+          spdlog::info("worker {} joins refinement", sender);
+        }
+        scheduler_.OnHeartbeat(message.peer, sender, ours ? h.current_job_id() : kForeignJob,
+                               h.last_job_id(), now);
+        return;
+      }
+      case wire::Envelope::kResult:
+        OnResult(message.peer, sender, envelope.result(), now);
+        return;
+      case wire::Envelope::kError:
+        OnError(message.peer, sender, envelope.error(), now);
+        return;
+      case wire::Envelope::kImageRequest: {
+        scheduler_.Touch(message.peer, sender, now);
+        const wire::ImageRequest& request = envelope.image_request();
+        wire::Envelope reply = stamper_.New();
+        catalog_.Serve(request.content_hash(), request.offset(), request.max_bytes(),
+                       limits_.image_chunk_bytes, reply.mutable_image_response());
+        if (!reply.image_response().found()) {
+          spdlog::warn("worker {} asked for image {}: {}", sender, HashHex(request.content_hash()),
+                       reply.image_response().error());
+        }
+        transport_->Send(message.peer, Serialize(reply));
+        return;
+      }
+      default:
+        scheduler_.Touch(message.peer, sender, now);
+        junk_.Warn("unexpected", fmt::format("dropped an unexpected {} message from {}",
+                                             BodyName(envelope), sender));
+        return;
+    }
+  }
+
+  void OnResult(const std::string& peer, const std::string& sender, const wire::Result& result,
+                double now) {
+    if (result.session_id() != session_) {  // e.g. a sweep job finishing late
+      scheduler_.OnResult(peer, sender, kForeignJob, now);
+      return;
+    }
+    if (!OfThisRound(result.job_id())) {
+      scheduler_.OnResult(peer, sender, result.job_id(), now);  // late: ignored
+      return;
+    }
+    std::string problem;
+    PairGradient gradient;
+    if (result.points_size() > 0 || !result.has_gradient()) {
+      problem = "not a refinement result (points, or no gradient)";
+    } else {
+      gradient = PairGradientFromWire(result.gradient(), round_vertices_, &problem);
+    }
+    if (!problem.empty()) {
+      junk_.Warn("result", fmt::format("dropped the result of refinement job {} from worker {}: {}",
+                                       PairName(result.job_id()), sender, problem));
+      last_failure_[result.job_id()] = "malformed result: " + problem;
+      scheduler_.OnWorkerFailure(peer, sender, result.job_id(), now);
+      if (++unfit_results_[peer] >= kMaxUnfitResults) {
+        spdlog::warn("worker {} sent {} results that do not fit their jobs: sending it away",
+                     sender, kMaxUnfitResults);
+        wire::Envelope envelope = stamper_.New();
+        envelope.mutable_shutdown()->set_reason("its results do not fit the jobs handed out");
+        transport_->Send(peer, Serialize(envelope));
+        scheduler_.Remove(peer);
+        sent_away_.insert(peer);
+      }
+      return;
+    }
+    if (scheduler_.OnResult(peer, sender, result.job_id(), now) !=
+        JobScheduler::Outcome::kAccepted) {
+      return;
+    }
+    gradients_[JobIdCamera(result.job_id())] = std::move(gradient);
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++stats_.jobs;
+    stats_.bytes_in += static_cast<int64_t>(result.gradient().ByteSizeLong());
+    stats_.worker_seconds += result.sweep_seconds();
+  }
+
+  void OnError(const std::string& peer, const std::string& sender, const wire::Error& error,
+               double now) {
+    const bool ours = error.session_id() == session_ && OfThisRound(error.job_id());
+    if (!ours) {
+      scheduler_.Touch(peer, sender, now);
+      if (error.job_id() != 0) scheduler_.OnResult(peer, sender, kForeignJob, now);
+      spdlog::warn("worker {} reports: {}", sender, error.message());
+      return;
+    }
+    if (error.code() == wire::Error::BAD_JOB) {
+      // The same job fails on every worker: leaving the pair out would change the result
+      // silently, so refinement stops with the reason.
+      active_ = false;
+      Fail(fmt::format("worker {} refused the refinement job of camera pair {}: {}", sender,
+                       PairName(error.job_id()), error.message()));
+      return;
+    }
+    last_failure_[error.job_id()] = fmt::format("worker {}: {}", sender, error.message());
+    spdlog::warn("worker {} failed on refinement job {}: {}", sender, PairName(error.job_id()),
+                 error.message());
+    scheduler_.OnWorkerFailure(peer, sender, error.job_id(), now);
+  }
+
+  void Broadcast(const std::string& reason) {
+    for (const std::string& peer : scheduler_.peers()) {
+      wire::Envelope envelope = stamper_.New();
+      envelope.mutable_shutdown()->set_reason(reason);
+      transport_->Send(peer, Serialize(envelope));
+    }
+  }
+
+  const Scene& scene_;
+  const std::vector<std::pair<int, int>> pairs_;
+  const RefineOptions options_;
+  ServerTransport* transport_;
+  const SchedulerOptions scheduler_options_;
+  JobScheduler scheduler_;  // the loop's
+  const WireLimits limits_;
+  const std::function<bool()> stop_requested_;
+  const ImageCatalog catalog_;  // read-only after construction: both threads use it
+  EnvelopeStamper stamper_;     // the loop's
+  const uint64_t session_;
+  uint32_t rounds_built_ = 0;  // the caller's
+
+  // Between the caller and the loop, under mutex_.
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  bool quit_ = false;
+  bool stopped_ = false;
+  std::string error_;
+  std::vector<wire::Job> request_;  // a round asked for, not yet started
+  size_t request_vertices_ = 0;
+  bool done_ = false;
+  std::vector<PairGradient> finished_;
+  RefineDispatchStats stats_;
+
+  // The loop's own.
+  std::thread loop_;
+  bool active_ = false;
+  uint32_t round_ = 0;
+  size_t round_vertices_ = 0;
+  double round_started_ = 0;
+  int64_t stats_requeued_ = 0;
+  std::map<uint64_t, wire::Job> jobs_;
+  std::vector<PairGradient> gradients_;  // by pair, as results come in
+  std::map<uint64_t, std::string> last_failure_;
+  std::map<std::string, int> unfit_results_;
+  std::set<std::string> sent_away_;
+  JunkLog junk_;
+};
+
+RefineDispatcher::RefineDispatcher(const Scene& scene, std::vector<std::pair<int, int>> pairs,
+                                   const RefineOptions& options, ServerTransport* transport,
+                                   const SchedulerOptions& scheduler, const WireLimits& limits,
+                                   std::function<bool()> stop_requested)
+    : impl_(std::make_unique<Impl>(scene, std::move(pairs), options, transport, scheduler, limits,
+                                   std::move(stop_requested))) {}
+
+RefineDispatcher::~RefineDispatcher() = default;
+
+bool RefineDispatcher::Compute(const Mesh& mesh, int level, std::vector<PairGradient>* per_pair) {
+  return impl_->Compute(mesh, level, per_pair);
+}
+
+RefineDispatchStats RefineDispatcher::stats() const { return impl_->stats(); }
+
+}  // namespace ms
