@@ -9,6 +9,7 @@
 #include "mesh/test_meshes.h"
 #include "refine/mesh_moves.h"
 #include "refine/photometric_gradient.h"
+#include "refine/refine_wire.h"
 #include "refine/refiner.h"
 #include "refine/remesh.h"
 #include "sweep/sweep_test_scene.h"
@@ -262,6 +263,54 @@ TEST(RefineMesh, AMeshNoCameraSeesIsAnInputError) {
   options.iterations = 2;
   options.levels = 1;
   EXPECT_THROW(RefineMesh(&elsewhere, scene.cameras, {{0, 1}, {1, 0}}, options), InputError);
+}
+
+// A pair's gradient survives the wire bit for bit (only touched vertices travel), and a
+// message that does not fit the job's mesh is refused with a reason, never summed.
+TEST(RefineWire, RoundTripsBitForBitAndRefusesWhatDoesNotFit) {
+  const RefineView a = NoiseView(LookAtView({0.03, -0.02, 3}, {0.01, 0.02, 0}, 160, 120, 150), 1);
+  const RefineView b = NoiseView(LookAtView({0.6, 0.1, 2.9}, {0, 0, 0}, 160, 120, 150), 2);
+  Mesh mesh = BumpyGrid();
+  mesh.vertices.emplace_back(50, 50, 50);  // seen by nobody: stays off the wire
+  const PairGradient g = ComputePairGradient(mesh, a, b, RefineOptions());
+  wire::PairGradient packed;
+  PairGradientToWire(g, &packed);
+  EXPECT_LT(packed.vertices().size() / 4, mesh.vertices.size());
+  std::string problem;
+  const PairGradient back = PairGradientFromWire(packed, mesh.vertices.size(), &problem);
+  ASSERT_EQ(problem, "");
+  EXPECT_EQ(back.energy, g.energy);
+  EXPECT_EQ(back.pixels, g.pixels);
+  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    EXPECT_EQ(back.gradient[v], g.gradient[v]);
+    EXPECT_EQ(back.parallax_rate2[v], g.parallax_rate2[v]);
+    EXPECT_EQ(back.weight[v], g.weight[v]);
+  }
+  const auto refused = [&](wire::PairGradient bad, size_t vertices) {
+    std::string why;
+    PairGradientFromWire(bad, vertices, &why);
+    return !why.empty();
+  };
+  EXPECT_TRUE(refused(packed, mesh.vertices.size() + 1));  // another mesh
+  wire::PairGradient bad = packed;
+  bad.set_energy(std::nan(""));
+  EXPECT_TRUE(refused(bad, mesh.vertices.size()));
+  bad = packed;
+  bad.set_energy(3.0 * static_cast<double>(packed.pixels()));  // 1 - ZNCC is at most 2
+  EXPECT_TRUE(refused(bad, mesh.vertices.size()));
+  bad = packed;
+  bad.mutable_values()->pop_back();  // sizes disagree
+  EXPECT_TRUE(refused(bad, mesh.vertices.size()));
+  bad = packed;
+  std::swap((*bad.mutable_vertices())[0], (*bad.mutable_vertices())[4]);  // not ascending
+  EXPECT_TRUE(refused(bad, mesh.vertices.size()));
+  bad = packed;
+  const double nan = std::nan(""), negative = -1;
+  bad.mutable_values()->replace(0, 8, reinterpret_cast<const char*>(&nan), 8);
+  EXPECT_TRUE(refused(bad, mesh.vertices.size()));
+  bad = packed;
+  bad.mutable_values()->replace(32, 8, reinterpret_cast<const char*>(&negative), 8);  // weight
+  EXPECT_TRUE(refused(bad, mesh.vertices.size()));
 }
 
 }  // namespace

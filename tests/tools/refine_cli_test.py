@@ -3,7 +3,8 @@
 `reconstruct --refine` writes a refined mesh that is valid for check-mesh and for Open3D
 (watertight, no self-intersecting pair), with a lower photometric energy and a lower depth error
 than the swept mesh it started from, and one interrupted and resumed ends as one that was not;
-bad inputs (an open mesh, a truncated
+the gradients computed by 1 or 2 worker processes and in one process give the same bytes, also
+after an interrupted and resumed `reconstruct --refine`; bad inputs (an open mesh, a truncated
 file, a missing image) end with exit 2 and one line naming the file. Exit 0 when all hold.
 """
 import argparse
@@ -51,8 +52,9 @@ def main():
         return 1
     # `reconstruct --refine`: 4 sweep iterations, then refine final.ply into refined.ply.
     out = os.path.join(args.workdir, "run")
-    r = run([ms, "reconstruct", "-i", scene, "-o", out, "--max-iterations", "4", "--kernel", "cpu",
-             "--refine", "--refine.iterations", "6", "--refine.levels", "2"])
+    recon = [ms, "reconstruct", "-i", scene, "--max-iterations", "4", "--kernel", "cpu",
+             "--refine", "--refine.iterations", "6", "--refine.levels", "2"]
+    r = run(recon + ["-o", out, "--workers", "2"])
     refined = os.path.join(out, "refined.ply")
     ok = r.returncode == 0 and "check-mesh: valid" in r.stdout
     print(("ok  " if ok else "FAIL"), "reconstruct --refine:",
@@ -95,6 +97,37 @@ def main():
     print(("ok  " if good else "FAIL"),
           f"interrupt (exit {interrupted}, checkpoint {had_checkpoint}) and --resume: "
           f"{'the same mesh' if same else 'a different mesh'}")
+    ok = ok and good
+
+    # Distributed: the gradients come from the workers, summed in pair order, so one worker,
+    # two workers and the single-process `refine` write the same bytes; and a reconstruct
+    # interrupted while refining resumes (sweep checkpoint, then refinement checkpoint) to them.
+    refined_bytes = open(refined, "rb").read()
+    one = os.path.join(args.workdir, "run1")
+    r = run(recon + ["-o", one, "--workers", "1"])
+    same_one = r.returncode == 0 and open(os.path.join(one, "refined.ply"), "rb").read() == refined_bytes
+    local = os.path.join(args.workdir, "local.ply")
+    r = run([ms, "refine", "-i", scene, "-m", final_mesh, "-o", local, "--refine.iterations", "6",
+             "--refine.levels", "2"])
+    same_local = r.returncode == 0 and open(local, "rb").read() == refined_bytes
+    cut = os.path.join(args.workdir, "run_cut")
+    p = subprocess.Popen(recon + ["-o", cut, "--workers", "2"], stderr=subprocess.PIPE,
+                         stdout=subprocess.DEVNULL, text=True)
+    for line in p.stderr:
+        if "iteration 3 (level" in line:
+            p.send_signal(signal.SIGINT)
+            break
+    p.stderr.read()
+    cut_exit = p.wait(timeout=120)
+    r = run(recon + ["-o", cut, "--workers", "2", "--resume"])
+    cut_path = os.path.join(cut, "refined.ply")
+    same_cut = (r.returncode == 0 and os.path.exists(cut_path) and
+                open(cut_path, "rb").read() == refined_bytes)
+    good = same_one and same_local and cut_exit == 130 and same_cut
+    print(("ok  " if good else "FAIL"),
+          f"distributed: 1 worker {'same' if same_one else 'DIFFERENT'}, single process "
+          f"{'same' if same_local else 'DIFFERENT'}, interrupted while refining (exit {cut_exit}) "
+          f"and resumed {'same' if same_cut else 'DIFFERENT'}")
     ok = ok and good
 
     check = run([ms, "check-mesh", refined])
