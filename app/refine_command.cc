@@ -117,6 +117,10 @@ void RefineMeshFile(const std::string& input, const std::string& mesh_path,
         "refinement stopped: no worker is left to compute the gradients (see the log above); "
         "the last checkpoint stays: continue with --resume");
   }
+  if (refine.max_edge_px > 0) {
+    spdlog::info("remeshing: {} edges split ({} refused), {} flipped ({} refused)", stats.splits,
+                 stats.splits_refused, stats.flips, stats.flips_refused);
+  }
   if (dispatcher) {
     const RefineDispatchStats d = dispatcher->stats();
     spdlog::info(

@@ -51,4 +51,9 @@ MS_OPTION(double, max_edge_px, 0, "max-edge-px",
           "split edges longer than this many pixels of the level (0: no remeshing)", AtLeast(0))
 MS_OPTION(int64_t, max_vertices, 2000000, "max-vertices",
           "remeshing adds no vertex beyond this many", AtLeast(1))
+// With remeshing, after the splits of a level: edges whose two faces' normals are within this
+// angle are flipped where that rounds the faces (refine/remesh.h FlipEdges); 0: no flips.
+MS_OPTION(double, flip_dihedral_deg, 10, "flip-dihedral-deg",
+          "with remeshing, flip edges of face pairs this flat (degrees; 0: no flips)",
+          InRange(0, 90))
 MS_OPTION(int, threads, 0, "threads", "threads for the camera pairs (0: one per core)", AtLeast(0))

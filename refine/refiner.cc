@@ -154,6 +154,11 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
           options.max_vertices, move_options.tolerance);
       stats.splits += split.splits;
       stats.splits_refused += split.refused;
+      if (options.flip_dihedral_deg > 0) {
+        const FlipStats flip = FlipEdges(mesh, options.flip_dihedral_deg, move_options.tolerance);
+        stats.flips += flip.flips;
+        stats.flips_refused += flip.refused;
+      }
     }
     const std::vector<std::vector<int32_t>> neighbours = VertexNeighbours(*mesh);
     // Backtracking: a step that raised the energy is undone and retried at half the length;

@@ -2,7 +2,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <climits>
+#include <cmath>
 #include <map>
 #include <set>
 #include <utility>
@@ -195,6 +197,146 @@ SplitStats SplitLongEdges(Mesh* mesh,
     stats.refused += undone;
   }
   mesh->RemoveUnreferencedVertices();
+  return stats;
+}
+
+namespace {
+
+// One flip: faces f0 = (a, b, c) and f1 = (b, a, d) of edge (a, b) became (c, a, d) and
+// (d, b, c).
+struct Flip {
+  int32_t faces[2];
+  std::array<int32_t, 3> old_faces[2];
+};
+
+double Angle(const Eigen::Vector3d& at, const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+  const Eigen::Vector3d u = p - at, v = q - at;
+  return std::atan2(u.cross(v).norm(), u.dot(v));
+}
+
+Eigen::Vector3d FaceNormal(const Mesh& mesh, const std::array<int32_t, 3>& f) {
+  return (mesh.vertices[f[1]] - mesh.vertices[f[0]])
+      .cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]);
+}
+
+// One pass over the edges in index order; a face flips at most once per pass.
+std::vector<Flip> FlipPass(Mesh* mesh, double min_cos_dihedral, const std::set<Edge>& refused) {
+  std::map<Edge, std::vector<int32_t>> faces_of;
+  std::vector<int32_t> degree(mesh->vertices.size(), 0);
+  for (size_t f = 0; f < mesh->faces.size(); ++f) {
+    const auto& t = mesh->faces[f];
+    for (int k = 0; k < 3; ++k) {
+      std::vector<int32_t>& faces = faces_of[Key(t[k], t[(k + 1) % 3])];
+      if (faces.empty()) {
+        ++degree[t[k]];
+        ++degree[t[(k + 1) % 3]];
+      }
+      faces.push_back(static_cast<int32_t>(f));
+    }
+  }
+  std::vector<uint8_t> touched(mesh->faces.size(), 0);
+  std::set<Edge> created;  // by this pass's flips
+  std::vector<Flip> flips;
+  for (const auto& [edge, faces] : faces_of) {
+    if (faces.size() != 2 || touched[faces[0]] || touched[faces[1]] || refused.count(edge)) {
+      continue;
+    }
+    // f0 has the edge as a -> b, f1 as b -> a (consistent orientation).
+    std::array<int32_t, 3> t0 = mesh->faces[faces[0]], t1 = mesh->faces[faces[1]];
+    while (Key(t0[0], t0[1]) != edge) std::rotate(t0.begin(), t0.begin() + 1, t0.end());
+    while (Key(t1[0], t1[1]) != edge) std::rotate(t1.begin(), t1.begin() + 1, t1.end());
+    const int32_t a = t0[0], b = t0[1], c = t0[2], d = t1[2];
+    if (t1[0] != b || t1[1] != a || c == d) continue;  // not consistently oriented: leave it
+    if (degree[a] <= 3 || degree[b] <= 3 || faces_of.count(Key(c, d)) || created.count(Key(c, d))) {
+      continue;
+    }
+    const Eigen::Vector3d &pa = mesh->vertices[a], &pb = mesh->vertices[b];
+    const Eigen::Vector3d &pc = mesh->vertices[c], &pd = mesh->vertices[d];
+    if (Angle(pc, pa, pb) + Angle(pd, pa, pb) <= M_PI + 1e-9) continue;  // Delaunay already
+    const Eigen::Vector3d n0 = FaceNormal(*mesh, t0).normalized();
+    const Eigen::Vector3d n1 = FaceNormal(*mesh, t1).normalized();
+    if (!(n0.dot(n1) >= min_cos_dihedral)) continue;
+    const std::array<int32_t, 3> new0 = {c, a, d}, new1 = {d, b, c};
+    const Eigen::Vector3d m0 = FaceNormal(*mesh, new0), m1 = FaceNormal(*mesh, new1);
+    const Eigen::Vector3d mean = n0 + n1;
+    if (!(m0.dot(mean) > 0 && m1.dot(mean) > 0 &&
+          m0.normalized().dot(m1.normalized()) >= min_cos_dihedral)) {
+      continue;
+    }
+    Flip flip;
+    for (int i = 0; i < 2; ++i) {
+      flip.faces[i] = faces[i];
+      flip.old_faces[i] = mesh->faces[faces[i]];
+      touched[faces[i]] = 1;
+    }
+    mesh->faces[faces[0]] = new0;
+    mesh->faces[faces[1]] = new1;
+    --degree[a];
+    --degree[b];
+    ++degree[c];
+    ++degree[d];
+    created.insert(Key(c, d));
+    flips.push_back(flip);
+  }
+  return flips;
+}
+
+}  // namespace
+
+FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance, int max_rounds) {
+  FlipStats stats;
+  const double min_cos = std::cos(max_dihedral_deg * M_PI / 180);
+  std::set<Edge> refused;
+  for (int round = 0; round < max_rounds; ++round) {
+    std::vector<Flip> flips = FlipPass(mesh, min_cos, refused);
+    ++stats.rounds;
+    if (flips.empty()) break;
+    std::vector<uint8_t> alive(flips.size(), 1), focus(mesh->faces.size(), 0);
+    std::map<int64_t, size_t> by_face;
+    for (size_t i = 0; i < flips.size(); ++i) {
+      for (int32_t f : flips[i].faces) {
+        focus[f] = 1;
+        by_face[f] = i;
+      }
+    }
+    int64_t undone = 0;
+    while (true) {
+      const CheckerProblems problems = FindCheckerProblems(*mesh, tolerance, focus);
+      std::set<size_t> bad;
+      const auto bad_face = [&](int64_t f) {
+        if (auto it = by_face.find(f); it != by_face.end() && alive[it->second]) {
+          bad.insert(it->second);
+        }
+      };
+      for (const auto& [f, g] : problems.face_pairs) {
+        bad_face(f);
+        bad_face(g);
+      }
+      for (int64_t f : problems.degenerate_faces) bad_face(f);
+      if (bad.empty()) break;  // what is left was there before the pass
+      std::fill(focus.begin(), focus.end(), 0);
+      for (size_t i : bad) {
+        const Flip& flip = flips[i];
+        for (int k = 0; k < 2; ++k) {
+          mesh->faces[flip.faces[k]] = flip.old_faces[k];
+          focus[flip.faces[k]] = 1;
+        }
+        // The flipped edge is the old faces' shared one; do not try it again.
+        const auto& t = flip.old_faces[0];
+        for (int k = 0; k < 3; ++k) {
+          const Edge e = Key(t[k], t[(k + 1) % 3]);
+          const auto& u = flip.old_faces[1];
+          if (std::count(u.begin(), u.end(), e.first) && std::count(u.begin(), u.end(), e.second)) {
+            refused.insert(e);
+          }
+        }
+        alive[i] = 0;
+        ++undone;
+      }
+    }
+    stats.flips += static_cast<int64_t>(flips.size()) - undone;
+    stats.refused += undone;
+  }
   return stats;
 }
 

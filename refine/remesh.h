@@ -1,11 +1,12 @@
 // Remeshing during refinement (docs/refine.md "Remeshing"): edges longer than the image
 // resolution asks for are split at their midpoints, so detail finer than the starting mesh can
-// appear. A split replaces the two faces of an edge by four, so a closed 2-manifold stays one.
-// The new vertex is the edge's midpoint moved 8 tolerances off it along the faces' mean normal:
-// exactly on the edge, chains of splits along a crease leave collinear vertices whose faces
-// double-precision tests (Open3D's among them) find touching. Each pass of splits is checked as
-// moves are (exact self-intersections, the floating-point tolerance), and the splits whose faces
-// the checker objects to are undone and not tried again.
+// appear; edges of nearly flat face pairs are flipped where that rounds the faces. A split replaces
+// the two faces of an edge by four, so a closed 2-manifold stays one. The new vertex is the edge's
+// midpoint moved 8 tolerances off it along the faces' mean normal: exactly on the edge, chains of
+// splits along a crease leave collinear vertices whose faces double-precision tests (Open3D's among
+// them) find touching. Each pass of splits is checked as moves are (exact self-intersections, the
+// floating-point tolerance), and the splits whose faces the checker objects to are undone and not
+// tried again.
 #pragma once
 
 #include <Eigen/Core>
@@ -30,5 +31,20 @@ struct SplitStats {
 SplitStats SplitLongEdges(Mesh* mesh,
                           const std::function<double(const Eigen::Vector3d&)>& max_length,
                           int64_t max_vertices, double tolerance);
+
+struct FlipStats {
+  int64_t flips = 0;    // edges flipped
+  int64_t refused = 0;  // flips undone because the checker objected
+  int rounds = 0;       // passes over the edges
+};
+
+// Flips edges whose two faces are nearly coplanar (normals within max_dihedral_deg) and whose
+// opposite angles sum to more than pi (the Delaunay criterion on the pair: the flip makes the
+// smallest angle of the two faces larger), so that the long, thin faces splitting and moving
+// leave become rounder without changing the surface by more than that angle allows. A flip
+// keeps the face count and a closed 2-manifold one: it is skipped where the new edge exists
+// already or a vertex would keep fewer than 3 neighbours; flips are checked as splits are and
+// undone where the checker objects. Passes repeat until none flips (at most max_rounds).
+FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance, int max_rounds = 5);
 
 }  // namespace ms

@@ -1,9 +1,11 @@
-// The sweep options travel field by field: the struct (sweep/sweep_options_def.h) and the wire
-// message (proto/manisweep.proto) must agree, and a job's options arrive as they were sent.
+// The sweep and refine options travel field by field: the structs (sweep/sweep_options_def.h,
+// refine/refine_options_def.h) and the wire messages (proto/manisweep.proto) must agree, and a
+// job's options arrive as they were sent.
 #include <gtest/gtest.h>
 
 #include "proto/manisweep.pb.h"
 #include "proto/options_codec.h"
+#include "refine/refine_options.h"
 #include "sweep/sweep_options.h"
 
 namespace ms {
@@ -13,6 +15,19 @@ TEST(JobCodec, SweepOptionsAndTheirWireMessageAgreeFieldByField) {
   const std::vector<std::string> problems =
       OptionGroupMismatches<SweepOptions>(wire::SweepOptions());
   EXPECT_TRUE(problems.empty()) << problems.front();
+}
+
+TEST(JobCodec, RefineOptionsAndTheirWireMessageAgreeFieldByField) {
+  const std::vector<std::string> problems =
+      OptionGroupMismatches<RefineOptions>(wire::RefineOptions());
+  EXPECT_TRUE(problems.empty()) << problems.front();
+  RefineOptions sent;
+  sent.iterations = 7;
+  sent.max_edge_px = 6.5;
+  sent.max_vertices = int64_t{1} << 40;
+  wire::RefineOptions message;
+  OptionsToWire(sent, &message);
+  EXPECT_EQ(OptionGroupText(OptionsFromWire<RefineOptions>(message)), OptionGroupText(sent));
 }
 
 TEST(JobCodec, AMessageOfAnotherGroupIsReportedAsDisagreeing) {
