@@ -118,8 +118,11 @@ void RefineMeshFile(const std::string& input, const std::string& mesh_path,
         "the last checkpoint stays: continue with --resume");
   }
   if (refine.max_edge_px > 0) {
-    spdlog::info("remeshing: {} edges split ({} refused), {} flipped ({} refused)", stats.splits,
-                 stats.splits_refused, stats.flips, stats.flips_refused);
+    spdlog::info(
+        "remeshing: {} edges collapsed ({} refused), {} split ({} refused), {} flipped ({} "
+        "refused)",
+        stats.collapses, stats.collapses_refused, stats.splits, stats.splits_refused, stats.flips,
+        stats.flips_refused);
   }
   if (dispatcher) {
     const RefineDispatchStats d = dispatcher->stats();

@@ -2,6 +2,9 @@
 // base/options.h derives the checks and the command line from it.
 #pragma once
 
+#include <string>
+
+#include "base/error.h"
 #include "base/options.h"
 
 namespace ms {
@@ -10,7 +13,14 @@ struct RefineOptions {
   static constexpr const char* kOptionGroup = "refine";
 #define MS_OPTION_LIST "refine/refine_options_def.h"
 #include "base/option_group_members.h"
-  void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
+  // Throws InputError naming the flag.
+  void Check() const {
+    CheckOptionGroup(*this);
+    if (max_edge_px > 0 && min_edge_px >= max_edge_px / 2) {
+      throw InputError("--refine.min-edge-px: must be below half of --refine.max-edge-px (" +
+                       std::to_string(max_edge_px) + "), or a split edge's halves collapse again");
+    }
+  }
 };
 
 }  // namespace ms

@@ -49,6 +49,12 @@ MS_OPTION(double, max_face_turn_deg, 60, "max-face-turn-deg",
 // that detail finer than the starting mesh can appear; 0 turns it off.
 MS_OPTION(double, max_edge_px, 0, "max-edge-px",
           "split edges longer than this many pixels of the level (0: no remeshing)", AtLeast(0))
+// With remeshing, first: edges shorter than min_edge_px pixels of the level are collapsed to
+// their midpoints (where that keeps the mesh a valid closed 2-manifold); 0: no collapses.
+// Below max_edge_px / 2, so that the halves of a split edge are not collapsed again.
+MS_OPTION(double, min_edge_px, 2, "min-edge-px",
+          "with remeshing, collapse edges shorter than this many pixels of the level (0: none)",
+          AtLeast(0))
 MS_OPTION(int64_t, max_vertices, 2000000, "max-vertices",
           "remeshing adds no vertex beyond this many", AtLeast(1))
 // With remeshing, after the splits of a level: edges whose two faces' normals are within this

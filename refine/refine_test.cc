@@ -251,6 +251,28 @@ TEST(Remesh, FlipsRoundFlatFacesAndKeepAClosedValidMesh) {
   EXPECT_EQ(FlipEdges(&mesh, 10, tolerance).flips, 0);
 }
 
+// Collapsing edges shorter than a limit keeps a closed 2-manifold closed, valid, genus 0 and in
+// place (area within 2%): each collapse removes one vertex and two faces.
+TEST(Remesh, CollapsesKeepAClosedValidMeshInPlace) {
+  Mesh mesh = test_meshes::Icosahedron();
+  const double tolerance =
+      2 * FloatCheckTolerance(mesh, std::vector<uint8_t>(mesh.faces.size(), 1));
+  SplitLongEdges(
+      &mesh, [](const Eigen::Vector3d&) { return 0.15; }, 1000000, tolerance);
+  const Mesh split = mesh;
+  // Collapse where x > 0 only: the other half keeps its short edges.
+  const CollapseStats stats = CollapseShortEdges(
+      &mesh, [](const Eigen::Vector3d& x) { return x.x() > 0 ? 0.12 : 0.0; }, 60, tolerance);
+  EXPECT_GT(stats.collapses, 30);
+  EXPECT_EQ(mesh.NumVertices() + static_cast<size_t>(stats.collapses), split.NumVertices());
+  EXPECT_EQ(mesh.NumFaces() + 2 * static_cast<size_t>(stats.collapses), split.NumFaces());
+  EXPECT_NEAR(mesh.SurfaceArea(), split.SurfaceArea(), 0.02 * split.SurfaceArea());
+  const MeshReport report = CheckMesh(mesh);
+  EXPECT_TRUE(report.is_valid) << report.ToTable();
+  ASSERT_TRUE(report.genus.has_value());
+  EXPECT_EQ(*report.genus, 0);
+}
+
 // The vertex budget stops splitting.
 TEST(Remesh, SplittingStopsAtTheVertexBudget) {
   Mesh mesh = test_meshes::Icosahedron();

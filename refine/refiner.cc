@@ -148,7 +148,15 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     std::vector<RefineView> views;
     views.reserve(cameras.size());
     for (const SweepCamera& c : cameras) views.push_back(RefineViewAtLevel(c, level));
-    if (options.max_edge_px > 0 && !resumed) {  // a resumed level was split before
+    if (options.max_edge_px > 0 && !resumed) {  // a resumed level was remeshed before
+      if (options.min_edge_px > 0) {
+        const CollapseStats collapse = CollapseShortEdges(
+            mesh,
+            [&](const Eigen::Vector3d& x) { return options.min_edge_px * Footprint(views, x); },
+            options.max_face_turn_deg, move_options.tolerance);
+        stats.collapses += collapse.collapses;
+        stats.collapses_refused += collapse.refused;
+      }
       const SplitStats split = SplitLongEdges(
           mesh, [&](const Eigen::Vector3d& x) { return options.max_edge_px * Footprint(views, x); },
           options.max_vertices, move_options.tolerance);

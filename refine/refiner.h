@@ -44,8 +44,10 @@ struct RefineStats {
   double final_energy = 0;     // mean (1 - ZNCC) of the returned mesh at the finest level
   int64_t splits = 0;          // edges split by remeshing (vertices added)
   int64_t splits_refused = 0;  // splits the checker objected to (undone)
-  int64_t flips = 0;           // edges flipped by remeshing
-  int64_t flips_refused = 0;   // flips the checker objected to (undone)
+  int64_t collapses = 0;       // edges collapsed by remeshing (vertices removed)
+  int64_t collapses_refused = 0;
+  int64_t flips = 0;          // edges flipped by remeshing
+  int64_t flips_refused = 0;  // flips the checker objected to (undone)
   double seconds = 0;
 };
 

@@ -5,6 +5,7 @@
 #include <array>
 #include <climits>
 #include <cmath>
+#include <iterator>
 #include <map>
 #include <set>
 #include <utility>
@@ -337,6 +338,169 @@ FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance, int m
     stats.flips += static_cast<int64_t>(flips.size()) - undone;
     stats.refused += undone;
   }
+  return stats;
+}
+
+namespace {
+
+// A planned collapse: vertex `gone` merges into `kept`, both at the edge's midpoint.
+struct Collapse {
+  Edge edge;
+  int32_t kept, gone;
+  Eigen::Vector3d position;
+};
+
+// The collapses of one pass: short edges, shortest first, each allowed by the link condition
+// and the face-turn limit, none touching another's star.
+std::vector<Collapse> PlanCollapses(const Mesh& mesh,
+                                    const std::function<double(const Eigen::Vector3d&)>& min_length,
+                                    double cos_turn, const std::set<Edge>& refused) {
+  std::map<Edge, std::vector<int32_t>> faces_of;
+  std::vector<std::vector<int32_t>> faces_at(mesh.vertices.size());
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& t = mesh.faces[f];
+    for (int k = 0; k < 3; ++k) {
+      faces_of[Key(t[k], t[(k + 1) % 3])].push_back(static_cast<int32_t>(f));
+      faces_at[t[k]].push_back(static_cast<int32_t>(f));
+    }
+  }
+  const std::vector<std::vector<int32_t>> neighbours = VertexNeighbours(mesh);
+  std::vector<std::pair<double, Edge>> short_edges;
+  std::vector<uint8_t> on_boundary(mesh.vertices.size(), 0);
+  for (const auto& [edge, faces] : faces_of) {
+    if (faces.size() > 2)
+      throw InternalError("CollapseShortEdges: an edge is in more than two faces");
+    if (faces.size() == 1) on_boundary[edge.first] = on_boundary[edge.second] = 1;
+  }
+  for (const auto& [edge, faces] : faces_of) {
+    if (refused.count(edge) || on_boundary[edge.first] || on_boundary[edge.second]) continue;
+    const Eigen::Vector3d& a = mesh.vertices[edge.first];
+    const Eigen::Vector3d& b = mesh.vertices[edge.second];
+    const double length = (a - b).norm();
+    if (length < min_length(0.5 * (a + b))) short_edges.emplace_back(length, edge);
+  }
+  std::sort(short_edges.begin(), short_edges.end());
+  std::vector<uint8_t> locked(mesh.vertices.size(), 0);
+  int64_t vertices_left = static_cast<int64_t>(mesh.vertices.size());
+  std::vector<Collapse> plan;
+  for (const auto& [length, edge] : short_edges) {
+    const int32_t a = edge.first, b = edge.second;
+    if (vertices_left <= 4 || locked[a] || locked[b]) continue;
+    // The link condition: the common neighbours are exactly the two opposite vertices.
+    std::vector<int32_t> common;
+    std::set_intersection(neighbours[a].begin(), neighbours[a].end(), neighbours[b].begin(),
+                          neighbours[b].end(), std::back_inserter(common));
+    if (common.size() != 2) continue;
+    if (neighbours[common[0]].size() <= 3 || neighbours[common[1]].size() <= 3) continue;
+    bool free = true;
+    for (int32_t v : {a, b}) {
+      for (int32_t u : neighbours[v]) free = free && !locked[u];
+    }
+    if (!free) continue;
+    const Eigen::Vector3d mid = 0.5 * (mesh.vertices[a] + mesh.vertices[b]);
+    // Every face that stays turns by at most the limit (and so does not flip).
+    bool turns_ok = true;
+    for (int32_t v : {a, b}) {
+      for (int32_t f : faces_at[v]) {
+        std::array<int32_t, 3> t = mesh.faces[f];
+        if (std::count(t.begin(), t.end(), a) && std::count(t.begin(), t.end(), b)) continue;
+        const Eigen::Vector3d before = FaceNormal(mesh, t);
+        Eigen::Vector3d p[3];
+        for (int k = 0; k < 3; ++k) p[k] = (t[k] == a || t[k] == b) ? mid : mesh.vertices[t[k]];
+        const Eigen::Vector3d after = (p[1] - p[0]).cross(p[2] - p[0]);
+        const double n = before.norm() * after.norm();
+        if (!(n > 0 && before.dot(after) >= cos_turn * n)) turns_ok = false;
+      }
+    }
+    if (!turns_ok) continue;
+    for (int32_t v : {a, b}) {
+      locked[v] = 1;
+      for (int32_t u : neighbours[v]) locked[u] = 1;
+    }
+    plan.push_back({edge, a, b, mid});
+    --vertices_left;
+  }
+  return plan;
+}
+
+// `mesh` with the planned collapses made: the collapsed edges' faces gone, `gone` vertices
+// unreferenced (still in place), `kept` ones at the midpoints. owner[f] is the collapse whose
+// star face f is in (-1: none).
+Mesh ApplyCollapses(const Mesh& mesh, const std::vector<Collapse>& plan,
+                    std::vector<int32_t>* owner) {
+  Mesh out;
+  out.vertices = mesh.vertices;
+  std::vector<int32_t> merged(mesh.vertices.size(), -1);  // gone -> kept
+  std::vector<int32_t> collapse_of(mesh.vertices.size(), -1);
+  for (size_t i = 0; i < plan.size(); ++i) {
+    merged[plan[i].gone] = plan[i].kept;
+    out.vertices[plan[i].kept] = plan[i].position;
+    collapse_of[plan[i].kept] = collapse_of[plan[i].gone] = static_cast<int32_t>(i);
+  }
+  owner->clear();
+  for (auto t : mesh.faces) {
+    int32_t by = -1;
+    for (int32_t& v : t) {
+      if (collapse_of[v] >= 0) by = collapse_of[v];
+      if (merged[v] >= 0) v = merged[v];
+    }
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;  // a collapsed edge's face
+    out.faces.push_back(t);
+    owner->push_back(by);
+  }
+  return out;
+}
+
+}  // namespace
+
+CollapseStats CollapseShortEdges(Mesh* mesh,
+                                 const std::function<double(const Eigen::Vector3d&)>& min_length,
+                                 double max_face_turn_deg, double tolerance, int max_rounds) {
+  CollapseStats stats;
+  const double cos_turn = std::cos(max_face_turn_deg * M_PI / 180);
+  std::set<Edge> refused;
+  for (int round = 0; round < max_rounds; ++round) {
+    std::vector<Collapse> plan = PlanCollapses(*mesh, min_length, cos_turn, refused);
+    ++stats.rounds;
+    if (plan.empty()) break;
+    while (!plan.empty()) {
+      std::vector<int32_t> owner;
+      Mesh trial = ApplyCollapses(*mesh, plan, &owner);
+      std::vector<uint8_t> focus(owner.size());
+      for (size_t f = 0; f < owner.size(); ++f) focus[f] = owner[f] >= 0;
+      const CheckerProblems problems = FindCheckerProblems(trial, tolerance, focus);
+      std::set<int32_t> bad;
+      const auto bad_face = [&](int64_t f) {
+        if (owner[f] >= 0) bad.insert(owner[f]);
+      };
+      for (const auto& [f, g] : problems.face_pairs) {
+        bad_face(f);
+        bad_face(g);
+      }
+      for (int64_t f : problems.degenerate_faces) bad_face(f);
+      for (const auto& [u, v] : problems.vertex_pairs) {
+        for (size_t i = 0; i < plan.size(); ++i) {
+          if (plan[i].kept == u || plan[i].kept == v) bad.insert(static_cast<int32_t>(i));
+        }
+      }
+      if (bad.empty()) {
+        stats.collapses += static_cast<int64_t>(plan.size());
+        *mesh = std::move(trial);
+        break;
+      }
+      std::vector<Collapse> kept;
+      for (size_t i = 0; i < plan.size(); ++i) {
+        if (bad.count(static_cast<int32_t>(i))) {
+          refused.insert(plan[i].edge);
+          ++stats.refused;
+        } else {
+          kept.push_back(plan[i]);
+        }
+      }
+      plan = std::move(kept);
+    }
+  }
+  mesh->RemoveUnreferencedVertices();
   return stats;
 }
 

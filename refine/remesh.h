@@ -1,6 +1,7 @@
 // Remeshing during refinement (docs/refine.md "Remeshing"): edges longer than the image
 // resolution asks for are split at their midpoints, so detail finer than the starting mesh can
-// appear; edges of nearly flat face pairs are flipped where that rounds the faces. A split replaces
+// appear; edges shorter than it resolves are collapsed; edges of nearly flat face pairs are
+// flipped where that rounds the faces. A split replaces
 // the two faces of an edge by four, so a closed 2-manifold stays one. The new vertex is the edge's
 // midpoint moved 8 tolerances off it along the faces' mean normal: exactly on the edge, chains of
 // splits along a crease leave collinear vertices whose faces double-precision tests (Open3D's among
@@ -31,6 +32,25 @@ struct SplitStats {
 SplitStats SplitLongEdges(Mesh* mesh,
                           const std::function<double(const Eigen::Vector3d&)>& max_length,
                           int64_t max_vertices, double tolerance);
+
+struct CollapseStats {
+  int64_t collapses = 0;  // edges collapsed (vertices removed)
+  int64_t refused = 0;    // collapses undone because the checker objected
+  int rounds = 0;         // passes over the edges
+};
+
+// Collapses edges shorter than min_length(midpoint), shortest first, each to its midpoint, so
+// that the mesh does not keep more vertices than the images resolve. A collapse removes the
+// edge's two faces and one vertex; it is made only where it keeps a closed 2-manifold one (the
+// link condition: the edge's ends share exactly the two opposite vertices as neighbours; the
+// opposite vertices keep at least 3 neighbours; more than 4 vertices remain) and turns no
+// remaining face by more than max_face_turn_deg (nor flips one); collapses touching one another
+// wait for the next pass. Each pass is checked as splits are, and the collapses whose faces the
+// checker objects to are left out and not tried again. Unreferenced vertices are removed at
+// the end. Every edge must be in exactly two faces.
+CollapseStats CollapseShortEdges(Mesh* mesh,
+                                 const std::function<double(const Eigen::Vector3d&)>& min_length,
+                                 double max_face_turn_deg, double tolerance, int max_rounds = 5);
 
 struct FlipStats {
   int64_t flips = 0;    // edges flipped
