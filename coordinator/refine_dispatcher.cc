@@ -55,6 +55,7 @@ class RefineDispatcher::Impl {
     if (!error_.empty()) throw InputError(error_);
     if (stopped_) return false;
     request_ = std::move(jobs);
+    request_mesh_ = std::move(round_mesh_);
     request_vertices_ = mesh.vertices.size();
     done_ = false;
     changed_.wait(lock, [&] { return done_ || stopped_ || !error_.empty(); });
@@ -78,7 +79,7 @@ class RefineDispatcher::Impl {
     common.set_iteration(round);
     common.set_session_id(session_);
     common.set_lease_seconds(scheduler_options_.lease_s);
-    PackMesh(mesh, common.mutable_mesh());
+    common.mutable_refine()->set_mesh_id(round);
     common.mutable_refine()->set_pyramid_level(level);
     OptionsToWire(options_, common.mutable_refine()->mutable_options());
     std::vector<wire::Job> jobs;
@@ -88,7 +89,12 @@ class RefineDispatcher::Impl {
       job.set_job_id(MakeJobId(round, static_cast<uint32_t>(i)));
       SetCamera(pairs_[i].first, job.mutable_camera());
       SetCamera(pairs_[i].second, job.add_neighbours());
-      const uint64_t bytes = job.ByteSizeLong();
+    }
+    // The mesh travels with a worker's first job of the round only (Dispatch).
+    wire::PackedMesh packed;
+    PackMesh(mesh, &packed);
+    for (const wire::Job& job : jobs) {
+      const uint64_t bytes = job.ByteSizeLong() + packed.ByteSizeLong() + 16;
       if (bytes + 1024 > limits_.max_message_bytes) {  // room for the envelope
         throw InputError(fmt::format(
             "a refinement job ({} vertices, {} faces) is {} bytes, over the message limit of {} "
@@ -96,6 +102,7 @@ class RefineDispatcher::Impl {
             mesh.NumVertices(), mesh.NumFaces(), bytes, limits_.max_message_bytes));
       }
     }
+    round_mesh_ = std::move(packed);
     return jobs;
   }
 
@@ -174,6 +181,7 @@ class RefineDispatcher::Impl {
     request_.clear();
     round_ = JobIdIteration(ids.front());
     round_vertices_ = request_vertices_;
+    mesh_of_round_ = std::move(request_mesh_);
     gradients_.assign(pairs_.size(), PairGradient());
     scheduler_.StartIteration(round_, ids);
     stats_requeued_ = 0;
@@ -196,6 +204,10 @@ class RefineDispatcher::Impl {
     for (const JobScheduler::Assignment& a : scheduler_.Assign(now)) {
       wire::Envelope envelope = stamper_.New();
       *envelope.mutable_job() = jobs_.at(a.job_id);
+      if (mesh_sent_[a.peer] != round_) {  // the worker's first job of the round
+        *envelope.mutable_job()->mutable_mesh() = mesh_of_round_;
+        mesh_sent_[a.peer] = round_;
+      }
       const std::string bytes = Serialize(envelope);
       transport_->Send(a.peer, bytes);
       std::lock_guard<std::mutex> lock(mutex_);
@@ -347,6 +359,11 @@ class RefineDispatcher::Impl {
       spdlog::warn("worker {} reports: {}", sender, error.message());
       return;
     }
+    if (error.code() == wire::Error::NEED_MESH) {  // send it again, with the mesh
+      mesh_sent_.erase(peer);
+      scheduler_.OnWorkerFailure(peer, sender, error.job_id(), now);
+      return;
+    }
     if (error.code() == wire::Error::BAD_JOB) {
       // The same job fails on every worker: leaving the pair out would change the result
       // silently, so refinement stops with the reason.
@@ -380,7 +397,8 @@ class RefineDispatcher::Impl {
   const ImageCatalog catalog_;  // read-only after construction: both threads use it
   EnvelopeStamper stamper_;     // the loop's
   const uint64_t session_;
-  uint32_t rounds_built_ = 0;  // the caller's
+  uint32_t rounds_built_ = 0;    // the caller's
+  wire::PackedMesh round_mesh_;  // the caller's: the mesh of the jobs just built
 
   // Between the caller and the loop, under mutex_.
   mutable std::mutex mutex_;
@@ -389,6 +407,7 @@ class RefineDispatcher::Impl {
   bool stopped_ = false;
   std::string error_;
   std::vector<wire::Job> request_;  // a round asked for, not yet started
+  wire::PackedMesh request_mesh_;   // its mesh
   size_t request_vertices_ = 0;
   bool done_ = false;
   std::vector<PairGradient> finished_;
@@ -401,8 +420,10 @@ class RefineDispatcher::Impl {
   size_t round_vertices_ = 0;
   double round_started_ = 0;
   int64_t stats_requeued_ = 0;
-  std::map<uint64_t, wire::Job> jobs_;
-  std::vector<PairGradient> gradients_;  // by pair, as results come in
+  std::map<uint64_t, wire::Job> jobs_;  // without the mesh
+  wire::PackedMesh mesh_of_round_;
+  std::map<std::string, uint32_t> mesh_sent_;  // peer -> the last round whose mesh it got
+  std::vector<PairGradient> gradients_;        // by pair, as results come in
   std::map<uint64_t, std::string> last_failure_;
   std::map<std::string, int> unfit_results_;
   std::set<std::string> sent_away_;

@@ -281,7 +281,26 @@ class Worker::Impl {
         c.sweep.neighbours.push_back(std::move(camera));
         c.refs.push_back(RefFromWire(n.image()));
       }
-      c.sweep.mesh = UnpackMesh(c.job.mesh(), what);
+      if (c.job.has_refine() && c.job.refine().mesh_id() != 0 && c.job.mesh().num_vertices() == 0) {
+        // The round's mesh, received with an earlier job of this round.
+        if (mesh_id_ != c.job.refine().mesh_id() || mesh_session_ != c.job.session_id()) {
+          spdlog::info("{}: asking for the round's mesh {}, which this worker does not hold", what,
+                       c.job.refine().mesh_id());
+          SendError(wire::Error::NEED_MESH, c.job.job_id(), c.job.session_id(),
+                    fmt::format("no mesh {} here", c.job.refine().mesh_id()));
+          phase_ = Phase::kIdle;
+          current_.reset();
+          return;
+        }
+        c.sweep.mesh = held_mesh_;
+      } else {
+        c.sweep.mesh = UnpackMesh(c.job.mesh(), what);
+        if (c.job.has_refine() && c.job.refine().mesh_id() != 0) {
+          held_mesh_ = c.sweep.mesh;
+          mesh_id_ = c.job.refine().mesh_id();
+          mesh_session_ = c.job.session_id();
+        }
+      }
       if (c.job.has_refine()) {
         c.refine = ReadRefinePair(c.job, what);
       } else {
@@ -497,6 +516,9 @@ class Worker::Impl {
   Phase phase_ = Phase::kIdle;
   std::optional<Current> current_;
   uint64_t last_job_id_ = 0;
+  // The refinement round's mesh, as its first job here brought it (main thread only).
+  Mesh held_mesh_;
+  uint64_t mesh_id_ = 0, mesh_session_ = 0;
   std::thread compute_;
   std::atomic<bool> compute_done_{false};
   wire::Envelope outcome_;

@@ -16,6 +16,7 @@
 #include "proto/content_hash.h"
 #include "proto/options_codec.h"
 #include "proto/wire.h"
+#include "refine/refine_options.h"
 #include "sweep/sweep_kernel_factory.h"
 #include "worker/image_cache.h"
 #include "worker/job_codec.h"
@@ -204,6 +205,55 @@ TEST_F(WorkerProcessTest, SaysReadyPullsAJobReturnsItsPointsAndExitsOnShutdown) 
   EXPECT_EQ(summary_.jobs, 1);
   EXPECT_EQ(summary_.points, 2);
   EXPECT_EQ(summary_.exit_reason, "shutdown: test over");
+}
+
+// Refinement jobs: the pair's gradient comes back instead of points; the round's mesh comes
+// with the first job only, later jobs refer to it by id, and a job naming a mesh this worker
+// does not hold (another id or session) is answered NEED_MESH; a pair of three cameras is a
+// bad job.
+TEST_F(WorkerProcessTest, RefinementJobsReturnGradientsAndAskForAMeshTheyDoNotHold) {
+  StartWorker();
+  wire::Envelope envelope;
+  ASSERT_TRUE(Next(&envelope));
+  const auto refine_job = [&](uint64_t id, uint64_t session, bool with_mesh) {
+    wire::Job job = MakeJob(id);
+    job.set_session_id(session);
+    job.mutable_neighbours()->RemoveLast();
+    job.clear_options();
+    job.mutable_refine()->set_mesh_id(5);
+    OptionsToWire(RefineOptions{}, job.mutable_refine()->mutable_options());
+    if (!with_mesh) job.clear_mesh();
+    return job;
+  };
+  SendJob(refine_job(1, 77, false));
+  ASSERT_TRUE(Next(&envelope));
+  ASSERT_TRUE(envelope.has_error()) << BodyName(envelope);
+  EXPECT_EQ(envelope.error().code(), wire::Error::NEED_MESH);
+  SendJob(refine_job(2, 77, true));
+  ASSERT_TRUE(Next(&envelope));
+  ASSERT_TRUE(envelope.has_result()) << BodyName(envelope);
+  EXPECT_EQ(envelope.result().points_size(), 0);
+  ASSERT_TRUE(envelope.result().has_gradient());
+  EXPECT_EQ(envelope.result().gradient().num_vertices(), 3u);
+  const std::string first = envelope.result().gradient().SerializeAsString();
+  SendJob(refine_job(3, 77, false));
+  ASSERT_TRUE(Next(&envelope));
+  ASSERT_TRUE(envelope.has_result()) << BodyName(envelope);
+  EXPECT_EQ(envelope.result().gradient().SerializeAsString(), first);
+  SendJob(refine_job(4, 78, false));  // another session: not the mesh it holds
+  ASSERT_TRUE(Next(&envelope));
+  ASSERT_TRUE(envelope.has_error());
+  EXPECT_EQ(envelope.error().code(), wire::Error::NEED_MESH);
+  wire::Job three = refine_job(5, 77, true);
+  *three.add_neighbours() = three.neighbours(0);
+  SendJob(three);
+  ASSERT_TRUE(Next(&envelope));
+  ASSERT_TRUE(envelope.has_error());
+  EXPECT_EQ(envelope.error().code(), wire::Error::BAD_JOB);
+  EXPECT_NE(envelope.error().message().find("exactly one neighbour"), std::string::npos);
+  SendShutdown();
+  thread_.join();
+  EXPECT_EQ(error_, "");
 }
 
 TEST_F(WorkerProcessTest, HeartbeatsNameTheJobWhileSweeping) {
