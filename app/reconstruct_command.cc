@@ -74,7 +74,7 @@ struct ReconstructCommandOptions {
   int worker_threads = 0;
   std::string kernel = "auto";
   int max_restarts = -1;
-  bool refine = false;  // refine final.ply into refined.ply at the end (docs/refine.md)
+  bool refine = true;  // refine final.ply into refined.ply at the end (docs/refine.md)
   RefineOptions refine_options;
 };
 
@@ -279,9 +279,9 @@ void RegisterReconstructCommand(CLI::App& app) {
   cmd->add_option("--max-restarts", options->max_restarts,
                   "restarts of workers that die (-1 = twice the number of workers)")
       ->capture_default_str();
-  cmd->add_flag("--refine", options->refine,
-                "refine final.ply photometrically into refined.ply, keeping it a closed "
-                "2-manifold (off by default until it pays off on the real sets; docs/refine.md)");
+  cmd->add_flag("--refine,!--no-refine", options->refine,
+                "then refine final.ply photometrically into refined.ply on the same workers, "
+                "keeping it a closed 2-manifold (docs/refine.md); --no-refine stops at final.ply");
   AddRunOptions(cmd, &options->coordinator);
   AddOptionGroup(cmd, &options->refine_options);
   cmd->callback([options] { RunReconstruct(*options); });

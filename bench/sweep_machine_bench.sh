@@ -52,7 +52,7 @@ for workers in $worker_counts; do
   run=$work/run_${size}_$workers
   echo "## fountain-P11 reconstruct, $label, $iterations iterations, $workers workers, --kernel $kernel"
   "$manisweep" reconstruct --input "$fountain" --output "$run" --workers "$workers" \
-    --kernel "$kernel" --max-iterations "$iterations" --sweep.max-image-dimension "$size" \
+    --kernel "$kernel" --max-iterations "$iterations" --sweep.max-image-dimension "$size" --no-refine \
     > "$run.log" 2>&1 || { tail -20 "$run.log"; exit 1; }
   grep -E "joined \(kernel" "$run.log" | head -1 || true
   python3 - "$run/summary.json" <<'PY'

@@ -161,7 +161,7 @@ def main():
         rss_file = out + ".rss"
         run(["/usr/bin/time", "-f", "%M", "-o", rss_file, args.manisweep, "reconstruct",
              "--input", scene, "--output", out, "--workers", str(args.workers),
-             "--max-iterations", str(args.iterations)] + args.sweep, log)
+             "--max-iterations", str(args.iterations), "--no-refine"] + args.sweep, log)
         with open(rss_file) as f:
             largest_rss_mib = int(f.read().split()[-1]) / 1024
         with open(os.path.join(out, "summary.json")) as f:

@@ -177,7 +177,7 @@ def main():
     if not os.path.exists(os.path.join(recorded, "final.ply")):
         shutil.rmtree(recorded, ignore_errors=True)
         run([args.manisweep, "reconstruct", "--input", scene, "--output", recorded, "--workers",
-             "2", "--max-iterations", str(args.iterations)] + args.sweep, log)
+             "2", "--max-iterations", str(args.iterations), "--no-refine"] + args.sweep, log)
     rows = []
     for w in args.workers:
         started = time.time()

@@ -50,14 +50,14 @@ same_mesh() {  # same_mesh A B WHAT
 }
 
 # 1. A job to the end equals a local run.
-"$manisweep" reconstruct --input scene/scene.h5 --output local2 --max-iterations 2 --workers 2 \
+"$manisweep" reconstruct --input scene/scene.h5 --output local2 --max-iterations 2 --workers 2 --no-refine \
   >local2.log 2>&1
 submit slurm2 2 --wait >/dev/null || { cat "$work"/slurm2-*.log >&2; echo "FAIL: job 1" >&2; exit 1; }
 same_mesh local2/final.ply slurm2/final.ply "a Slurm job gives reconstruct's mesh"
 grep -q "CURVE security on" "$work"/slurm2-*.log || { echo "FAIL: the job ran without CURVE" >&2; exit 1; }
 
 # 2. scancel after the first checkpoint, submit again: it resumes to an uncancelled run's mesh.
-"$manisweep" reconstruct --input scene/scene.h5 --output local4 --max-iterations 4 --workers 2 \
+"$manisweep" reconstruct --input scene/scene.h5 --output local4 --max-iterations 4 --workers 2 --no-refine \
   >local4.log 2>&1
 job=$(submit slurm4 4)
 for _ in $(seq 1 240); do

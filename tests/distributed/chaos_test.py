@@ -37,7 +37,7 @@ def main():
     scene = make_scene(ms, work, logs)
     iterations = ["--max-iterations", str(args.iterations)]
     run([ms, "reconstruct", "--input", scene, "--output", os.path.join(work, "undisturbed"),
-         "--workers", "2"] + iterations + SWEEP)
+         "--workers", "2", "--no-refine"] + iterations + SWEEP)
 
     port = free_port()
     out = os.path.join(work, "chaos")

@@ -242,8 +242,9 @@ TEST_F(MultiProcessTest, AKilledCoordinatorResumesToTheIdenticalMesh) {
 TEST_F(MultiProcessTest, ReconstructStopsEverythingOnCtrlCAndResumesToTheIdenticalMesh) {
   const std::string reference = FinalMesh(Reference());
   const std::string out = Dir("reconstruct");
-  std::vector<std::string> args = Split("reconstruct --input " + *scene_ + " --output " + out +
-                                        " --workers 2 --max-iterations 3 " + kRunOptions);
+  std::vector<std::string> args =
+      Split("reconstruct --input " + *scene_ + " --output " + out +
+            " --workers 2 --max-iterations 3 --no-refine " + kRunOptions);
   std::vector<pid_t> children;
   {
     ChildProcess run(kBinary, args, out + "/reconstruct1.log");

@@ -29,7 +29,7 @@ def main():
     logs = fresh_workdir(work)
     scene = make_scene(ms, work, logs)
     recorded = os.path.join(work, "recorded")
-    subprocess.run([ms, "reconstruct", "--input", scene, "--output", recorded, "--workers", "2"]
+    subprocess.run([ms, "reconstruct", "--input", scene, "--output", recorded, "--workers", "2", "--no-refine"]
                    + ITERATIONS + SWEEP, check=True, stdout=logs, stderr=subprocess.STDOUT)
 
     port = free_port()
