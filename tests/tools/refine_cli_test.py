@@ -4,7 +4,8 @@
 (watertight, no self-intersecting pair), with a lower photometric energy and a lower depth error
 than the swept mesh it started from, and one interrupted and resumed ends as one that was not;
 the gradients computed by 1 or 2 worker processes and in one process give the same bytes, also
-after an interrupted and resumed `reconstruct --refine`; bad inputs (an open mesh, a truncated
+after an interrupted and resumed `reconstruct --refine`, and from `coordinator --refine` with two
+`worker` processes; bad inputs (an open mesh, a truncated
 file, a missing image) end with exit 2 and one line naming the file. Exit 0 when all hold.
 """
 import argparse
@@ -12,8 +13,15 @@ import os
 import re
 import shutil
 import signal
+import socket
 import subprocess
 import sys
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
 
 
 def run(cmd, **kw):
@@ -123,11 +131,30 @@ def main():
     cut_path = os.path.join(cut, "refined.ply")
     same_cut = (r.returncode == 0 and os.path.exists(cut_path) and
                 open(cut_path, "rb").read() == refined_bytes)
-    good = same_one and same_local and cut_exit == 130 and same_cut
+    # `coordinator --refine` with two `worker` processes (a cluster's shape) gives them too.
+    port = free_port()
+    cluster = os.path.join(args.workdir, "cluster")
+    endpoint = f"tcp://127.0.0.1:{port}"
+    coordinator = subprocess.Popen(
+        [ms, "coordinator", "-i", scene, "-o", cluster, "--bind", endpoint, "--max-iterations",
+         "4", "--refine", "--refine.iterations", "6", "--refine.levels", "2"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    workers = [subprocess.Popen([ms, "worker", "--connect", endpoint, "--kernel", "cpu"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+               for _ in range(2)]
+    cluster_exit = coordinator.wait(timeout=300)
+    worker_exits = [w.wait(timeout=60) for w in workers]
+    cluster_path = os.path.join(cluster, "refined.ply")
+    same_cluster = (cluster_exit == 0 and os.path.exists(cluster_path) and
+                    open(cluster_path, "rb").read() == refined_bytes)
+    good = (same_one and same_local and cut_exit == 130 and same_cut and same_cluster and
+            worker_exits == [0, 0])
     print(("ok  " if good else "FAIL"),
           f"distributed: 1 worker {'same' if same_one else 'DIFFERENT'}, single process "
           f"{'same' if same_local else 'DIFFERENT'}, interrupted while refining (exit {cut_exit}) "
-          f"and resumed {'same' if same_cut else 'DIFFERENT'}")
+          f"and resumed {'same' if same_cut else 'DIFFERENT'}, coordinator --refine with 2 "
+          f"worker processes (exit {cluster_exit}, workers {worker_exits}) "
+          f"{'same' if same_cluster else 'DIFFERENT'}")
     ok = ok and good
 
     check = run([ms, "check-mesh", refined])
