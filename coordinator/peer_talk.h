@@ -12,7 +12,10 @@
 #include <random>
 #include <string>
 
+#include "coordinator/image_catalog.h"
 #include "proto/content_hash.h"
+#include "proto/transport.h"
+#include "proto/wire.h"
 
 namespace ms {
 
@@ -56,5 +59,28 @@ class JunkLog {
  private:
   std::map<std::string, int64_t> counts_;
 };
+
+// Decodes one message from a worker for a coordinator's loop. A message of several frames, or
+// one that does not parse, is dropped and logged through `junk`; one of another protocol
+// version is answered with Error VERSION_MISMATCH and logged, and `*wrong_version` set (the
+// caller forgets the peer). Returns true when `envelope` is usable.
+bool DecodeWorkerMessage(const PeerMessage& message, const WireLimits& limits,
+                         ServerTransport* transport, EnvelopeStamper* stamper, JunkLog* junk,
+                         wire::Envelope* envelope, bool* wrong_version);
+
+// The job a heartbeat says its worker is busy with, for the scheduler: 0 (idle), the job, or
+// kForeignJob when it is a job of another session.
+inline uint64_t HeartbeatJob(const wire::Heartbeat& heartbeat, uint64_t session) {
+  if (heartbeat.current_job_id() == 0 || heartbeat.session_id() == session) {
+    return heartbeat.current_job_id();
+  }
+  return kForeignJob;
+}
+
+// Answers an ImageRequest from `catalog` (null: the coordinator is still starting) and logs
+// a refusal, or the start of a file's transfer.
+void ServeImageRequest(const ImageCatalog* catalog, const wire::ImageRequest& request,
+                       const std::string& peer, const std::string& sender, const WireLimits& limits,
+                       ServerTransport* transport, EnvelopeStamper* stamper);
 
 }  // namespace ms

@@ -234,31 +234,12 @@ class RefineDispatcher::Impl {
   bool OfThisRound(uint64_t job_id) const { return active_ && jobs_.count(job_id) > 0; }
 
   void Handle(const PeerMessage& message) {
-    const std::string who = PeerTag(message.peer);
     if (sent_away_.count(message.peer)) return;
-    if (message.frames != 1) {
-      junk_.Warn("frames", fmt::format("dropped a message of {} frames from {} (expected 1)",
-                                       message.frames, who));
-      return;
-    }
     wire::Envelope envelope;
-    std::string problem;
-    const DecodeStatus status = DecodeEnvelope(message.payload.data(), message.payload.size(),
-                                               limits_, &envelope, &problem);
-    if (status == DecodeStatus::kWrongVersion) {
-      junk_.Warn("version", fmt::format("refused worker {}: it speaks {}", who, problem));
-      wire::Envelope reply = stamper_.New();
-      reply.mutable_error()->set_code(wire::Error::VERSION_MISMATCH);
-      reply.mutable_error()->set_message(
-          fmt::format("this coordinator speaks protocol version {}, you sent {}", kProtocolVersion,
-                      envelope.protocol_version()));
-      transport_->Send(message.peer, Serialize(reply));
-      scheduler_.Remove(message.peer);
-      return;
-    }
-    if (status != DecodeStatus::kOk) {
-      junk_.Warn(DecodeStatusName(status), fmt::format("dropped a message from {} ({}): {}", who,
-                                                       DecodeStatusName(status), problem));
+    bool wrong_version = false;
+    if (!DecodeWorkerMessage(message, limits_, transport_, &stamper_, &junk_, &envelope,
+                             &wrong_version)) {
+      if (wrong_version) scheduler_.Remove(message.peer);
       return;
     }
     const double now = MonotonicSeconds();
@@ -269,35 +250,22 @@ class RefineDispatcher::Impl {
         spdlog::info("worker {} ready for refinement; {} workers", sender,
                      scheduler_.num_workers());
         return;
-      case wire::Envelope::kHeartbeat: {
-        const wire::Heartbeat& h = envelope.heartbeat();
-        const bool ours = h.current_job_id() == 0 || h.session_id() == session_;
-        if (!scheduler_.IsKnown(message.peer)) {
-          spdlog::info("worker {} joins refinement", sender);
-        }
-        scheduler_.OnHeartbeat(message.peer, sender, ours ? h.current_job_id() : kForeignJob,
-                               h.last_job_id(), now);
+      case wire::Envelope::kHeartbeat:
+        if (!scheduler_.IsKnown(message.peer)) spdlog::info("worker {} joins refinement", sender);
+        scheduler_.OnHeartbeat(message.peer, sender, HeartbeatJob(envelope.heartbeat(), session_),
+                               envelope.heartbeat().last_job_id(), now);
         return;
-      }
       case wire::Envelope::kResult:
         OnResult(message.peer, sender, envelope.result(), now);
         return;
       case wire::Envelope::kError:
         OnError(message.peer, sender, envelope.error(), now);
         return;
-      case wire::Envelope::kImageRequest: {
+      case wire::Envelope::kImageRequest:
         scheduler_.Touch(message.peer, sender, now);
-        const wire::ImageRequest& request = envelope.image_request();
-        wire::Envelope reply = stamper_.New();
-        catalog_.Serve(request.content_hash(), request.offset(), request.max_bytes(),
-                       limits_.image_chunk_bytes, reply.mutable_image_response());
-        if (!reply.image_response().found()) {
-          spdlog::warn("worker {} asked for image {}: {}", sender, HashHex(request.content_hash()),
-                       reply.image_response().error());
-        }
-        transport_->Send(message.peer, Serialize(reply));
+        ServeImageRequest(&catalog_, envelope.image_request(), message.peer, sender, limits_,
+                          transport_, &stamper_);
         return;
-      }
       default:
         scheduler_.Touch(message.peer, sender, now);
         junk_.Warn("unexpected", fmt::format("dropped an unexpected {} message from {}",

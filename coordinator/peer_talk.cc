@@ -1,0 +1,59 @@
+#include "coordinator/peer_talk.h"
+
+namespace ms {
+
+bool DecodeWorkerMessage(const PeerMessage& message, const WireLimits& limits,
+                         ServerTransport* transport, EnvelopeStamper* stamper, JunkLog* junk,
+                         wire::Envelope* envelope, bool* wrong_version) {
+  *wrong_version = false;
+  const std::string who = PeerTag(message.peer);
+  if (message.frames != 1) {
+    junk->Warn("frames", fmt::format("dropped a message of {} frames from {} (expected 1)",
+                                     message.frames, who));
+    return false;
+  }
+  std::string problem;
+  const DecodeStatus status =
+      DecodeEnvelope(message.payload.data(), message.payload.size(), limits, envelope, &problem);
+  if (status == DecodeStatus::kWrongVersion) {
+    const std::string name = envelope->sender().empty() ? who : envelope->sender();
+    junk->Warn("version", fmt::format("refused worker {}: it speaks {}", name, problem));
+    wire::Envelope reply = stamper->New();
+    wire::Error* error = reply.mutable_error();
+    error->set_code(wire::Error::VERSION_MISMATCH);
+    error->set_message(fmt::format("this coordinator speaks protocol version {}, you sent {}",
+                                   kProtocolVersion, envelope->protocol_version()));
+    transport->Send(message.peer, Serialize(reply));
+    *wrong_version = true;
+    return false;
+  }
+  if (status != DecodeStatus::kOk) {
+    junk->Warn(DecodeStatusName(status), fmt::format("dropped a message from {} ({}): {}", who,
+                                                     DecodeStatusName(status), problem));
+    return false;
+  }
+  return true;
+}
+
+void ServeImageRequest(const ImageCatalog* catalog, const wire::ImageRequest& request,
+                       const std::string& peer, const std::string& sender, const WireLimits& limits,
+                       ServerTransport* transport, EnvelopeStamper* stamper) {
+  wire::Envelope reply = stamper->New();
+  if (catalog != nullptr) {
+    catalog->Serve(request.content_hash(), request.offset(), request.max_bytes(),
+                   limits.image_chunk_bytes, reply.mutable_image_response());
+  } else {
+    reply.mutable_image_response()->set_content_hash(request.content_hash());
+    reply.mutable_image_response()->set_error("the coordinator is still starting");
+  }
+  if (!reply.image_response().found()) {
+    spdlog::warn("worker {} asked for image {}: {}", sender, HashHex(request.content_hash()),
+                 reply.image_response().error());
+  } else if (request.offset() == 0) {
+    spdlog::info("sending image {} ({} bytes) to worker {}", HashHex(request.content_hash()),
+                 reply.image_response().total_size(), sender);
+  }
+  transport->Send(peer, Serialize(reply));
+}
+
+}  // namespace ms
