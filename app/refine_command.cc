@@ -18,6 +18,7 @@
 #include "coordinator/refine_dispatcher.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
+#include "proto/content_hash.h"
 #include "refine/refine_checkpoint.h"
 #include "refine/refiner.h"
 #include "scene/scene_io.h"
@@ -58,6 +59,16 @@ void RefineMeshFile(const std::string& input, const std::string& mesh_path,
   const std::string fingerprint = fmt::format("input={} mesh={} {} {}", input, mesh_path,
                                               OptionGroupText(refine), OptionGroupText(neighbours));
   if (mesh.faces.empty()) throw InputError(mesh_path + ": the mesh has no faces");
+  // A finished refinement of this very mesh (by content) with these options is not redone.
+  const std::string done_fingerprint =
+      fingerprint + " mesh-content=" + HashHex(HashFile(mesh_path).hash);
+  if (resume && RefineIsDone(output, done_fingerprint)) {
+    spdlog::info(
+        "{} is up to date (refined from this {} with these options); delete it to refine "
+        "again",
+        output, mesh_path);
+    return;
+  }
   MeshCheckOptions check;
   check.allow_float_issues = true;  // reported below; refinement leaves such spots alone
   const MeshReport before = CheckMesh(mesh, check);
@@ -137,6 +148,7 @@ void RefineMeshFile(const std::string& input, const std::string& mesh_path,
   write_options.binary = !ascii;
   WriteMesh(mesh, output, write_options);
   RemoveRefineCheckpoint(output);
+  WriteRefineDone(output, done_fingerprint);
   const MeshReport after = CheckMesh(mesh);
   std::printf("refined %s -> %s: %d iterations, %.1f s, final energy %.4f; check-mesh: %s\n",
               mesh_path.c_str(), output.c_str(), static_cast<int>(stats.iterations.size()),

@@ -6,6 +6,7 @@
 #include "base/error.h"
 #include "base/file_util.h"
 #include "mesh/mesh_io.h"
+#include "proto/content_hash.h"
 
 namespace ms {
 namespace {
@@ -15,6 +16,7 @@ namespace fs = std::filesystem;
 std::string MeshPath(const std::string& output) { return output + ".checkpoint.ply"; }
 std::string AcceptedPath(const std::string& output) { return output + ".checkpoint.accepted.ply"; }
 std::string JsonPath(const std::string& output) { return output + ".checkpoint.json"; }
+std::string DonePath(const std::string& output) { return output + ".done.json"; }
 
 }  // namespace
 
@@ -83,6 +85,32 @@ void RemoveRefineCheckpoint(const std::string& output) {
   for (const std::string& path : {JsonPath(output), MeshPath(output), AcceptedPath(output)}) {
     std::error_code ignored;
     fs::remove(path, ignored);
+  }
+}
+
+void WriteRefineDone(const std::string& output, const std::string& fingerprint) {
+  const FileHash hash = HashFile(output);
+  const nlohmann::json j = {{"format", "manisweep refine done"},
+                            {"version", 1},
+                            {"fingerprint", fingerprint},
+                            {"size", hash.size},
+                            {"hash", HashHex(hash.hash)}};
+  WriteFileAtomically(
+      DonePath(output), [&](std::ostream& os) { os << j.dump(2) << "\n"; }, false);
+}
+
+bool RefineIsDone(const std::string& output, const std::string& fingerprint) {
+  if (!fs::exists(DonePath(output)) || !fs::exists(output)) return false;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(ReadFileToString(DonePath(output)));
+    if (j.value("format", "") != "manisweep refine done" ||
+        j.value("fingerprint", "") != fingerprint) {
+      return false;
+    }
+    const FileHash hash = HashFile(output);
+    return j.value("size", uint64_t{0}) == hash.size && j.value("hash", "") == HashHex(hash.hash);
+  } catch (const nlohmann::json::exception&) {
+    return false;  // unreadable: refine again
   }
 }
 

@@ -2,6 +2,7 @@
 //   O.checkpoint.ply           the mesh as it stands (faces included: remeshing changes them)
 //   O.checkpoint.accepted.ply  the last accepted vertices (backtracking), when there are any
 //   O.checkpoint.json          the rest of RefineState, and the options it was made with
+// and, once finished, O.done.json (below).
 // each written atomically, the JSON last, so a checkpoint is whole or absent. Doubles are
 // written exactly (binary PLY, round-trip JSON), so a resumed run ends with the same mesh.
 #pragma once
@@ -30,5 +31,11 @@ std::optional<RefineCheckpoint> ReadRefineCheckpoint(const std::string& output,
 
 // Removes the checkpoint files (after a refinement that finished).
 void RemoveRefineCheckpoint(const std::string& output);
+
+// A finished refinement's record beside the output O, O.done.json: the fingerprint (which
+// should name the starting mesh's content) and O's size and content hash. `--resume` on a
+// finished run skips the refinement when RefineIsDone says the output is that record's.
+void WriteRefineDone(const std::string& output, const std::string& fingerprint);
+bool RefineIsDone(const std::string& output, const std::string& fingerprint);
 
 }  // namespace ms

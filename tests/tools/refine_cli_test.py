@@ -131,6 +131,12 @@ def main():
     cut_path = os.path.join(cut, "refined.ply")
     same_cut = (r.returncode == 0 and os.path.exists(cut_path) and
                 open(cut_path, "rb").read() == refined_bytes)
+    # --resume once more: the run is finished, refinement included; it is not redone.
+    r = run(recon + ["-o", cut, "--workers", "2", "--resume"])
+    not_redone = (r.returncode == 0 and "is up to date" in r.stderr and
+                  open(cut_path, "rb").read() == refined_bytes)
+    print(("ok  " if not_redone else "FAIL"), "--resume of a finished run does not refine again")
+    ok = ok and not_redone
     # `coordinator --refine` with two `worker` processes (a cluster's shape) gives them too.
     port = free_port()
     cluster = os.path.join(args.workdir, "cluster")
