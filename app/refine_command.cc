@@ -76,10 +76,12 @@ void RefineMeshFile(const std::string& input, const std::string& mesh_path,
     throw InputError(mesh_path + ": not a closed 2-manifold (run `manisweep check-mesh " +
                      mesh_path + "`); refine keeps a closed manifold closed, so it needs one");
   }
-  std::vector<SweepCamera> cameras;
-  cameras.reserve(scene.views.size());
+  // With workers, only they read the images; here the views are enough (remeshing's pixel
+  // sizes).
+  std::vector<SweepCamera> cameras(scene.views.size());
   for (size_t c = 0; c < scene.views.size(); ++c) {
-    cameras.push_back(LoadSweepCamera(static_cast<int32_t>(c), scene.views[c]));
+    cameras[c] = dispatcher ? SweepCameraGeometry(static_cast<int32_t>(c), scene.views[c])
+                            : LoadSweepCamera(static_cast<int32_t>(c), scene.views[c]);
   }
   spdlog::info(
       "refining {} ({} vertices, {} faces) with {} camera pairs, {} iterations over {} levels, "

@@ -124,6 +124,14 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
           fmt::format("refine: camera pair ({}, {}) out of range ({} cameras)", a, b, n));
     }
   }
+  if (!hooks.pair_gradients) {
+    for (const SweepCamera& c : cameras) {
+      if (c.image.empty()) {
+        throw InternalError(fmt::format(
+            "refine: camera {} has no image and no pair gradient source was given", c.id));
+      }
+    }
+  }
   RefineStats stats;
   Timer total;
   if (mesh->faces.empty() || pairs.empty()) return stats;

@@ -94,7 +94,8 @@ struct RefineHooks {
   PairGradientSource pair_gradients;  // empty: computed in this process
 };
 
-// `cameras[i]` is camera i at full size (gray float, no distortion: LoadSweepCamera); `pairs`
+// `cameras[i]` is camera i at full size (gray float, no distortion: LoadSweepCamera; with
+// hooks.pair_gradients the images are not used and may be empty, the views alone); `pairs`
 // index `cameras` as (reference, neighbour). `mesh` should be a closed 2-manifold robust in
 // floating point (what `reconstruct` writes); its faces stay as they are unless remeshing.
 RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,

@@ -57,22 +57,27 @@ cv::Mat UndistortImage(const cv::Mat& image, const Intrinsics& k) {
   return out;
 }
 
+SweepCamera SweepCameraGeometry(int32_t id, const View& view) {
+  SweepCamera camera;
+  camera.id = id;
+  camera.view = view;
+  Intrinsics& k = camera.view.intrinsics;
+  k.k1 = k.k2 = k.p1 = k.p2 = k.k3 = 0;
+  return camera;
+}
+
 SweepCamera LoadSweepCamera(int32_t id, const View& view) {
   if (view.image_path.empty()) {
     throw InputError(fmt::format("view {} ('{}'): no image file known for it", id, view.name));
   }
-  SweepCamera camera;
-  camera.id = id;
-  camera.view = view;
   cv::Mat image = ReadGrayImage(view.image_path);
   if (image.cols != view.intrinsics.width || image.rows != view.intrinsics.height) {
     throw InputError(fmt::format("{}: image is {}x{} but view {} ('{}') says {}x{}",
                                  view.image_path, image.cols, image.rows, id, view.name,
                                  view.intrinsics.width, view.intrinsics.height));
   }
+  SweepCamera camera = SweepCameraGeometry(id, view);
   camera.image = UndistortImage(image, view.intrinsics);
-  Intrinsics& k = camera.view.intrinsics;
-  k.k1 = k.k2 = k.p1 = k.p2 = k.k3 = 0;
   return camera;
 }
 

@@ -21,5 +21,8 @@ cv::Mat UndistortImage(const cv::Mat& image, const Intrinsics& intrinsics);
 // Loads view.image_path as a sweep camera: gray float, undistorted, the view's distortion set to
 // zero. Throws InputError if the path is empty or the file's size differs from the view's.
 SweepCamera LoadSweepCamera(int32_t id, const View& view);
+// The same camera without reading its image (image empty): what code that needs only the
+// views, as LoadSweepCamera gives them, works with.
+SweepCamera SweepCameraGeometry(int32_t id, const View& view);
 
 }  // namespace ms

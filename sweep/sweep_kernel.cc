@@ -299,7 +299,7 @@ SweepCamera CameraAtPyramidLevel(const SweepCamera& in, int level) {
   k.cy *= sy;
   k.width = size.width;
   k.height = size.height;
-  cv::resize(in.image, out.image, size, 0, 0, cv::INTER_AREA);
+  if (!in.image.empty()) cv::resize(in.image, out.image, size, 0, 0, cv::INTER_AREA);
   return out;
 }
 

@@ -136,7 +136,8 @@ int PyramidLevelToFit(int longest_side, int max_image_dimension);
 cv::Size SweptImageSize(int width, int height, int level);
 // The camera at a pyramid level: its image resized (cv::INTER_AREA) to SweptImageSize and its
 // intrinsics scaled by the size ratios (fx, cx by the width's, fy, cy by the height's: exact with
-// the corner-origin convention). Level 0 returns it as it is.
+// the corner-origin convention). Level 0 returns it as it is. A camera without an image (its
+// geometry only) stays without one.
 SweepCamera CameraAtPyramidLevel(const SweepCamera& camera, int level);
 
 // Checks the job (CheckSweepJob), picks the pyramid level, resizes images (cv::INTER_AREA) and

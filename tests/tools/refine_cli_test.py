@@ -58,10 +58,12 @@ def main():
     if r.returncode != 0:
         print("FAIL manifold:", r.stderr[-2000:])
         return 1
-    # `reconstruct --refine`: 4 sweep iterations, then refine final.ply into refined.ply.
+    # `reconstruct --refine`: 4 sweep iterations, then refine final.ply into refined.ply,
+    # remeshing to 20-px edges (so the distributed checks below cover remeshing too).
     out = os.path.join(args.workdir, "run")
     recon = [ms, "reconstruct", "-i", scene, "--max-iterations", "4", "--kernel", "cpu",
-             "--refine", "--refine.iterations", "6", "--refine.levels", "2"]
+             "--refine", "--refine.iterations", "6", "--refine.levels", "2",
+             "--refine.max-edge-px", "20"]
     r = run(recon + ["-o", out, "--workers", "2"])
     refined = os.path.join(out, "refined.ply")
     ok = r.returncode == 0 and "check-mesh: valid" in r.stdout
@@ -116,7 +118,7 @@ def main():
     same_one = r.returncode == 0 and open(os.path.join(one, "refined.ply"), "rb").read() == refined_bytes
     local = os.path.join(args.workdir, "local.ply")
     r = run([ms, "refine", "-i", scene, "-m", final_mesh, "-o", local, "--refine.iterations", "6",
-             "--refine.levels", "2"])
+             "--refine.levels", "2", "--refine.max-edge-px", "20"])
     same_local = r.returncode == 0 and open(local, "rb").read() == refined_bytes
     cut = os.path.join(args.workdir, "run_cut")
     p = subprocess.Popen(recon + ["-o", cut, "--workers", "2"], stderr=subprocess.PIPE,
@@ -143,7 +145,8 @@ def main():
     endpoint = f"tcp://127.0.0.1:{port}"
     coordinator = subprocess.Popen(
         [ms, "coordinator", "-i", scene, "-o", cluster, "--bind", endpoint, "--max-iterations",
-         "4", "--refine", "--refine.iterations", "6", "--refine.levels", "2"],
+         "4", "--refine", "--refine.iterations", "6", "--refine.levels", "2",
+         "--refine.max-edge-px", "20"],
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     workers = [subprocess.Popen([ms, "worker", "--connect", endpoint, "--kernel", "cpu"],
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
