@@ -68,10 +68,6 @@ CheckerProblems FindCheckerProblems(const Mesh& mesh, double tolerance,
 
 namespace {
 
-Eigen::Vector3d FaceCross(const std::vector<Eigen::Vector3d>& p, const std::array<int32_t, 3>& f) {
-  return (p[f[1]] - p[f[0]]).cross(p[f[2]] - p[f[0]]);
-}
-
 // Vertices of faces that the move from `before` to `mesh` turned too far (or flipped).
 void MarkTurnedFaces(const Mesh& mesh, const std::vector<Eigen::Vector3d>& before,
                      const std::vector<uint8_t>& moving, double cos_limit,

@@ -16,6 +16,13 @@
 
 namespace ms {
 
+// The cross product of face f's edges over the points p: twice its area along its normal. Also
+// for faces that are not (yet) in a mesh.
+inline Eigen::Vector3d FaceCross(const std::vector<Eigen::Vector3d>& p,
+                                 const std::array<int32_t, 3>& f) {
+  return (p[f[1]] - p[f[0]]).cross(p[f[2]] - p[f[0]]);
+}
+
 // Neighbours of every vertex along the faces' edges (sorted, unique).
 std::vector<std::vector<int32_t>> VertexNeighbours(const Mesh& mesh);
 

@@ -206,14 +206,14 @@ PairGradient ComputePairGradient(const Mesh& mesh, const RefineView& reference,
       const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
       const double n2 = n.squaredNorm();
       const Eigen::Vector3d& x = s.world[q];
-      const double phi[3] = {(p2 - p1).cross(x - p1).dot(n) / n2,
-                             (p0 - p2).cross(x - p2).dot(n) / n2, 0};
-      const double phi2 = 1 - phi[0] - phi[1];
+      const double phi0 = (p2 - p1).cross(x - p1).dot(n) / n2;
+      const double phi1 = (p0 - p2).cross(x - p2).dot(n) / n2;
+      const double phi[3] = {phi0, phi1, 1 - phi0 - phi1};  // barycentric weights of x
       const Eigen::Vector3d unit = n / std::sqrt(n2);
       const double cos = unit.dot(s.ray[q]);
       const Eigen::Vector3d dd_dv = unit / cos;  // times phi_k: dd/dv_k
       for (int k = 0; k < 3; ++k) {
-        const double weight = k == 2 ? phi2 : phi[k];
+        const double weight = phi[k];
         out.gradient[t[k]] += (de_dd * weight) * dd_dv;
         out.parallax_rate2[t[k]] += weight * s.parallax2[q] / (cos * cos);
         out.weight[t[k]] += weight;

@@ -21,6 +21,33 @@ using Edge = std::pair<int32_t, int32_t>;  // (smaller, larger) vertex index
 
 Edge Key(int32_t a, int32_t b) { return a < b ? Edge{a, b} : Edge{b, a}; }
 
+// Every edge with the faces that have it (one on a boundary, two inside), in edge order.
+// An edge in more than two faces is an InternalError naming `who`.
+std::map<Edge, std::vector<int32_t>> EdgeFaces(const Mesh& mesh, const char* who) {
+  std::map<Edge, std::vector<int32_t>> faces_of;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& t = mesh.faces[f];
+    for (int k = 0; k < 3; ++k) {
+      std::vector<int32_t>& faces = faces_of[Key(t[k], t[(k + 1) % 3])];
+      faces.push_back(static_cast<int32_t>(f));
+      if (faces.size() > 2) {
+        throw InternalError(std::string(who) + ": an edge is in more than two faces");
+      }
+    }
+  }
+  return faces_of;
+}
+
+// The faces the checker objects to: both faces of each pair, and the degenerate ones.
+std::vector<int64_t> TroubledFaces(const CheckerProblems& problems) {
+  std::vector<int64_t> faces = problems.degenerate_faces;
+  for (const auto& [f, g] : problems.face_pairs) {
+    faces.push_back(f);
+    faces.push_back(g);
+  }
+  return faces;
+}
+
 // One split: edge (u, v) of faces f0 and f1 at the new vertex m; faces f0 and f1 were changed
 // and faces added0 and added1 appended.
 struct Split {
@@ -37,13 +64,8 @@ struct Split {
 Eigen::Vector3d SplitPoint(const Mesh& mesh, const Edge& edge, const std::vector<int32_t>& faces,
                            double offset) {
   const Eigen::Vector3d mid = 0.5 * (mesh.vertices[edge.first] + mesh.vertices[edge.second]);
-  const auto normal = [&](const std::array<int32_t, 3>& f) {
-    return (mesh.vertices[f[1]] - mesh.vertices[f[0]])
-        .cross(mesh.vertices[f[2]] - mesh.vertices[f[0]])
-        .normalized();
-  };
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
-  for (int32_t f : faces) n += normal(mesh.faces[f]);
+  for (int32_t f : faces) n += FaceCross(mesh.vertices, mesh.faces[f]).normalized();
   return n.norm() > 1e-6 ? Eigen::Vector3d(mid + offset * n.normalized()) : mid;
 }
 
@@ -52,16 +74,9 @@ Eigen::Vector3d SplitPoint(const Mesh& mesh, const Edge& edge, const std::vector
 std::vector<Split> SplitPass(Mesh* mesh,
                              const std::function<double(const Eigen::Vector3d&)>& max_length,
                              int64_t max_vertices, const std::set<Edge>& refused, double offset) {
-  std::map<Edge, std::vector<int32_t>> faces_of;  // edge -> the faces that have it
-  for (size_t f = 0; f < mesh->faces.size(); ++f) {
-    const auto& t = mesh->faces[f];
-    for (int k = 0; k < 3; ++k) {
-      faces_of[Key(t[k], t[(k + 1) % 3])].push_back(static_cast<int32_t>(f));
-    }
-  }
+  std::map<Edge, std::vector<int32_t>> faces_of = EdgeFaces(*mesh, "SplitLongEdges");
   std::vector<std::pair<double, Edge>> long_edges;
   for (const auto& [edge, faces] : faces_of) {
-    if (faces.size() > 2) throw InternalError("SplitLongEdges: an edge is in more than two faces");
     if (refused.count(edge)) continue;
     const Eigen::Vector3d& a = mesh->vertices[edge.first];
     const Eigen::Vector3d& b = mesh->vertices[edge.second];
@@ -129,20 +144,13 @@ int64_t UndoTroubledSplits(Mesh* mesh, std::vector<Split>* splits_ptr, double to
       by_vertex[splits[i].m] = i;
     }
     std::set<size_t> bad;
-    const auto bad_face = [&](int64_t f) {
+    for (int64_t f : TroubledFaces(problems)) {
       if (auto it = by_face.find(f); it != by_face.end()) bad.insert(it->second);
-    };
-    const auto bad_vertex = [&](int32_t v) {
-      if (auto it = by_vertex.find(v); it != by_vertex.end()) bad.insert(it->second);
-    };
-    for (const auto& [f, g] : problems.face_pairs) {
-      bad_face(f);
-      bad_face(g);
     }
-    for (int64_t f : problems.degenerate_faces) bad_face(f);
-    for (const auto& [u, v] : problems.vertex_pairs) {
-      bad_vertex(u);
-      bad_vertex(v);
+    for (const auto& pair : problems.vertex_pairs) {
+      for (int32_t v : pair) {
+        if (auto it = by_vertex.find(v); it != by_vertex.end()) bad.insert(it->second);
+      }
     }
     if (bad.empty()) break;  // what is left was there before the pass
     std::vector<uint8_t> restored(mesh->faces.size(), 0);
@@ -206,6 +214,7 @@ namespace {
 // One flip: faces f0 = (a, b, c) and f1 = (b, a, d) of edge (a, b) became (c, a, d) and
 // (d, b, c).
 struct Flip {
+  Edge edge;  // (a, b)
   int32_t faces[2];
   std::array<int32_t, 3> old_faces[2];
 };
@@ -215,25 +224,13 @@ double Angle(const Eigen::Vector3d& at, const Eigen::Vector3d& p, const Eigen::V
   return std::atan2(u.cross(v).norm(), u.dot(v));
 }
 
-Eigen::Vector3d FaceNormal(const Mesh& mesh, const std::array<int32_t, 3>& f) {
-  return (mesh.vertices[f[1]] - mesh.vertices[f[0]])
-      .cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]);
-}
-
 // One pass over the edges in index order; a face flips at most once per pass.
 std::vector<Flip> FlipPass(Mesh* mesh, double min_cos_dihedral, const std::set<Edge>& refused) {
-  std::map<Edge, std::vector<int32_t>> faces_of;
+  const std::map<Edge, std::vector<int32_t>> faces_of = EdgeFaces(*mesh, "FlipEdges");
   std::vector<int32_t> degree(mesh->vertices.size(), 0);
-  for (size_t f = 0; f < mesh->faces.size(); ++f) {
-    const auto& t = mesh->faces[f];
-    for (int k = 0; k < 3; ++k) {
-      std::vector<int32_t>& faces = faces_of[Key(t[k], t[(k + 1) % 3])];
-      if (faces.empty()) {
-        ++degree[t[k]];
-        ++degree[t[(k + 1) % 3]];
-      }
-      faces.push_back(static_cast<int32_t>(f));
-    }
+  for (const auto& entry : faces_of) {
+    ++degree[entry.first.first];
+    ++degree[entry.first.second];
   }
   std::vector<uint8_t> touched(mesh->faces.size(), 0);
   std::set<Edge> created;  // by this pass's flips
@@ -254,17 +251,19 @@ std::vector<Flip> FlipPass(Mesh* mesh, double min_cos_dihedral, const std::set<E
     const Eigen::Vector3d &pa = mesh->vertices[a], &pb = mesh->vertices[b];
     const Eigen::Vector3d &pc = mesh->vertices[c], &pd = mesh->vertices[d];
     if (Angle(pc, pa, pb) + Angle(pd, pa, pb) <= M_PI + 1e-9) continue;  // Delaunay already
-    const Eigen::Vector3d n0 = FaceNormal(*mesh, t0).normalized();
-    const Eigen::Vector3d n1 = FaceNormal(*mesh, t1).normalized();
+    const Eigen::Vector3d n0 = FaceCross(mesh->vertices, t0).normalized();
+    const Eigen::Vector3d n1 = FaceCross(mesh->vertices, t1).normalized();
     if (!(n0.dot(n1) >= min_cos_dihedral)) continue;
     const std::array<int32_t, 3> new0 = {c, a, d}, new1 = {d, b, c};
-    const Eigen::Vector3d m0 = FaceNormal(*mesh, new0), m1 = FaceNormal(*mesh, new1);
+    const Eigen::Vector3d m0 = FaceCross(mesh->vertices, new0),
+                          m1 = FaceCross(mesh->vertices, new1);
     const Eigen::Vector3d mean = n0 + n1;
     if (!(m0.dot(mean) > 0 && m1.dot(mean) > 0 &&
           m0.normalized().dot(m1.normalized()) >= min_cos_dihedral)) {
       continue;
     }
     Flip flip;
+    flip.edge = edge;
     for (int i = 0; i < 2; ++i) {
       flip.faces[i] = faces[i];
       flip.old_faces[i] = mesh->faces[faces[i]];
@@ -304,16 +303,11 @@ FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance, int m
     while (true) {
       const CheckerProblems problems = FindCheckerProblems(*mesh, tolerance, focus);
       std::set<size_t> bad;
-      const auto bad_face = [&](int64_t f) {
+      for (int64_t f : TroubledFaces(problems)) {
         if (auto it = by_face.find(f); it != by_face.end() && alive[it->second]) {
           bad.insert(it->second);
         }
-      };
-      for (const auto& [f, g] : problems.face_pairs) {
-        bad_face(f);
-        bad_face(g);
       }
-      for (int64_t f : problems.degenerate_faces) bad_face(f);
       if (bad.empty()) break;  // what is left was there before the pass
       std::fill(focus.begin(), focus.end(), 0);
       for (size_t i : bad) {
@@ -322,15 +316,7 @@ FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance, int m
           mesh->faces[flip.faces[k]] = flip.old_faces[k];
           focus[flip.faces[k]] = 1;
         }
-        // The flipped edge is the old faces' shared one; do not try it again.
-        const auto& t = flip.old_faces[0];
-        for (int k = 0; k < 3; ++k) {
-          const Edge e = Key(t[k], t[(k + 1) % 3]);
-          const auto& u = flip.old_faces[1];
-          if (std::count(u.begin(), u.end(), e.first) && std::count(u.begin(), u.end(), e.second)) {
-            refused.insert(e);
-          }
-        }
+        refused.insert(flip.edge);  // not tried again
         alive[i] = 0;
         ++undone;
       }
@@ -355,21 +341,15 @@ struct Collapse {
 std::vector<Collapse> PlanCollapses(const Mesh& mesh,
                                     const std::function<double(const Eigen::Vector3d&)>& min_length,
                                     double cos_turn, const std::set<Edge>& refused) {
-  std::map<Edge, std::vector<int32_t>> faces_of;
+  const std::map<Edge, std::vector<int32_t>> faces_of = EdgeFaces(mesh, "CollapseShortEdges");
   std::vector<std::vector<int32_t>> faces_at(mesh.vertices.size());
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    const auto& t = mesh.faces[f];
-    for (int k = 0; k < 3; ++k) {
-      faces_of[Key(t[k], t[(k + 1) % 3])].push_back(static_cast<int32_t>(f));
-      faces_at[t[k]].push_back(static_cast<int32_t>(f));
-    }
+    for (int32_t v : mesh.faces[f]) faces_at[v].push_back(static_cast<int32_t>(f));
   }
   const std::vector<std::vector<int32_t>> neighbours = VertexNeighbours(mesh);
   std::vector<std::pair<double, Edge>> short_edges;
   std::vector<uint8_t> on_boundary(mesh.vertices.size(), 0);
   for (const auto& [edge, faces] : faces_of) {
-    if (faces.size() > 2)
-      throw InternalError("CollapseShortEdges: an edge is in more than two faces");
     if (faces.size() == 1) on_boundary[edge.first] = on_boundary[edge.second] = 1;
   }
   for (const auto& [edge, faces] : faces_of) {
@@ -404,7 +384,7 @@ std::vector<Collapse> PlanCollapses(const Mesh& mesh,
       for (int32_t f : faces_at[v]) {
         std::array<int32_t, 3> t = mesh.faces[f];
         if (std::count(t.begin(), t.end(), a) && std::count(t.begin(), t.end(), b)) continue;
-        const Eigen::Vector3d before = FaceNormal(mesh, t);
+        const Eigen::Vector3d before = FaceCross(mesh.vertices, t);
         Eigen::Vector3d p[3];
         for (int k = 0; k < 3; ++k) p[k] = (t[k] == a || t[k] == b) ? mid : mesh.vertices[t[k]];
         const Eigen::Vector3d after = (p[1] - p[0]).cross(p[2] - p[0]);
@@ -470,14 +450,9 @@ CollapseStats CollapseShortEdges(Mesh* mesh,
       for (size_t f = 0; f < owner.size(); ++f) focus[f] = owner[f] >= 0;
       const CheckerProblems problems = FindCheckerProblems(trial, tolerance, focus);
       std::set<int32_t> bad;
-      const auto bad_face = [&](int64_t f) {
+      for (int64_t f : TroubledFaces(problems)) {
         if (owner[f] >= 0) bad.insert(owner[f]);
-      };
-      for (const auto& [f, g] : problems.face_pairs) {
-        bad_face(f);
-        bad_face(g);
       }
-      for (int64_t f : problems.degenerate_faces) bad_face(f);
       for (const auto& [u, v] : problems.vertex_pairs) {
         for (size_t i = 0; i < plan.size(); ++i) {
           if (plan[i].kept == u || plan[i].kept == v) bad.insert(static_cast<int32_t>(i));
