@@ -41,6 +41,8 @@ struct PairGradient {
   std::vector<double> parallax_rate2;
   std::vector<double> weight;
 
+  // Mean (1 - ZNCC) over the defined pixels (0 without any).
+  double MeanEnergy() const { return pixels > 0 ? energy / static_cast<double>(pixels) : 0; }
   void Resize(size_t vertices);
   void Add(const PairGradient& other);  // sums, vertex by vertex
 };

@@ -93,6 +93,29 @@ double Footprint(const std::vector<RefineView>& views, const Eigen::Vector3d& x)
   return best;
 }
 
+// Remeshing at the start of a level (docs/refine.md "Remeshing"): collapses, splits, flips,
+// with edge lengths in pixels of `views`.
+void Remesh(Mesh* mesh, const std::vector<RefineView>& views, const RefineOptions& options,
+            double tolerance, RefineStats* stats) {
+  if (options.min_edge_px > 0) {
+    const CollapseStats collapse = CollapseShortEdges(
+        mesh, [&](const Eigen::Vector3d& x) { return options.min_edge_px * Footprint(views, x); },
+        options.max_face_turn_deg, tolerance);
+    stats->collapses += collapse.collapses;
+    stats->collapses_refused += collapse.refused;
+  }
+  const SplitStats split = SplitLongEdges(
+      mesh, [&](const Eigen::Vector3d& x) { return options.max_edge_px * Footprint(views, x); },
+      options.max_vertices, tolerance);
+  stats->splits += split.splits;
+  stats->splits_refused += split.refused;
+  if (options.flip_dihedral_deg > 0) {
+    const FlipStats flip = FlipEdges(mesh, options.flip_dihedral_deg, tolerance);
+    stats->flips += flip.flips;
+    stats->flips_refused += flip.refused;
+  }
+}
+
 }  // namespace
 
 RefineView RefineViewAtLevel(const SweepCamera& camera, int level) {
@@ -157,24 +180,7 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     views.reserve(cameras.size());
     for (const SweepCamera& c : cameras) views.push_back(RefineViewAtLevel(c, level));
     if (options.max_edge_px > 0 && !resumed) {  // a resumed level was remeshed before
-      if (options.min_edge_px > 0) {
-        const CollapseStats collapse = CollapseShortEdges(
-            mesh,
-            [&](const Eigen::Vector3d& x) { return options.min_edge_px * Footprint(views, x); },
-            options.max_face_turn_deg, move_options.tolerance);
-        stats.collapses += collapse.collapses;
-        stats.collapses_refused += collapse.refused;
-      }
-      const SplitStats split = SplitLongEdges(
-          mesh, [&](const Eigen::Vector3d& x) { return options.max_edge_px * Footprint(views, x); },
-          options.max_vertices, move_options.tolerance);
-      stats.splits += split.splits;
-      stats.splits_refused += split.refused;
-      if (options.flip_dihedral_deg > 0) {
-        const FlipStats flip = FlipEdges(mesh, options.flip_dihedral_deg, move_options.tolerance);
-        stats.flips += flip.flips;
-        stats.flips_refused += flip.refused;
-      }
+      Remesh(mesh, views, options, move_options.tolerance, &stats);
     }
     const std::vector<std::vector<int32_t>> neighbours = VertexNeighbours(*mesh);
     // Backtracking: a step that raised the energy is undone and retried at half the length;
@@ -196,7 +202,7 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
       it.level = level;
       it.iteration = ++iteration;
       it.pixels = data.pixels;
-      it.energy = data.pixels > 0 ? data.energy / static_cast<double>(data.pixels) : 0;
+      it.energy = data.MeanEnergy();
       if (iteration == 1 && data.pixels == 0) {
         throw InputError(
             "refine: no pixel of any camera pair has a defined ZNCC at the first level: no camera "
@@ -240,7 +246,7 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     }
     if (l == 0 && !accepted.empty()) {  // the last step is kept only if it lowered the energy
       const PairGradient last = SumPairs(*mesh, views, level, pairs, options, hooks.pair_gradients);
-      const double energy = last.pixels > 0 ? last.energy / static_cast<double>(last.pixels) : 0;
+      const double energy = last.MeanEnergy();
       if (energy > accepted_energy) mesh->vertices = accepted;
       stats.final_energy = std::min(energy, accepted_energy);
     }
