@@ -56,7 +56,6 @@ class RefineDispatcher::Impl {
     if (stopped_) return false;
     request_ = std::move(jobs);
     request_mesh_ = std::move(round_mesh_);
-    request_vertices_ = mesh.vertices.size();
     done_ = false;
     changed_.wait(lock, [&] { return done_ || stopped_ || !error_.empty(); });
     if (!error_.empty()) throw InputError(error_);
@@ -150,7 +149,8 @@ class RefineDispatcher::Impl {
       }
       for (uint64_t job : expiry.requeued) {
         spdlog::warn("refinement job {} goes back to the queue", PairName(job));
-        ++stats_requeued_;
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++stats_.requeued;
       }
       for (const std::string& peer : scheduler_.DueHeartbeats(now)) {
         wire::Envelope envelope = stamper_.New();
@@ -180,11 +180,9 @@ class RefineDispatcher::Impl {
     }
     request_.clear();
     round_ = JobIdIteration(ids.front());
-    round_vertices_ = request_vertices_;
     mesh_of_round_ = std::move(request_mesh_);
     gradients_.assign(pairs_.size(), PairGradient());
     scheduler_.StartIteration(round_, ids);
-    stats_requeued_ = 0;
     round_started_ = now;
     active_ = true;
   }
@@ -195,7 +193,6 @@ class RefineDispatcher::Impl {
     finished_ = std::move(gradients_);
     done_ = true;
     ++stats_.rounds;
-    stats_.requeued += stats_requeued_;
     stats_.seconds += now - round_started_;
     changed_.notify_all();
   }
@@ -289,7 +286,7 @@ class RefineDispatcher::Impl {
     if (result.points_size() > 0 || !result.has_gradient()) {
       problem = "not a refinement result (points, or no gradient)";
     } else {
-      gradient = PairGradientFromWire(result.gradient(), round_vertices_, &problem);
+      gradient = PairGradientFromWire(result.gradient(), mesh_of_round_.num_vertices(), &problem);
     }
     if (!problem.empty()) {
       junk_.Warn("result", fmt::format("dropped the result of refinement job {} from worker {}: {}",
@@ -376,7 +373,6 @@ class RefineDispatcher::Impl {
   std::string error_;
   std::vector<wire::Job> request_;  // a round asked for, not yet started
   wire::PackedMesh request_mesh_;   // its mesh
-  size_t request_vertices_ = 0;
   bool done_ = false;
   std::vector<PairGradient> finished_;
   RefineDispatchStats stats_;
@@ -385,9 +381,7 @@ class RefineDispatcher::Impl {
   std::thread loop_;
   bool active_ = false;
   uint32_t round_ = 0;
-  size_t round_vertices_ = 0;
   double round_started_ = 0;
-  int64_t stats_requeued_ = 0;
   std::map<uint64_t, wire::Job> jobs_;  // without the mesh
   wire::PackedMesh mesh_of_round_;
   std::map<std::string, uint32_t> mesh_sent_;  // peer -> the last round whose mesh it got
