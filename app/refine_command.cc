@@ -35,6 +35,31 @@ struct RefineCommandOptions {
   NeighbourOptions neighbours;
 };
 
+void LogIteration(const RefineIteration& it) {
+  spdlog::info(
+      "iteration {} (level {}): energy {:.4f} over {} pixels{}; step x{:.3g}: {} vertices "
+      "moved ({} halved, {} refused), largest {:.3g}; {:.2f} s ({} checks, {:.2f} s)",
+      it.iteration, it.level, it.energy, it.pixels,
+      it.rejected ? " (higher: last step undone)" : "", it.step_scale, it.moved, it.halved,
+      it.refused, it.largest_move, it.seconds, it.checks, it.check_seconds);
+}
+
+void LogRemeshing(const RefineStats& stats) {
+  spdlog::info(
+      "remeshing: {} edges collapsed ({} refused), {} split ({} refused), {} flipped ({} "
+      "refused)",
+      stats.collapses, stats.collapses_refused, stats.splits, stats.splits_refused, stats.flips,
+      stats.flips_refused);
+}
+
+void LogDispatch(const RefineDispatchStats& d) {
+  spdlog::info(
+      "refinement on workers: {} rounds, {} jobs ({} handed out again), {:.1f} MiB of jobs out, "
+      "{:.1f} MiB of gradients in; {:.1f} s waiting for rounds, {:.1f} s of worker time",
+      d.rounds, d.jobs, d.requeued, d.bytes_out / 1048576.0, d.bytes_in / 1048576.0, d.seconds,
+      d.worker_seconds);
+}
+
 }  // namespace
 
 void RefineMeshFile(const std::string& input, const std::string& mesh_path,
@@ -107,14 +132,7 @@ void RefineMeshFile(const std::string& input, const std::string& mesh_path,
     }
   };
   RefineHooks hooks;
-  hooks.progress = [](const RefineIteration& it) {
-    spdlog::info(
-        "iteration {} (level {}): energy {:.4f} over {} pixels{}; step x{:.3g}: {} vertices "
-        "moved ({} halved, {} refused), largest {:.3g}; {:.2f} s ({} checks, {:.2f} s)",
-        it.iteration, it.level, it.energy, it.pixels,
-        it.rejected ? " (higher: last step undone)" : "", it.step_scale, it.moved, it.halved,
-        it.refused, it.largest_move, it.seconds, it.checks, it.check_seconds);
-  };
+  hooks.progress = LogIteration;
   if (checkpoint) hooks.resume = &checkpoint->state;
   hooks.checkpoint = save;
   if (dispatcher) hooks.pair_gradients = dispatcher->Source();
@@ -130,20 +148,9 @@ void RefineMeshFile(const std::string& input, const std::string& mesh_path,
         "refinement stopped: no worker is left to compute the gradients (see the log above); "
         "the last checkpoint stays: continue with --resume");
   }
-  if (refine.max_edge_px > 0) {
-    spdlog::info(
-        "remeshing: {} edges collapsed ({} refused), {} split ({} refused), {} flipped ({} "
-        "refused)",
-        stats.collapses, stats.collapses_refused, stats.splits, stats.splits_refused, stats.flips,
-        stats.flips_refused);
-  }
+  if (refine.max_edge_px > 0) LogRemeshing(stats);
   if (dispatcher) {
-    const RefineDispatchStats d = dispatcher->stats();
-    spdlog::info(
-        "refinement on workers: {} rounds, {} jobs ({} handed out again), {:.1f} MiB of jobs out, "
-        "{:.1f} MiB of gradients in; {:.1f} s waiting for rounds, {:.1f} s of worker time",
-        d.rounds, d.jobs, d.requeued, d.bytes_out / 1048576.0, d.bytes_in / 1048576.0, d.seconds,
-        d.worker_seconds);
+    LogDispatch(dispatcher->stats());
     dispatcher.reset();  // the workers are told to shut down
   }
   MeshWriteOptions write_options;
