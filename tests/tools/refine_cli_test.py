@@ -24,6 +24,17 @@ def free_port():
         return s.getsockname()[1]
 
 
+def interrupt_after(cmd, marker):
+    """Runs cmd, sends it SIGINT (Ctrl-C) once its log shows `marker`; returns its exit code."""
+    p = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+    for line in p.stderr:
+        if marker in line:
+            p.send_signal(signal.SIGINT)
+            break
+    p.stderr.read()
+    return p.wait(timeout=120)
+
+
 def run(cmd, **kw):
     return subprocess.run(cmd, capture_output=True, text=True, timeout=600, **kw)
 
@@ -90,14 +101,8 @@ def main():
     r = run([ms, "refine", "-i", scene, "-m", final_mesh, "-o", straight] + args_refine)
     ok = r.returncode == 0 and ok
     resumed = os.path.join(args.workdir, "resumed.ply")
-    p = subprocess.Popen([ms, "refine", "-i", scene, "-m", final_mesh, "-o", resumed] + args_refine,
-                         stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
-    for line in p.stderr:
-        if "iteration 3 " in line:
-            p.send_signal(signal.SIGINT)
-            break
-    p.stderr.read()
-    interrupted = p.wait(timeout=120)
+    interrupted = interrupt_after(
+        [ms, "refine", "-i", scene, "-m", final_mesh, "-o", resumed] + args_refine, "iteration 3 ")
     had_checkpoint = os.path.exists(resumed + ".checkpoint.json")
     r = run([ms, "refine", "-i", scene, "-m", final_mesh, "-o", resumed, "--resume"] + args_refine)
     same = (r.returncode == 0 and os.path.exists(resumed) and
@@ -121,14 +126,7 @@ def main():
              "--refine.levels", "2", "--refine.max-edge-px", "20"])
     same_local = r.returncode == 0 and open(local, "rb").read() == refined_bytes
     cut = os.path.join(args.workdir, "run_cut")
-    p = subprocess.Popen(recon + ["-o", cut, "--workers", "2"], stderr=subprocess.PIPE,
-                         stdout=subprocess.DEVNULL, text=True)
-    for line in p.stderr:
-        if "iteration 3 (level" in line:
-            p.send_signal(signal.SIGINT)
-            break
-    p.stderr.read()
-    cut_exit = p.wait(timeout=120)
+    cut_exit = interrupt_after(recon + ["-o", cut, "--workers", "2"], "iteration 3 (level")
     r = run(recon + ["-o", cut, "--workers", "2", "--resume"])
     cut_path = os.path.join(cut, "refined.ply")
     same_cut = (r.returncode == 0 and os.path.exists(cut_path) and
