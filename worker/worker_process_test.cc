@@ -221,7 +221,14 @@ TEST_F(WorkerProcessTest, RefinementJobsReturnGradientsAndAskForAMeshTheyDoNotHo
     job.mutable_neighbours()->RemoveLast();
     job.clear_options();
     job.mutable_refine()->set_mesh_id(5);
-    OptionsToWire(RefineOptions{}, job.mutable_refine()->mutable_options());
+    RefineOptions options;
+    options.gaussian_sigma_px = 0.5;  // a window that fits the 8 x 6 images
+    OptionsToWire(options, job.mutable_refine()->mutable_options());
+    // A square filling both views, so that the pair has pixels to compare.
+    Mesh square;
+    square.vertices = {{-4, -4, 0}, {4, -4, 0}, {4, 4, 0}, {-4, 4, 0}};
+    square.faces = {{0, 1, 2}, {0, 2, 3}};
+    PackMesh(square, job.mutable_mesh());
     if (!with_mesh) job.clear_mesh();
     return job;
   };
@@ -234,7 +241,8 @@ TEST_F(WorkerProcessTest, RefinementJobsReturnGradientsAndAskForAMeshTheyDoNotHo
   ASSERT_TRUE(envelope.has_result()) << BodyName(envelope);
   EXPECT_EQ(envelope.result().points_size(), 0);
   ASSERT_TRUE(envelope.result().has_gradient());
-  EXPECT_EQ(envelope.result().gradient().num_vertices(), 3u);
+  EXPECT_EQ(envelope.result().gradient().num_vertices(), 4u);
+  EXPECT_GT(envelope.result().gradient().pixels(), 0);
   const std::string first = envelope.result().gradient().SerializeAsString();
   SendJob(refine_job(3, 77, false));
   ASSERT_TRUE(Next(&envelope));
