@@ -9,12 +9,13 @@
 
 namespace ms {
 
-// One quantity of one row as the product of two rows of factors: m, mI, J, mI^2, J^2 and IJ
-// are m 1, m I, J 1, m I^2, J J and I J (J is already 0 where m is). Computed where they are
-// used, so the products are never stored.
-struct RowFactors {
-  const float* __restrict a;
-  const float* __restrict b;
+// One row of the images behind the six quantities: m, I m (I is C's image minus 0.5, so I m is
+// I where valid), I^2, J (already 0 where m is). All zeros outside the image.
+struct RowInputs {
+  const float* __restrict m;
+  const float* __restrict i;
+  const float* __restrict ii;
+  const float* __restrict j;
 };
 
 namespace {
@@ -42,52 +43,6 @@ FloatGaussian ToFloat(const RecursiveGaussian& g) {
   return f;
 }
 
-// One step of the causal recursion down a row of columns (see recursive_gaussian.h):
-// s = pole s + x - tail x_tail per pole; y = the output.
-MS_VECTOR_CLONES void CausalRow(const FloatGaussian& g, float* __restrict s0r,
-                                float* __restrict s0i, float* __restrict s1r, float* __restrict s1i,
-                                RowFactors x, RowFactors x_tail, float* __restrict y, int n) {
-  const float p0r = g.pr[0], p0i = g.pi[0], p1r = g.pr[1], p1i = g.pi[1];
-  const float t0r = g.tr[0], t0i = g.ti[0], t1r = g.tr[1], t1i = g.ti[1];
-  const float w0r = g.wr[0], w0i = g.wi[0], w1r = g.wr[1], w1i = g.wi[1];
-  for (int i = 0; i < n; ++i) {
-    const float xv = x.a[i] * x.b[i], tv = x_tail.a[i] * x_tail.b[i];
-    const float a0r = p0r * s0r[i] - p0i * s0i[i] + xv - t0r * tv;
-    const float a0i = p0r * s0i[i] + p0i * s0r[i] - t0i * tv;
-    const float a1r = p1r * s1r[i] - p1i * s1i[i] + xv - t1r * tv;
-    const float a1i = p1r * s1i[i] + p1i * s1r[i] - t1i * tv;
-    s0r[i] = a0r;
-    s0i[i] = a0i;
-    s1r[i] = a1r;
-    s1i[i] = a1i;
-    y[i] = w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i;
-  }
-}
-
-// One step of the anticausal recursion: a = pole (a + x_next) - tail x_tail; out = causal + its
-// output.
-MS_VECTOR_CLONES void AnticausalRow(const FloatGaussian& g, float* __restrict s0r,
-                                    float* __restrict s0i, float* __restrict s1r,
-                                    float* __restrict s1i, RowFactors x_next, RowFactors x_tail,
-                                    const float* __restrict causal, float* __restrict out, int n) {
-  const float p0r = g.pr[0], p0i = g.pi[0], p1r = g.pr[1], p1i = g.pi[1];
-  const float t0r = g.tr[0], t0i = g.ti[0], t1r = g.tr[1], t1i = g.ti[1];
-  const float w0r = g.wr[0], w0i = g.wi[0], w1r = g.wr[1], w1i = g.wi[1];
-  for (int i = 0; i < n; ++i) {
-    const float tv = x_tail.a[i] * x_tail.b[i], xv = x_next.a[i] * x_next.b[i];
-    const float u0 = s0r[i] + xv, u1 = s1r[i] + xv;
-    const float a0r = p0r * u0 - p0i * s0i[i] - t0r * tv;
-    const float a0i = p0r * s0i[i] + p0i * u0 - t0i * tv;
-    const float a1r = p1r * u1 - p1i * s1i[i] - t1r * tv;
-    const float a1i = p1r * s1i[i] + p1i * u1 - t1i * tv;
-    s0r[i] = a0r;
-    s0i[i] = a0i;
-    s1r[i] = a1r;
-    s1i[i] = a1i;
-    out[i] = causal[i] + w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i;
-  }
-}
-
 // Eight floats (the rows of a block), held in registers. The helpers are internal and inlined,
 // so the AVX calling convention GCC warns about never crosses a library boundary.
 #pragma GCC diagnostic ignored "-Wpsabi"
@@ -100,6 +55,135 @@ inline Lanes LoadLanes(const float* p) {
 }
 
 inline void StoreLanes(float* p, Lanes v) { __builtin_memcpy(p, &v, sizeof v); }
+
+// The helpers below are inlined into each clone of the vectorised loops that call them, so that
+// they take that clone's instruction set (and its fused multiply-adds).
+#define MS_ALWAYS_INLINE inline __attribute__((always_inline))
+
+// Loads and stores of one float or of 8 (the vertical passes' remainder and body).
+template <typename V>
+MS_ALWAYS_INLINE V Load(const float* p) {
+  if constexpr (sizeof(V) == sizeof(float)) {
+    return *p;
+  } else {
+    return LoadLanes(p);
+  }
+}
+
+template <typename V>
+MS_ALWAYS_INLINE void Store(float* p, V v) {
+  if constexpr (sizeof(V) == sizeof(float)) {
+    *p = v;
+  } else {
+    StoreLanes(p, v);
+  }
+}
+
+// The six quantities m, mI, J, mI^2, J^2, IJ at column c of one row.
+template <typename V>
+MS_ALWAYS_INLINE void Products(const RowInputs& r, size_t c, V out[kQuantities]) {
+  const V m = Load<V>(r.m + c), i = Load<V>(r.i + c), j = Load<V>(r.j + c);
+  out[0] = m;
+  out[1] = m * i;
+  out[2] = j;
+  out[3] = m * Load<V>(r.ii + c);
+  out[4] = j * j;
+  out[5] = i * j;
+}
+
+// Where column c's values of the six quantities lie in a row interleaved by groups of 8 columns
+// ([col / 8][quantity][col % 8]): the vertical passes then stream one array instead of six, and
+// their many rows never compete for the same cache sets.
+MS_ALWAYS_INLINE size_t Grouped(size_t c, int q, int per_column) {
+  return (c / kLanes * per_column + q) * kLanes + c % kLanes;
+}
+
+// The size of a grouped row of n columns.
+size_t GroupedSize(size_t n, int per_column) {
+  return (n + kLanes - 1) / kLanes * per_column * kLanes;
+}
+
+// The vertical recursions' state, 4 values per quantity: Grouped(c, 4 q + k, 24).
+constexpr int kStates = 4 * kQuantities;
+// One step of the causal recursion down column c for every quantity (see recursive_gaussian.h):
+// s = pole s + x - tail x_tail per pole; out = the output ([quantity], `out_stride` apart).
+template <typename V>
+MS_ALWAYS_INLINE void CausalColumns(const FloatGaussian& g, float* __restrict state,
+                                    const RowInputs& x, const RowInputs& x_tail,
+                                    float* __restrict out, size_t c) {
+  V xv[kQuantities], tv[kQuantities];
+  Products(x, c, xv);
+  Products(x_tail, c, tv);
+#pragma GCC unroll 6
+  for (int q = 0; q < kQuantities; ++q) {
+    float* s0r = state + Grouped(c, 4 * q, kStates);
+    float *s0i = s0r + kLanes, *s1r = s0r + 2 * kLanes, *s1i = s0r + 3 * kLanes;
+    const V r0 = Load<V>(s0r), i0 = Load<V>(s0i), r1 = Load<V>(s1r), i1 = Load<V>(s1i);
+    const V a0r = g.pr[0] * r0 - g.pi[0] * i0 + xv[q] - g.tr[0] * tv[q];
+    const V a0i = g.pr[0] * i0 + g.pi[0] * r0 - g.ti[0] * tv[q];
+    const V a1r = g.pr[1] * r1 - g.pi[1] * i1 + xv[q] - g.tr[1] * tv[q];
+    const V a1i = g.pr[1] * i1 + g.pi[1] * r1 - g.ti[1] * tv[q];
+    Store(s0r, a0r);
+    Store(s0i, a0i);
+    Store(s1r, a1r);
+    Store(s1i, a1i);
+    Store(out + Grouped(c, q, kQuantities),
+          g.wr[0] * a0r - g.wi[0] * a0i + g.wr[1] * a1r - g.wi[1] * a1i);
+  }
+}
+
+// One step of the anticausal recursion: a = pole (a + x_next) - tail x_tail; out = causal + its
+// output (both [quantity], their strides apart).
+template <typename V>
+MS_ALWAYS_INLINE void AnticausalColumns(const FloatGaussian& g, float* __restrict state,
+                                        const RowInputs& x_next, const RowInputs& x_tail,
+                                        const float* __restrict causal, float* __restrict out,
+                                        size_t out_stride, size_t c) {
+  V xv[kQuantities], tv[kQuantities];
+  Products(x_next, c, xv);
+  Products(x_tail, c, tv);
+#pragma GCC unroll 6
+  for (int q = 0; q < kQuantities; ++q) {
+    float* s0r = state + Grouped(c, 4 * q, kStates);
+    float *s0i = s0r + kLanes, *s1r = s0r + 2 * kLanes, *s1i = s0r + 3 * kLanes;
+    const V r0 = Load<V>(s0r), i0 = Load<V>(s0i), r1 = Load<V>(s1r), i1 = Load<V>(s1i);
+    const V u0 = r0 + xv[q], u1 = r1 + xv[q];
+    const V a0r = g.pr[0] * u0 - g.pi[0] * i0 - g.tr[0] * tv[q];
+    const V a0i = g.pr[0] * i0 + g.pi[0] * u0 - g.ti[0] * tv[q];
+    const V a1r = g.pr[1] * u1 - g.pi[1] * i1 - g.tr[1] * tv[q];
+    const V a1i = g.pr[1] * i1 + g.pi[1] * u1 - g.ti[1] * tv[q];
+    Store(s0r, a0r);
+    Store(s0i, a0i);
+    Store(s1r, a1r);
+    Store(s1i, a1i);
+    Store(out + q * out_stride + c, Load<V>(causal + Grouped(c, q, kQuantities)) + g.wr[0] * a0r -
+                                        g.wi[0] * a0i + g.wr[1] * a1r - g.wi[1] * a1i);
+  }
+}
+
+// The causal step of a whole row: all six quantities at once, so each input row is read once.
+MS_VECTOR_CLONES void CausalRow(const FloatGaussian& g, float* __restrict state, RowInputs x,
+                                RowInputs x_tail, float* __restrict out, int n) {
+  size_t c = 0;
+  for (; c + kLanes <= static_cast<size_t>(n); c += kLanes) {
+    CausalColumns<Lanes>(g, state, x, x_tail, out, c);
+  }
+  for (; c < static_cast<size_t>(n); ++c) CausalColumns<float>(g, state, x, x_tail, out, c);
+}
+
+// The anticausal step of a whole row, all six quantities at once.
+MS_VECTOR_CLONES void AnticausalRow(const FloatGaussian& g, float* __restrict state,
+                                    RowInputs x_next, RowInputs x_tail,
+                                    const float* __restrict causal, float* __restrict out,
+                                    size_t out_stride, int n) {
+  size_t c = 0;
+  for (; c + kLanes <= static_cast<size_t>(n); c += kLanes) {
+    AnticausalColumns<Lanes>(g, state, x_next, x_tail, causal, out, out_stride, c);
+  }
+  for (; c < static_cast<size_t>(n); ++c) {
+    AnticausalColumns<float>(g, state, x_next, x_tail, causal, out, out_stride, c);
+  }
+}
 
 // The horizontal recursions of one quantity over a block of 8 rows ([col][lane]).
 MS_VECTOR_CLONES void HorizontalBlock(const FloatGaussian& g, const float* __restrict in,
@@ -226,12 +310,11 @@ WindowedNcc::WindowedNcc(int width, int height, double sigma_px, double min_text
   const size_t n = static_cast<size_t>(width) * height;
   i_.resize(n);
   ii_.resize(n);
-  causal_.resize(n * kQuantities);
-  state_.resize(static_cast<size_t>(kQuantities) * 4 * width);
+  causal_.resize(GroupedSize(width, kQuantities) * height);
+  state_.resize(GroupedSize(width, kStates));
   zeros_.assign(width, 0.0f);
-  ones_.assign(width, 1.0f);
   block_.resize(static_cast<size_t>(kQuantities) * width * kLanes);
-  rows_.assign(block_.size(), 0.0f);
+  rows_.assign(RowsOffset(kQuantities, 0), 0.0f);
   sums_.resize(block_.size());
 }
 
@@ -249,25 +332,13 @@ void WindowedNcc::SetCamera(const cv::Mat& image) {
   }
 }
 
-RowFactors WindowedNcc::Factors(int row, int q) const {
-  if (row < 0 || row >= height_) return {zeros_.data(), zeros_.data()};
-  const size_t offset = static_cast<size_t>(row) * width_;
-  const float *i = i_.data() + offset, *ii = ii_.data() + offset, *ones = ones_.data();
-  const float *j = J_ + offset, *m = mask_ + offset;
-  switch (q) {
-    case 0:
-      return {m, ones};
-    case 1:
-      return {m, i};
-    case 2:
-      return {j, ones};
-    case 3:
-      return {m, ii};
-    case 4:
-      return {j, j};
-    default:
-      return {i, j};
+RowInputs WindowedNcc::Inputs(int row) const {
+  if (row < 0 || row >= height_) {
+    const float* zeros = zeros_.data();
+    return {zeros, zeros, zeros, zeros};
   }
+  const size_t offset = static_cast<size_t>(row) * width_;
+  return {mask_ + offset, i_.data() + offset, ii_.data() + offset, J_ + offset};
 }
 
 int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
@@ -275,30 +346,22 @@ int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
   mask_ = mask;
   const FloatGaussian g = ToFloat(gaussian_);
   const int w = width_, r = gaussian_.radius;
-  const auto state = [&](int q, int k) {
-    return state_.data() + (static_cast<size_t>(q) * 4 + k) * w;
-  };
+  float* state = state_.data();
+  const size_t row_size = GroupedSize(w, kQuantities);
 
   // Pass 1: vertical causal, top to bottom.
   std::fill(state_.begin(), state_.end(), 0.0f);
   for (int row = 0; row < height_; ++row) {
-    float* out = causal_.data() + static_cast<size_t>(row) * kQuantities * w;
-    for (int q = 0; q < kQuantities; ++q) {
-      CausalRow(g, state(q, 0), state(q, 1), state(q, 2), state(q, 3), Factors(row, q),
-                Factors(row - r - 1, q), out + q * w, w);
-    }
+    CausalRow(g, state, Inputs(row), Inputs(row - r - 1), causal_.data() + row * row_size, w);
   }
 
   // Pass 2: vertical anticausal, bottom to top; horizontal and NCC every 8 rows.
   std::fill(state_.begin(), state_.end(), 0.0f);
   int64_t defined = 0;
   for (int row = height_ - 1; row >= 0; --row) {
-    const float* causal = causal_.data() + static_cast<size_t>(row) * kQuantities * w;
     const int lane = row % kLanes;
-    for (int q = 0; q < kQuantities; ++q) {
-      AnticausalRow(g, state(q, 0), state(q, 1), state(q, 2), state(q, 3), Factors(row + 1, q),
-                    Factors(row + r + 1, q), causal + q * w, rows_.data() + RowsOffset(q, lane), w);
-    }
+    AnticausalRow(g, state, Inputs(row + 1), Inputs(row + r + 1), causal_.data() + row * row_size,
+                  rows_.data() + RowsOffset(0, lane), RowsOffset(1, 0), w);
     if (lane == 0) FinishBlock(row, ncc, &defined);
   }
   return defined;

@@ -15,7 +15,7 @@
 
 namespace ms {
 
-struct RowFactors;  // windowed_ncc.cc
+struct RowInputs;  // windowed_ncc.cc
 
 class WindowedNcc {
  public:
@@ -33,8 +33,8 @@ class WindowedNcc {
   static constexpr int kLanes = 8;       // rows per horizontal block
 
  private:
-  // Quantity q of `row` as a product of two rows (zeros outside the image).
-  RowFactors Factors(int row, int q) const;
+  // The rows behind the quantities at `row` (zeros outside the image).
+  RowInputs Inputs(int row) const;
   void FinishBlock(int first_row, float* ncc, int64_t* defined);
 
   int width_, height_;
@@ -42,15 +42,16 @@ class WindowedNcc {
   double min_texture_variance_, min_window_weight_;
   const float* J_ = nullptr;
   const float* mask_ = nullptr;
-  std::vector<float> i_, ii_;        // I - 0.5 and its square
-  std::vector<float> causal_;        // pass 1: [row][quantity][col]
-  std::vector<float> state_;         // vertical recursions: [quantity][4][col]
-  std::vector<float> zeros_, ones_;  // one row each
-  // The 8 rows of a block as pass 2 makes them ([quantity][lane][col]), then transposed for the
-  // horizontal recursions ([quantity][col][lane]) and their sums.
+  std::vector<float> i_, ii_;  // I - 0.5 and its square
+  std::vector<float> causal_;  // pass 1: [row][col / 8][quantity][col % 8]
+  std::vector<float> state_;   // vertical recursions: [col / 8][quantity][4][col % 8]
+  std::vector<float> zeros_;   // one row
+  // The 8 rows of a block as pass 2 makes them ([quantity][lane][col], each quantity's rows 16
+  // floats further on than a plain array, so that the six never share cache sets), then
+  // transposed for the horizontal recursions ([quantity][col][lane]) and their sums.
   std::vector<float> rows_, block_, sums_;
   size_t RowsOffset(int q, int lane) const {
-    return (static_cast<size_t>(q) * kLanes + lane) * width_;
+    return q * (static_cast<size_t>(kLanes) * width_ + 16) + static_cast<size_t>(lane) * width_;
   }
 };
 
