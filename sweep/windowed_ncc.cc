@@ -185,43 +185,55 @@ MS_VECTOR_CLONES void AnticausalRow(const FloatGaussian& g, float* __restrict st
   }
 }
 
-// The horizontal recursions of one quantity over a block of 8 rows ([col][lane]).
+// The horizontal recursions of Q quantities over a block of 8 rows ([quantity][col][lane], the
+// quantities `plane` apart). Each step's result waits on the step before it, so the quantities
+// run side by side to keep the multiply-add units busy.
+template <int Q>
 MS_VECTOR_CLONES void HorizontalBlock(const FloatGaussian& g, const float* __restrict in,
-                                      float* __restrict out, int n) {
+                                      float* __restrict out, size_t plane, int n) {
   static_assert(kLanes * sizeof(float) == sizeof(Lanes));
   const float p0r = g.pr[0], p0i = g.pi[0], p1r = g.pr[1], p1i = g.pi[1];
   const float t0r = g.tr[0], t0i = g.ti[0], t1r = g.tr[1], t1i = g.ti[1];
   const float w0r = g.wr[0], w0i = g.wi[0], w1r = g.wr[1], w1i = g.wi[1];
   const int r = g.radius;
-  Lanes s0r = {}, s0i = {}, s1r = {}, s1i = {};
+  Lanes s0r[Q] = {}, s0i[Q] = {}, s1r[Q] = {}, s1i[Q] = {};
   for (int col = 0; col < n; ++col) {
-    const Lanes x = LoadLanes(in + col * kLanes);
-    const Lanes t = col > r ? LoadLanes(in + (col - r - 1) * kLanes) : Lanes{};
-    const Lanes a0r = p0r * s0r - p0i * s0i + x - t0r * t;
-    const Lanes a0i = p0r * s0i + p0i * s0r - t0i * t;
-    const Lanes a1r = p1r * s1r - p1i * s1i + x - t1r * t;
-    const Lanes a1i = p1r * s1i + p1i * s1r - t1i * t;
-    s0r = a0r;
-    s0i = a0i;
-    s1r = a1r;
-    s1i = a1i;
-    StoreLanes(out + col * kLanes, w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i);
+#pragma GCC unroll 4
+    for (int q = 0; q < Q; ++q) {
+      const float* x_in = in + q * plane;
+      const Lanes x = LoadLanes(x_in + col * kLanes);
+      const Lanes t = col > r ? LoadLanes(x_in + (col - r - 1) * kLanes) : Lanes{};
+      const Lanes a0r = p0r * s0r[q] - p0i * s0i[q] + x - t0r * t;
+      const Lanes a0i = p0r * s0i[q] + p0i * s0r[q] - t0i * t;
+      const Lanes a1r = p1r * s1r[q] - p1i * s1i[q] + x - t1r * t;
+      const Lanes a1i = p1r * s1i[q] + p1i * s1r[q] - t1i * t;
+      s0r[q] = a0r;
+      s0i[q] = a0i;
+      s1r[q] = a1r;
+      s1i[q] = a1i;
+      StoreLanes(out + q * plane + col * kLanes, w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i);
+    }
   }
-  s0r = s0i = s1r = s1i = Lanes{};
+#pragma GCC unroll 4
+  for (int q = 0; q < Q; ++q) s0r[q] = s0i[q] = s1r[q] = s1i[q] = Lanes{};
   for (int col = n - 1; col >= 0; --col) {
-    const Lanes x = col + 1 < n ? LoadLanes(in + (col + 1) * kLanes) : Lanes{};
-    const Lanes t = col + r + 1 < n ? LoadLanes(in + (col + r + 1) * kLanes) : Lanes{};
-    const Lanes u0 = s0r + x, u1 = s1r + x;
-    const Lanes a0r = p0r * u0 - p0i * s0i - t0r * t;
-    const Lanes a0i = p0r * s0i + p0i * u0 - t0i * t;
-    const Lanes a1r = p1r * u1 - p1i * s1i - t1r * t;
-    const Lanes a1i = p1r * s1i + p1i * u1 - t1i * t;
-    s0r = a0r;
-    s0i = a0i;
-    s1r = a1r;
-    s1i = a1i;
-    StoreLanes(out + col * kLanes,
-               LoadLanes(out + col * kLanes) + w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i);
+#pragma GCC unroll 4
+    for (int q = 0; q < Q; ++q) {
+      const float* x_in = in + q * plane;
+      const Lanes x = col + 1 < n ? LoadLanes(x_in + (col + 1) * kLanes) : Lanes{};
+      const Lanes t = col + r + 1 < n ? LoadLanes(x_in + (col + r + 1) * kLanes) : Lanes{};
+      const Lanes u0 = s0r[q] + x, u1 = s1r[q] + x;
+      const Lanes a0r = p0r * u0 - p0i * s0i[q] - t0r * t;
+      const Lanes a0i = p0r * s0i[q] + p0i * u0 - t0i * t;
+      const Lanes a1r = p1r * u1 - p1i * s1i[q] - t1r * t;
+      const Lanes a1i = p1r * s1i[q] + p1i * u1 - t1i * t;
+      s0r[q] = a0r;
+      s0i[q] = a0i;
+      s1r[q] = a1r;
+      s1i[q] = a1i;
+      float* y = out + q * plane + col * kLanes;
+      StoreLanes(y, LoadLanes(y) + w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i);
+    }
   }
 }
 
@@ -244,13 +256,17 @@ MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
     const Lanes mean_j = LoadLanes(sums + 2 * plane + s) * inv_w;
     const Lanes ii = LoadLanes(sums + 3 * plane + s) * inv_w;
     const Lanes jj = LoadLanes(sums + 4 * plane + s) * inv_w;
-    const Lanes ij = LoadLanes(sums + 5 * plane + s) * inv_w;
+    Lanes ij = LoadLanes(sums + 5 * plane + s) * inv_w;
+    // Rounded before ij - mean_i mean_j, as the kernel has always done: which product a fused
+    // multiply-add takes moves NCCs by an ulp, and with them tile winners and whole runs.
+    __asm__("" : "+m"(ij));
     const Lanes var_i = ii - mean_i * mean_i, var_j = jj - mean_j * mean_j;
     const LaneMask ok = (w >= min_weight) & (var_i > min_variance) & (var_i > floor * ii) &
                         (var_j > min_variance) & (var_j > floor * jj);
-    const Lanes product = var_i * var_j;
-    Lanes root;
-    for (int l = 0; l < kLanes; ++l) root[l] = __builtin_sqrtf(product[l] > 0 ? product[l] : 0);
+    Lanes product = var_i * var_j;
+    product = product > 0 ? product : Lanes{};
+    Lanes root;  // one vector square root (this file is compiled without errno from sqrt)
+    for (int l = 0; l < kLanes; ++l) root[l] = __builtin_sqrtf(product[l]);
     Lanes value = (ij - mean_i * mean_j) / root;
     value = value > 1.0f ? Lanes{} + 1.0f : value;
     value = value < -1.0f ? Lanes{} - 1.0f : value;
@@ -370,11 +386,14 @@ int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
 void WindowedNcc::FinishBlock(int first_row, float* ncc, int64_t* defined) {
   const int w = width_;
   const int rows = std::min(kLanes, height_ - first_row);
+  const size_t plane = static_cast<size_t>(w) * kLanes;
   for (int q = 0; q < kQuantities; ++q) {
-    RowsToBlock(rows_.data() + RowsOffset(q, 0), w,
-                block_.data() + static_cast<size_t>(q) * w * kLanes, w);
-    HorizontalBlock(ToFloat(gaussian_), block_.data() + static_cast<size_t>(q) * w * kLanes,
-                    sums_.data() + static_cast<size_t>(q) * w * kLanes, w);
+    RowsToBlock(rows_.data() + RowsOffset(q, 0), w, block_.data() + q * plane, w);
+  }
+  constexpr int kSideBySide = 3;  // measured: 2 and 6 are slower
+  for (int q = 0; q < kQuantities; q += kSideBySide) {
+    HorizontalBlock<kSideBySide>(ToFloat(gaussian_), block_.data() + q * plane,
+                                 sums_.data() + q * plane, plane, w);
   }
   const size_t offset = static_cast<size_t>(first_row) * w;
   *defined += NccBlock(sums_.data(), static_cast<size_t>(w) * kLanes, mask_ + offset, ncc + offset,
