@@ -58,6 +58,25 @@ void ReprojectRow(const ReprojectionRow& p, const float* __restrict inv_z,
 }
 
 #if MS_HAVE_AVX2_DISPATCH
+// image[index[l]] and image[index[l] + 1] for 8 lanes: 4 + 4 gathers of 64-bit pairs, which cost
+// half as much as 8 + 8 single floats.
+__attribute__((target("avx2,fma"))) inline void GatherPairs(const float* image, __m256i index,
+                                                            __m256* first, __m256* second) {
+  const double* pairs = reinterpret_cast<const double*>(image);
+  // The masked form with every lane on: the plain one trips GCC 12's uninitialised warning.
+  const __m256d zero = _mm256_setzero_pd(), all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  const __m256 low = _mm256_castpd_ps(
+      _mm256_mask_i32gather_pd(zero, pairs, _mm256_castsi256_si128(index), all, 4));
+  const __m256 high = _mm256_castpd_ps(
+      _mm256_mask_i32gather_pd(zero, pairs, _mm256_extracti128_si256(index, 1), all, 4));
+  // low = a0 b0 a1 b1 | a2 b2 a3 b3, high = a4 b4 a5 b5 | a6 b6 a7 b7.
+  const __m256 a =
+      _mm256_shuffle_ps(low, high, _MM_SHUFFLE(2, 0, 2, 0));  // a0 a1 a4 a5 | a2 a3 a6 a7
+  const __m256 b = _mm256_shuffle_ps(low, high, _MM_SHUFFLE(3, 1, 3, 1));
+  *first = _mm256_castpd_ps(_mm256_permute4x64_pd(_mm256_castps_pd(a), _MM_SHUFFLE(3, 1, 2, 0)));
+  *second = _mm256_castpd_ps(_mm256_permute4x64_pd(_mm256_castps_pd(b), _MM_SHUFFLE(3, 1, 2, 0)));
+}
+
 // The same with AVX2 gathers, 8 pixels at a time; the remainder by ReprojectRow.
 __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
     const ReprojectionRow& p, const float* __restrict inv_z, const float* __restrict shadow,
@@ -66,6 +85,7 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
   const __m256 u_max = _mm256_set1_ps(p.width - 0.5f), v_max = _mm256_set1_ps(p.height - 0.5f);
   const __m256i last_col = _mm256_set1_epi32(p.width - 1),
                 last_row = _mm256_set1_epi32(p.height - 1);
+  const __m256i last_pair = _mm256_set1_epi32(p.width - 2);
   const __m256i stride = _mm256_set1_epi32(p.width), one_i = _mm256_set1_epi32(1);
   const __m256 ratio = _mm256_set1_ps(p.max_depth_ratio);
   const __m256 iota = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
@@ -102,15 +122,19 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
     const __m256 sx = _mm256_sub_ps(uc, half), sy = _mm256_sub_ps(vc, half);
     const __m256i x0 = _mm256_min_epi32(_mm256_cvttps_epi32(sx), last_col);
     const __m256i y0 = _mm256_min_epi32(_mm256_cvttps_epi32(sy), last_row);
-    const __m256i x1 = _mm256_min_epi32(_mm256_add_epi32(x0, one_i), last_col);
     const __m256i y1 = _mm256_min_epi32(_mm256_add_epi32(y0, one_i), last_row);
     const __m256 fx = _mm256_sub_ps(sx, _mm256_cvtepi32_ps(x0));
     const __m256 fy = _mm256_sub_ps(sy, _mm256_cvtepi32_ps(y0));
+    // The two columns of each row as one pair from xl = min(x0, width - 2): x1 = xl + 1 always,
+    // and x0 = xl + 1 at the last column (where fx = 0).
+    const __m256i xl = _mm256_min_epi32(x0, last_pair);
+    const __m256 at_last = _mm256_castsi256_ps(_mm256_cmpgt_epi32(x0, xl));
     const __m256i row0 = _mm256_mullo_epi32(y0, stride), row1 = _mm256_mullo_epi32(y1, stride);
-    const __m256 a = _mm256_i32gather_ps(image, _mm256_add_epi32(row0, x0), 4);
-    const __m256 b = _mm256_i32gather_ps(image, _mm256_add_epi32(row0, x1), 4);
-    const __m256 e = _mm256_i32gather_ps(image, _mm256_add_epi32(row1, x0), 4);
-    const __m256 f = _mm256_i32gather_ps(image, _mm256_add_epi32(row1, x1), 4);
+    __m256 a, b, e, f;
+    GatherPairs(image, _mm256_add_epi32(row0, xl), &a, &b);
+    GatherPairs(image, _mm256_add_epi32(row1, xl), &e, &f);
+    a = _mm256_blendv_ps(a, b, at_last);
+    e = _mm256_blendv_ps(e, f, at_last);
     const __m256 top = _mm256_fmadd_ps(fx, _mm256_sub_ps(b, a), a);
     const __m256 bottom = _mm256_fmadd_ps(fx, _mm256_sub_ps(f, e), e);
     const __m256 value = _mm256_sub_ps(_mm256_fmadd_ps(fy, _mm256_sub_ps(bottom, top), top), half);
@@ -148,7 +172,7 @@ void ReprojectThrough(const SpanRasterizer& camera, const View& c, const View& n
   CV_Assert(image.isContinuous());
 #if MS_HAVE_AVX2_DISPATCH
   static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  const auto reproject_row = avx2 ? ReprojectRowAvx2 : ReprojectRow;
+  const auto reproject_row = avx2 && image.cols >= 2 ? ReprojectRowAvx2 : ReprojectRow;
 #else
   const auto reproject_row = ReprojectRow;
 #endif

@@ -34,6 +34,10 @@ class CpuSweepSlab {
   // NCC of C's image against the last reprojection (row-major at the swept resolution, NaN where
   // undefined); returns the number of defined pixels.
   int64_t Ncc(float* out);
+  // The last reprojection: the neighbour's image minus 0.5 where valid (0 elsewhere), and the
+  // mask of valid pixels (1 or 0), row-major at the swept resolution.
+  const std::vector<float>& reprojected() const { return J_; }
+  const std::vector<float>& valid() const { return mask_; }
   // C's face per pixel of the last rendering (-1: nothing drawn) and their count.
   const std::vector<int32_t>& faces() const { return camera_raster_.face(); }
   int64_t CoveredPixels() const;

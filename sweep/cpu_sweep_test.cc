@@ -161,6 +161,47 @@ TEST(WindowedNcc, MatchesWeightedNcc) {
   }
 }
 
+// ---- The reprojection ----
+
+// The fast reprojection against the reference's on every pixel, over a plane that fills C's
+// image, so that valid pixels reach the neighbour's last row and column, where a bilinear
+// sample's second tap would lie outside the image.
+TEST(CpuSweepSlab, ReprojectsLikeTheReference) {
+  const SweepJob job = MakeSmallSweepJob(NoisyPyramidScene(), MakeFlatSquare(0.0, 50.0, 2));
+  const PreparedSweep prep = PrepareSweep(job);
+  CpuSweepSlab slab(job, prep);
+  slab.Render(0);
+  const View& view = prep.camera.view;
+  SoftwareRasterizer camera_raster(view, prep.near, /*keep_world=*/true);
+  RenderSoup(SweepFacets(job.mesh, FaceNormals(job.mesh), view.Center(), 0), &camera_raster);
+  for (size_t j = 0; j < prep.neighbours.size(); ++j) {
+    SCOPED_TRACE(j);
+    const SweepCamera& n = prep.neighbours[j];
+    SoftwareRasterizer shadow_map(n.view, prep.near, /*keep_world=*/false);
+    RenderSoup(SweepFacets(job.mesh, FaceNormals(job.mesh), view.Center(), 0), &shadow_map);
+    cv::Mat reprojected, mask;
+    ReprojectNeighbour(camera_raster, n.view, n.image, shadow_map, job.options.occlusion_tolerance,
+                       &reprojected, &mask);
+    slab.Reproject(static_cast<int>(j));
+    int both = 0, differ = 0;
+    double worst = 0;
+    for (int row = 0; row < mask.rows; ++row) {
+      for (int col = 0; col < mask.cols; ++col) {
+        const size_t i = static_cast<size_t>(row) * mask.cols + col;
+        const bool fast = slab.valid()[i] > 0, reference = mask.at<uint8_t>(row, col) > 0;
+        differ += fast != reference;
+        if (!fast || !reference) continue;
+        ++both;
+        worst = std::max(worst,
+                         std::abs(slab.reprojected()[i] + 0.5 - reprojected.at<float>(row, col)));
+      }
+    }
+    EXPECT_GT(both, mask.rows * mask.cols / 4);
+    EXPECT_LT(differ, both / 1000);  // float against double at the borders of validity
+    EXPECT_LT(worst, 1e-3);
+  }
+}
+
 // ---- End to end ----
 
 TEST(CpuSweep, PyramidFromAFlatSquareLikeTheReference) {
