@@ -205,13 +205,8 @@ CpuSweepSlab::CpuSweepSlab(const SweepJob& job, const PreparedSweep& prep)
 
 void CpuSweepSlab::Render(int k) {
   const auto soup = SweepFacets(job_.mesh, normals_, prep_.camera.view.Center(), prep_.alpha * k);
-  camera_raster_.Clear();
-  for (auto& s : shadow_maps_) s.Clear();
-  for (size_t f = 0; f < soup.size(); ++f) {
-    const auto& t = soup[f];
-    camera_raster_.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
-    for (auto& s : shadow_maps_) s.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
-  }
+  camera_raster_.DrawSoup(soup);
+  for (auto& s : shadow_maps_) s.DrawSoup(soup);
 }
 
 int64_t CpuSweepSlab::CoveredPixels() const {

@@ -96,8 +96,8 @@ TEST(SpanRasterizer, SamePixelsAsTheSoftwareRasterizer) {
   for (size_t f = 0; f < triangles.size(); ++f) {
     const auto& t = triangles[f];
     reference.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
-    fast.DrawTriangle(t[0], t[1], t[2], static_cast<int32_t>(f));
   }
+  fast.DrawSoup(triangles);
   int covered = 0, different_face = 0;
   for (int row = 0; row < view.intrinsics.height; ++row) {
     for (int col = 0; col < view.intrinsics.width; ++col) {

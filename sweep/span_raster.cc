@@ -41,6 +41,8 @@ SpanRasterizer::SpanRasterizer(const View& view, double near, bool keep_face)
       height_(view.intrinsics.height),
       keep_face_(keep_face) {
   MS_CHECK(width_ > 0 && height_ > 0 && near_ > 0) << "bad raster target";
+  const int bytes_per_row = width_ * (keep_face_ ? 8 : 4);
+  band_rows_ = std::clamp((256 << 10) / bytes_per_row, 4, 256);
   Clear();
 }
 
@@ -50,32 +52,60 @@ void SpanRasterizer::Clear() {
   if (keep_face_) face_.assign(n, -1);
 }
 
-void SpanRasterizer::DrawTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                  const Eigen::Vector3d& c, int32_t face) {
-  const std::array<Eigen::Vector3d, 3> in = {R_ * a + t_, R_ * b + t_, R_ * c + t_};
-  if (in[0].z() >= near_ && in[1].z() >= near_ && in[2].z() >= near_) {
-    DrawProjected(in[0], in[1], in[2], face);
-    return;
+void SpanRasterizer::DrawSoup(const std::vector<std::array<Eigen::Vector3d, 3>>& soup) {
+  Clear();
+  projected_.clear();
+  for (size_t f = 0; f < soup.size(); ++f) {
+    const std::array<Eigen::Vector3d, 3> in = {R_ * soup[f][0] + t_, R_ * soup[f][1] + t_,
+                                               R_ * soup[f][2] + t_};
+    const auto face = static_cast<int32_t>(f);
+    if (in[0].z() >= near_ && in[1].z() >= near_ && in[2].z() >= near_) {
+      Project(in[0], in[1], in[2], face);
+      continue;
+    }
+    // Sutherland-Hodgman against z >= near, as SoftwareRasterizer: a fan of at most 2.
+    std::array<Eigen::Vector3d, 4> out;
+    int n = 0;
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d& p = in[i];
+      const Eigen::Vector3d& q = in[(i + 1) % 3];
+      const bool p_in = p.z() >= near_, q_in = q.z() >= near_;
+      if (p_in) out[n++] = p;
+      if (p_in != q_in) {
+        const double s = (near_ - p.z()) / (q.z() - p.z());
+        out[n] = p + s * (q - p);
+        out[n++].z() = near_;
+      }
+    }
+    for (int i = 1; i + 1 < n; ++i) Project(out[0], out[i], out[i + 1], face);
   }
-  // Sutherland-Hodgman against z >= near, as SoftwareRasterizer: a fan of at most 2.
-  std::array<Eigen::Vector3d, 4> out;
-  int n = 0;
-  for (int i = 0; i < 3; ++i) {
-    const Eigen::Vector3d& p = in[i];
-    const Eigen::Vector3d& q = in[(i + 1) % 3];
-    const bool p_in = p.z() >= near_, q_in = q.z() >= near_;
-    if (p_in) out[n++] = p;
-    if (p_in != q_in) {
-      const double s = (near_ - p.z()) / (q.z() - p.z());
-      out[n] = p + s * (q - p);
-      out[n++].z() = near_;
+
+  // Each band's triangles in drawing order (a counting sort by band).
+  const int bands = (height_ + band_rows_ - 1) / band_rows_;
+  band_start_.assign(bands + 1, 0);
+  for (const Projected& t : projected_) {
+    for (int b = t.row_lo / band_rows_; b <= t.row_hi / band_rows_; ++b) ++band_start_[b + 1];
+  }
+  for (int b = 0; b < bands; ++b) band_start_[b + 1] += band_start_[b];
+  band_triangles_.resize(band_start_[bands]);
+  std::vector<uint32_t> next(band_start_.begin(), band_start_.end() - 1);
+  for (size_t i = 0; i < projected_.size(); ++i) {
+    const Projected& t = projected_[i];
+    for (int b = t.row_lo / band_rows_; b <= t.row_hi / band_rows_; ++b) {
+      band_triangles_[next[b]++] = static_cast<uint32_t>(i);
     }
   }
-  for (int i = 1; i + 1 < n; ++i) DrawProjected(out[0], out[i], out[i + 1], face);
+  for (int b = 0; b < bands; ++b) {
+    const int first = b * band_rows_, last = std::min(height_, first + band_rows_) - 1;
+    for (uint32_t k = band_start_[b]; k < band_start_[b + 1]; ++k) {
+      const Projected& t = projected_[band_triangles_[k]];
+      FillRows(t, std::max(first, t.row_lo), std::min(last, t.row_hi));
+    }
+  }
 }
 
-void SpanRasterizer::DrawProjected(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                   const Eigen::Vector3d& c, int32_t face) {
+void SpanRasterizer::Project(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                             const Eigen::Vector3d& c, int32_t face) {
   std::array<Point2, 3> p;
   std::array<double, 3> inv_z;
   const std::array<const Eigen::Vector3d*, 3> v = {&a, &b, &c};
@@ -94,11 +124,12 @@ void SpanRasterizer::DrawProjected(const Eigen::Vector3d& a, const Eigen::Vector
   const double max_x = std::max({p[0].x, p[1].x, p[2].x});
   const double min_y = std::min({p[0].y, p[1].y, p[2].y});
   const double max_y = std::max({p[0].y, p[1].y, p[2].y});
-  const int col_lo = static_cast<int>(std::max(0.0, std::ceil(min_x - 0.5)));
-  const int col_hi = static_cast<int>(std::min(width_ - 1.0, std::floor(max_x - 0.5)));
-  const int row_lo = static_cast<int>(std::max(0.0, std::ceil(min_y - 0.5)));
-  const int row_hi = static_cast<int>(std::min(height_ - 1.0, std::floor(max_y - 0.5)));
-  if (col_lo > col_hi || row_lo > row_hi) return;
+  Projected t;
+  t.col_lo = static_cast<int>(std::max(0.0, std::ceil(min_x - 0.5)));
+  t.col_hi = static_cast<int>(std::min(width_ - 1.0, std::floor(max_x - 0.5)));
+  t.row_lo = static_cast<int>(std::max(0.0, std::ceil(min_y - 0.5)));
+  t.row_hi = static_cast<int>(std::min(height_ - 1.0, std::floor(max_y - 0.5)));
+  if (t.col_lo > t.col_hi || t.row_lo > t.row_hi) return;
 
   // 1/z is affine in the image: inv_z(x, y) = gx x + gy y + g0 (screen barycentrics).
   const double twice_area = std::abs(area);
@@ -114,9 +145,21 @@ void SpanRasterizer::DrawProjected(const Eigen::Vector3d& a, const Eigen::Vector
     gx += (w10[i] - w00[i]) * inv_z[i];
     gy += (w01[i] - w00[i]) * inv_z[i];
   }
-  g0 /= twice_area;
-  gx /= twice_area;
-  gy /= twice_area;
+  t.g0 = g0 / twice_area;
+  t.gx = gx / twice_area;
+  t.gy = gy / twice_area;
+  for (int i = 0; i < 3; ++i) {
+    t.p[2 * i] = p[i].x;
+    t.p[2 * i + 1] = p[i].y;
+  }
+  t.face = face;
+  projected_.push_back(t);
+}
+
+void SpanRasterizer::FillRows(const Projected& t, int row_begin, int row_end) {
+  const std::array<Point2, 3> p = {Point2{t.p[0], t.p[1]}, Point2{t.p[2], t.p[3]},
+                                   Point2{t.p[4], t.p[5]}};
+  const int col_lo = t.col_lo, col_hi = t.col_hi;
   const auto covered = [&](int col, int row) {
     const Point2 centre{col + 0.5, row + 0.5};
     return Covers(Edge(p[1], p[2], centre), p[1], p[2]) &&
@@ -126,17 +169,17 @@ void SpanRasterizer::DrawProjected(const Eigen::Vector3d& a, const Eigen::Vector
   // Per row, the covered columns form one interval: estimate it from the edges' crossings of
   // the row's centre line, then settle its ends with the exact rules.
   const std::array<std::array<int, 2>, 3> edges = {{{1, 2}, {2, 0}, {0, 1}}};
-  for (int row = row_lo; row <= row_hi; ++row) {
+  for (int row = row_begin; row <= row_end; ++row) {
     const double y = row + 0.5;
     double lo = col_lo, hi = col_hi;
     for (const auto& e : edges) {
       const Point2& s = p[e[0]];
-      const Point2& t = p[e[1]];
-      const double dy = t.y - s.y;
+      const Point2& q = p[e[1]];
+      const double dy = q.y - s.y;
       if (dy == 0) continue;
       // Centre x where the edge crosses y, as a column: x - 0.5.
-      const double x = s.x + (y - s.y) * (t.x - s.x) / dy - 0.5;
-      // Interior lies left of s->t: for dy < 0 (going up in y-down) at larger x... decide by
+      const double x = s.x + (y - s.y) * (q.x - s.x) / dy - 0.5;
+      // Interior lies left of s->q: for dy < 0 (going up in y-down) at larger x... decide by
       // the sign of d(edge)/dx = -dy.
       if (-dy > 0) {
         lo = std::max(lo, std::floor(x));
@@ -153,7 +196,7 @@ void SpanRasterizer::DrawProjected(const Eigen::Vector3d& a, const Eigen::Vector
     while (end < col_hi && covered(end + 1, row)) ++end;
     const size_t offset = static_cast<size_t>(row) * width_;
     FillSpan(inv_z_.data() + offset, keep_face_ ? face_.data() + offset : nullptr, begin, end + 1,
-             g0 + gx * 0.5 + gy * y, gx, face);
+             t.g0 + t.gx * 0.5 + t.gy * y, t.gx, t.face);
   }
 }
 

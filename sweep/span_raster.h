@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -17,10 +18,11 @@ class SpanRasterizer {
   // `view` must be a pinhole view (distortion is ignored). keep_face: also record face ids.
   SpanRasterizer(const View& view, double near, bool keep_face);
 
-  void Clear();
-  // Draws the triangle (a, b, c) given in world coordinates; nearest wins, ties to the first.
-  void DrawTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                    int32_t face);
+  // Clears the image and draws the triangles (world coordinates) with face ids = their indices;
+  // nearest wins, ties to the lower index. Triangles are set up first, then filled a band of
+  // rows at a time (each band's rows fit in the cache), every band in index order: the same
+  // writes per pixel, in the same order, as drawing the triangles one after the other.
+  void DrawSoup(const std::vector<std::array<Eigen::Vector3d, 3>>& soup);
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -30,16 +32,30 @@ class SpanRasterizer {
   const std::vector<int32_t>& face() const { return face_; }
 
  private:
-  void DrawProjected(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                     int32_t face);
+  // A triangle projected and set up for filling: its pixel bounds and 1/z = gx x + gy y + g0.
+  struct Projected {
+    std::array<double, 6> p;  // x0 y0 x1 y1 x2 y2, positively oriented
+    double g0, gx, gy;
+    int col_lo, col_hi, row_lo, row_hi;
+    int32_t face;
+  };
+  void Clear();
+  // Sets up (a, b, c) in camera coordinates, appending to projected_ if any pixel may be covered.
+  void Project(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+               int32_t face);
+  // Fills rows [row_begin, row_end] of a set-up triangle.
+  void FillRows(const Projected& t, int row_begin, int row_end);
 
   Eigen::Matrix3d R_;
   Eigen::Vector3d t_;
   double fx_, fy_, cx_, cy_, near_;
   int width_, height_;
   bool keep_face_;
+  int band_rows_;  // rows per band: about 256 KiB of image
   std::vector<float> inv_z_;
   std::vector<int32_t> face_;
+  std::vector<Projected> projected_;
+  std::vector<uint32_t> band_start_, band_triangles_;  // per band, its triangles (CSR)
 };
 
 }  // namespace ms
