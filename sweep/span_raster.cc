@@ -159,41 +159,57 @@ void SpanRasterizer::Project(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
 void SpanRasterizer::FillRows(const Projected& t, int row_begin, int row_end) {
   const std::array<Point2, 3> p = {Point2{t.p[0], t.p[1]}, Point2{t.p[2], t.p[3]},
                                    Point2{t.p[4], t.p[5]}};
-  const int col_lo = t.col_lo, col_hi = t.col_hi;
-  const auto covered = [&](int col, int row) {
-    const Point2 centre{col + 0.5, row + 0.5};
-    return Covers(Edge(p[1], p[2], centre), p[1], p[2]) &&
-           Covers(Edge(p[2], p[0], centre), p[2], p[0]) &&
-           Covers(Edge(p[0], p[1], centre), p[0], p[1]);
+  // A pixel is covered when it passes the test of each edge. Along a row each edge's test is
+  // monotone in the column (every rounding step of Edge is), so the covered columns are the
+  // intersection of three half-lines: per edge, its boundary is estimated from where the edge
+  // crosses the row's centre line and settled with the exact test a column or two around it.
+  struct RowEdge {
+    Point2 s, q;
+    double dy, dx_per_dy;
   };
-  // Per row, the covered columns form one interval: estimate it from the edges' crossings of
-  // the row's centre line, then settle its ends with the exact rules.
-  const std::array<std::array<int, 2>, 3> edges = {{{1, 2}, {2, 0}, {0, 1}}};
+  std::array<RowEdge, 3> edges;
+  const std::array<std::array<int, 2>, 3> ends = {{{1, 2}, {2, 0}, {0, 1}}};
+  for (int e = 0; e < 3; ++e) {
+    const Point2& s = p[ends[e][0]];
+    const Point2& q = p[ends[e][1]];
+    const double dy = q.y - s.y;
+    edges[e] = {s, q, dy, dy == 0 ? 0 : (q.x - s.x) / dy};
+  }
   for (int row = row_begin; row <= row_end; ++row) {
     const double y = row + 0.5;
-    double lo = col_lo, hi = col_hi;
-    for (const auto& e : edges) {
-      const Point2& s = p[e[0]];
-      const Point2& q = p[e[1]];
-      const double dy = q.y - s.y;
-      if (dy == 0) continue;
-      // Centre x where the edge crosses y, as a column: x - 0.5.
-      const double x = s.x + (y - s.y) * (q.x - s.x) / dy - 0.5;
-      // Interior lies left of s->q: for dy < 0 (going up in y-down) at larger x... decide by
-      // the sign of d(edge)/dx = -dy.
-      if (-dy > 0) {
-        lo = std::max(lo, std::floor(x));
+    int begin = t.col_lo, end = t.col_hi;  // inclusive
+    for (const RowEdge& e : edges) {
+      const auto passes = [&](int col) {
+        return Covers(Edge(e.s, e.q, Point2{col + 0.5, y}), e.s, e.q);
+      };
+      if (e.dy == 0) {  // the same for the whole row
+        if (!passes(begin)) end = begin - 1;
       } else {
-        hi = std::min(hi, std::ceil(x));
+        // Centre x where the edge crosses y, as a column: x - 0.5. The interior lies where
+        // d(edge)/dx = -dy is positive: right of the crossing for dy < 0, left for dy > 0.
+        const double x = e.s.x + (y - e.s.y) * e.dx_per_dy - 0.5;
+        const double guess = e.dy < 0 ? std::floor(x) : std::ceil(x);
+        int c = static_cast<int>(
+            std::clamp(guess, static_cast<double>(begin), static_cast<double>(end)));
+        if (e.dy < 0) {  // the first column that passes
+          if (passes(c)) {
+            while (c > begin && passes(c - 1)) --c;
+          } else {
+            while (c <= end && !passes(c)) ++c;
+          }
+          begin = c;
+        } else {  // the last column that passes
+          if (passes(c)) {
+            while (c < end && passes(c + 1)) ++c;
+          } else {
+            while (c >= begin && !passes(c)) --c;
+          }
+          end = c;
+        }
       }
+      if (begin > end) break;
     }
-    int begin = static_cast<int>(std::max<double>(col_lo, lo));
-    int end = static_cast<int>(std::min<double>(col_hi, hi));  // inclusive
-    while (begin <= end && !covered(begin, row)) ++begin;
-    while (end >= begin && !covered(end, row)) --end;
     if (begin > end) continue;
-    while (begin > col_lo && covered(begin - 1, row)) --begin;
-    while (end < col_hi && covered(end + 1, row)) ++end;
     const size_t offset = static_cast<size_t>(row) * width_;
     FillSpan(inv_z_.data() + offset, keep_face_ ? face_.data() + offset : nullptr, begin, end + 1,
              t.g0 + t.gx * 0.5 + t.gy * y, t.gx, t.face);
