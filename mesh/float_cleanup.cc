@@ -15,6 +15,7 @@ namespace {
 using Eigen::Vector3d;
 using float_robustness_internal::SegmentCrossesTriangle;
 using float_robustness_internal::Triangle;
+using float_robustness_internal::TriangleClosestPoints;
 using float_robustness_internal::TriangleDistance;
 using float_robustness_internal::TrianglesIntersectLikeOpen3d;
 using Face = std::array<int32_t, 3>;
@@ -247,26 +248,40 @@ class Cleaner {
   }
 
   // Faces f and g, closer than the tolerance and sharing no vertex: moves the corners of one of
-  // them (or one corner) 2 tolerances along g's normal, away from the other, where that leaves
-  // fewer problems and nothing forbidden: 4e-6 of the diagonal with the defaults (check-mesh's
-  // tolerance, times the cleanup's margin, times 2).
+  // them (or one corner) 2 tolerances away from the other, where that leaves fewer problems and
+  // nothing forbidden: 4e-6 of the diagonal with the defaults (check-mesh's tolerance, times the
+  // cleanup's margin, times 2). First along the line through their closest points (which
+  // separates two sheets meeting at an angle), then along g's normal (two parallel sheets).
   void MoveApart(int32_t f, int32_t g) {
     const Face a = mesh_.faces[f], b = mesh_.faces[g];
+    std::vector<std::pair<std::vector<int32_t>, Vector3d>> tries;
+    const auto [on_a, on_b] = TriangleClosestPoints(Corners(a), Corners(b));
+    const Vector3d gap = on_a - on_b;
+    if (gap.norm() > 0) {
+      const Vector3d away = 2 * tolerance_ * gap.normalized();  // moves a away from b
+      const auto nearest = [&](const Face& face, const Vector3d& point) {
+        int32_t best = face[0];
+        for (int32_t v : face) {
+          if ((mesh_.vertices[v] - point).norm() < (mesh_.vertices[best] - point).norm()) best = v;
+        }
+        return best;
+      };
+      tries.push_back({{a[0], a[1], a[2]}, away});
+      tries.push_back({{b[0], b[1], b[2]}, -away});
+      tries.push_back({{nearest(a, on_a)}, away});
+      tries.push_back({{nearest(b, on_b)}, -away});
+    }
     const Vector3d n = Normal(b);
-    if (!(n.norm() > 0)) return;
-    const Vector3d centre_a =
-        (mesh_.vertices[a[0]] + mesh_.vertices[a[1]] + mesh_.vertices[a[2]]) / 3;
-    const double side = n.dot(centre_a - mesh_.vertices[b[0]]) >= 0 ? 1.0 : -1.0;
-    const Vector3d away = 2 * tolerance_ * side * n.normalized();  // moves a away from b
-    const std::vector<std::pair<std::vector<int32_t>, Vector3d>> tries = {
-        {{a[0], a[1], a[2]}, away},
-        {{b[0], b[1], b[2]}, -away},
-        {{a[0]}, away},
-        {{a[1]}, away},
-        {{a[2]}, away},
-        {{b[0]}, -away},
-        {{b[1]}, -away},
-        {{b[2]}, -away}};
+    if (n.norm() > 0) {
+      const Vector3d centre_a =
+          (mesh_.vertices[a[0]] + mesh_.vertices[a[1]] + mesh_.vertices[a[2]]) / 3;
+      const double side = n.dot(centre_a - mesh_.vertices[b[0]]) >= 0 ? 1.0 : -1.0;
+      const Vector3d away = 2 * tolerance_ * side * n.normalized();
+      tries.push_back({{a[0], a[1], a[2]}, away});
+      tries.push_back({{b[0], b[1], b[2]}, -away});
+      for (int32_t v : a) tries.push_back({{v}, away});
+      for (int32_t v : b) tries.push_back({{v}, -away});
+    }
     for (const auto& [vertices, delta] : tries) {
       if (TryMove(vertices, delta)) return;
     }
@@ -301,7 +316,7 @@ class Cleaner {
       ok = ok && FlipFree(old_normal, face);
       made.push_back(face);
     }
-    if (!ok || !Improves(removed, made)) {
+    if (!ok || !Improves(removed, made, /*moved=*/true)) {
       mesh_.vertices.resize(first);
       return false;
     }
@@ -420,8 +435,7 @@ class Cleaner {
   // opposite the shared vertex crosses the other face). Faces sharing an edge: forbidden when
   // folded onto each other.
   PairState Classify(const Face& a, const Face& b) const {
-    int shared = 0;
-    for (int32_t x : a) shared += std::count(b.begin(), b.end(), x) > 0;
+    const int shared = SharedVertices(a, b);
     if (shared == 0) {
       const Triangle ta = Corners(a), tb = Corners(b);
       const double distance = TriangleDistance(ta, tb);
@@ -442,40 +456,67 @@ class Cleaner {
     return folded ? PairState::kForbidden : PairState::kClean;
   }
 
+  // Cosine between the normals of two faces sharing an edge (1 when one is degenerate).
+  double FoldCosine(const Face& a, const Face& b) const {
+    const Vector3d na = Normal(a), nb = Normal(b);
+    if (!(na.norm() > 0) || !(nb.norm() > 0)) return 1;
+    return na.normalized().dot(nb.normalized());
+  }
+
   // The problem pairs between `faces` and the alive faces near them (those in `skip` excepted)
   // and among `faces`; -1 when `forbid` and a pair is forbidden (else such a pair counts as a
-  // problem).
+  // problem). `before`, when given, holds what each of `faces` replaces (a move: the same
+  // vertices, some moved): a fold that was there before is allowed as long as it does not get
+  // sharper, so that a sheet next to a fin can still be moved.
   int64_t CountProblems(const std::vector<Face>& faces, const std::vector<int32_t>& skip,
-                        bool forbid) const {
+                        bool forbid, const std::vector<Face>* before = nullptr) const {
     int64_t problems = 0;
     bool forbidden = false;
-    auto add = [&](PairState state) {
+    auto add = [&](const Face& x, const Face& y, const Face* old_x, const Face* old_y) {
+      PairState state = Classify(x, y);
+      if (state == PairState::kForbidden && old_x != nullptr && SharedVertices(x, y) == 2 &&
+          Classify(*old_x, *old_y) == PairState::kForbidden &&
+          FoldCosine(x, y) >= FoldCosine(*old_x, *old_y)) {
+        state = PairState::kClean;  // a fold that was there, no sharper
+      }
       if (state == PairState::kForbidden && forbid) forbidden = true;
       problems += state != PairState::kClean;
     };
     for (size_t i = 0; i < faces.size() && !forbidden; ++i) {
+      const Face* old_i = before != nullptr ? &(*before)[i] : nullptr;
       const Box3 box = FaceBox(faces[i]).Grown(tolerance_);
       auto visit = [&](int32_t f) {
         if (forbidden || !alive_[f]) return;
         if (std::find(skip.begin(), skip.end(), f) != skip.end()) return;
-        add(Classify(faces[i], mesh_.faces[f]));
+        add(faces[i], mesh_.faces[f], old_i, &mesh_.faces[f]);
       };
       tree_.Query(box, visit);
       for (int32_t f : recent_) {
         if (box_[f].Overlaps(box)) visit(f);
       }
-      for (size_t j = 0; j < i && !forbidden; ++j) add(Classify(faces[i], faces[j]));
+      for (size_t j = 0; j < i && !forbidden; ++j) {
+        add(faces[i], faces[j], old_i, before != nullptr ? &(*before)[j] : nullptr);
+      }
     }
     return forbidden ? -1 : problems;
   }
 
+  static int SharedVertices(const Face& a, const Face& b) {
+    int shared = 0;
+    for (int32_t x : a) shared += std::count(b.begin(), b.end(), x) > 0;
+    return shared;
+  }
+
   // Replacing `removed` by `made` is worth it: nothing forbidden, and fewer problem pairs.
-  bool Improves(const std::vector<int32_t>& removed, const std::vector<Face>& made) const {
-    const int64_t after = CountProblems(made, removed, true);
-    if (after < 0) return false;
-    if (after == 0) return true;
+  // `moved`: made[k] is removed[k] with some vertices moved (TryMove), so folds already there
+  // may stay.
+  bool Improves(const std::vector<int32_t>& removed, const std::vector<Face>& made,
+                bool moved = false) const {
     std::vector<Face> old;
     for (int32_t f : removed) old.push_back(mesh_.faces[f]);
+    const int64_t after = CountProblems(made, removed, true, moved ? &old : nullptr);
+    if (after < 0) return false;
+    if (after == 0) return true;
     return after < CountProblems(old, removed, false);
   }
 

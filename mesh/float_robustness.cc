@@ -296,6 +296,77 @@ double TriangleDistance(const Triangle& p, const Triangle& q) {
   return std::sqrt(d2);
 }
 
+namespace {
+
+Eigen::Vector3d ClosestOnSegment(const Eigen::Vector3d& x, const Eigen::Vector3d& a,
+                                 const Eigen::Vector3d& b) {
+  const Eigen::Vector3d ab = b - a;
+  const double l2 = ab.squaredNorm();
+  return l2 > 0 ? Eigen::Vector3d(a + std::clamp((x - a).dot(ab) / l2, 0.0, 1.0) * ab) : a;
+}
+
+Eigen::Vector3d ClosestOnTriangle(const Eigen::Vector3d& x, const Triangle& t) {
+  const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]);
+  const double n2 = n.squaredNorm();
+  if (n2 > 0 && (t[1] - t[0]).cross(x - t[0]).dot(n) >= 0 &&
+      (t[2] - t[1]).cross(x - t[1]).dot(n) >= 0 && (t[0] - t[2]).cross(x - t[2]).dot(n) >= 0) {
+    return x - (x - t[0]).dot(n) / n2 * n;
+  }
+  Eigen::Vector3d best = t[0];
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d c = ClosestOnSegment(x, t[i], t[(i + 1) % 3]);
+    if ((c - x).squaredNorm() < (best - x).squaredNorm()) best = c;
+  }
+  return best;
+}
+
+// The closest points of segments p0p1 and q0q1 (SegmentSegmentDistance2's parameters).
+std::array<Eigen::Vector3d, 2> SegmentClosestPoints(const Eigen::Vector3d& p0,
+                                                    const Eigen::Vector3d& p1,
+                                                    const Eigen::Vector3d& q0,
+                                                    const Eigen::Vector3d& q1) {
+  const Eigen::Vector3d d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  double s = 0, t = 0;
+  if (a > 0 && e > 0) {
+    const double b = d1.dot(d2), c = d1.dot(r), denom = a * e - b * b;
+    s = denom > 0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+    t = (b * s + f) / e;
+    if (t < 0 || t > 1) {
+      t = std::clamp(t, 0.0, 1.0);
+      s = std::clamp((b * t - c) / a, 0.0, 1.0);
+    }
+  } else if (a > 0) {
+    s = std::clamp(-d1.dot(r) / a, 0.0, 1.0);
+  } else if (e > 0) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  }
+  return {p0 + s * d1, q0 + t * d2};
+}
+
+}  // namespace
+
+std::array<Eigen::Vector3d, 2> TriangleClosestPoints(const Triangle& p, const Triangle& q) {
+  std::array<Eigen::Vector3d, 2> best = {p[0], q[0]};
+  double best2 = std::numeric_limits<double>::infinity();
+  const auto consider = [&](const Eigen::Vector3d& on_p, const Eigen::Vector3d& on_q) {
+    const double d2 = (on_p - on_q).squaredNorm();
+    if (d2 < best2) {
+      best2 = d2;
+      best = {on_p, on_q};
+    }
+  };
+  for (int i = 0; i < 3; ++i) {
+    consider(p[i], ClosestOnTriangle(p[i], q));
+    consider(ClosestOnTriangle(q[i], p), q[i]);
+    for (int j = 0; j < 3; ++j) {
+      const auto c = SegmentClosestPoints(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3]);
+      consider(c[0], c[1]);
+    }
+  }
+  return best;
+}
+
 }  // namespace float_robustness_internal
 
 namespace {

@@ -104,6 +104,10 @@ bool SegmentCrossesTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, 
 // else the minimum of the 6 point-triangle and 9 segment-segment distances.
 double TriangleDistance(const Triangle& p, const Triangle& q);
 
+// A point of p and a point of q at their smallest distance (the 6 point-triangle and 9
+// segment-segment candidates; meaningless when they cross): the direction that parts them.
+std::array<Eigen::Vector3d, 2> TriangleClosestPoints(const Triangle& p, const Triangle& q);
+
 }  // namespace float_robustness_internal
 
 }  // namespace ms

@@ -17,6 +17,7 @@ namespace {
 using namespace test_meshes;  // NOLINT: small shapes only
 
 using float_robustness_internal::SegmentCrossesTriangle;
+using float_robustness_internal::TriangleClosestPoints;
 using float_robustness_internal::TriangleDistance;
 using float_robustness_internal::TrianglesIntersectLikeOpen3d;
 using ::testing::ElementsAre;
@@ -300,6 +301,23 @@ TEST(FloatRobustnessKernels, TriangleDistance) {
   EXPECT_EQ(TriangleDistance(t, {V(0.2, 0.2, -1), V(0.3, 0.2, 1), V(0.2, 0.3, 1)}), 0.0);
   // A degenerate (zero-area) triangle is measured through its edges.
   EXPECT_NEAR(TriangleDistance(t, {V(2, 0, 0), V(3, 0, 0), V(4, 0, 0)}), 1.0, 1e-15);
+}
+
+TEST(FloatRobustnessKernels, TriangleClosestPoints) {
+  const Triangle t = {V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)};
+  const auto expect = [&](const Triangle& q, const V& on_t, const V& on_q) {
+    const auto c = TriangleClosestPoints(t, q);
+    EXPECT_NEAR((c[0] - on_t).norm(), 0, 1e-12) << c[0].transpose();
+    EXPECT_NEAR((c[1] - on_q).norm(), 0, 1e-12) << c[1].transpose();
+    EXPECT_NEAR((c[0] - c[1]).norm(), TriangleDistance(t, q), 1e-12);
+  };
+  // A vertex of q above t's interior.
+  expect({V(0.2, 0.2, 0.5), V(0.3, 0.2, 2), V(0.2, 0.3, 2)}, V(0.2, 0.2, 0), V(0.2, 0.2, 0.5));
+  // A vertex of t below q's interior.
+  expect({V(-1, -1, -0.25), V(3, -1, -0.25), V(-1, 3, -0.25)}, V(0, 0, 0), V(0, 0, -0.25));
+  // Skew edges: t's hypotenuse and an edge of q rising over it (q in the plane x = y).
+  expect({V(1, 1, -0.8), V(0, 0, 1.2), V(2, 2, 5)}, V(0.5, 0.5, 0),
+         V(17.0 / 30, 17.0 / 30, 2.0 / 30));
 }
 
 }  // namespace
