@@ -105,6 +105,7 @@ size_t GroupedSize(size_t n, int per_column) {
 
 // The vertical recursions' state, 4 values per quantity: Grouped(c, 4 q + k, 24).
 constexpr int kStates = 4 * kQuantities;
+
 // One step of the causal recursion down column c for every quantity (see recursive_gaussian.h):
 // s = pole s + x - tail x_tail per pole; out = the output ([quantity], `out_stride` apart).
 template <typename V>
