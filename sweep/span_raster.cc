@@ -148,17 +148,13 @@ void SpanRasterizer::Project(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   t.g0 = g0 / twice_area;
   t.gx = gx / twice_area;
   t.gy = gy / twice_area;
-  for (int i = 0; i < 3; ++i) {
-    t.p[2 * i] = p[i].x;
-    t.p[2 * i + 1] = p[i].y;
-  }
+  t.p = p;
   t.face = face;
   projected_.push_back(t);
 }
 
 void SpanRasterizer::FillRows(const Projected& t, int row_begin, int row_end) {
-  const std::array<Point2, 3> p = {Point2{t.p[0], t.p[1]}, Point2{t.p[2], t.p[3]},
-                                   Point2{t.p[4], t.p[5]}};
+  const std::array<Point2, 3>& p = t.p;
   // A pixel is covered when it passes the test of each edge. Along a row each edge's test is
   // monotone in the column (every rounding step of Edge is), so the covered columns are the
   // intersection of three half-lines: per edge, its boundary is estimated from where the edge

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "scene/camera.h"
+#include "sweep/raster_rules.h"
 
 namespace ms {
 
@@ -34,7 +35,7 @@ class SpanRasterizer {
  private:
   // A triangle projected and set up for filling: its pixel bounds and 1/z = gx x + gy y + g0.
   struct Projected {
-    std::array<double, 6> p;  // x0 y0 x1 y1 x2 y2, positively oriented
+    std::array<raster::Point2, 3> p;  // positively oriented
     double g0, gx, gy;
     int col_lo, col_hi, row_lo, row_hi;
     int32_t face;

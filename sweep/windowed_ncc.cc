@@ -106,8 +106,29 @@ size_t GroupedSize(size_t n, int per_column) {
 // The vertical recursions' state, 4 values per quantity: Grouped(c, 4 q + k, 24).
 constexpr int kStates = 4 * kQuantities;
 
+// Quantity q's state at column c: the two complex poles' recursions, real and imaginary parts.
+template <typename V>
+struct PoleStates {
+  V r0, i0, r1, i1;
+};
+
+template <typename V>
+MS_ALWAYS_INLINE PoleStates<V> LoadPoles(const float* state, size_t c, int q) {
+  const float* s = state + Grouped(c, 4 * q, kStates);
+  return {Load<V>(s), Load<V>(s + kLanes), Load<V>(s + 2 * kLanes), Load<V>(s + 3 * kLanes)};
+}
+
+template <typename V>
+MS_ALWAYS_INLINE void StorePoles(float* state, size_t c, int q, const PoleStates<V>& a) {
+  float* s = state + Grouped(c, 4 * q, kStates);
+  Store(s, a.r0);
+  Store(s + kLanes, a.i0);
+  Store(s + 2 * kLanes, a.r1);
+  Store(s + 3 * kLanes, a.i1);
+}
+
 // One step of the causal recursion down column c for every quantity (see recursive_gaussian.h):
-// s = pole s + x - tail x_tail per pole; out = the output ([quantity], `out_stride` apart).
+// s = pole s + x - tail x_tail per pole; out = the output, a grouped row.
 template <typename V>
 MS_ALWAYS_INLINE void CausalColumns(const FloatGaussian& g, float* __restrict state,
                                     const RowInputs& x, const RowInputs& x_tail,
@@ -117,24 +138,19 @@ MS_ALWAYS_INLINE void CausalColumns(const FloatGaussian& g, float* __restrict st
   Products(x_tail, c, tv);
 #pragma GCC unroll 6
   for (int q = 0; q < kQuantities; ++q) {
-    float* s0r = state + Grouped(c, 4 * q, kStates);
-    float *s0i = s0r + kLanes, *s1r = s0r + 2 * kLanes, *s1i = s0r + 3 * kLanes;
-    const V r0 = Load<V>(s0r), i0 = Load<V>(s0i), r1 = Load<V>(s1r), i1 = Load<V>(s1i);
+    const auto [r0, i0, r1, i1] = LoadPoles<V>(state, c, q);
     const V a0r = g.pr[0] * r0 - g.pi[0] * i0 + xv[q] - g.tr[0] * tv[q];
     const V a0i = g.pr[0] * i0 + g.pi[0] * r0 - g.ti[0] * tv[q];
     const V a1r = g.pr[1] * r1 - g.pi[1] * i1 + xv[q] - g.tr[1] * tv[q];
     const V a1i = g.pr[1] * i1 + g.pi[1] * r1 - g.ti[1] * tv[q];
-    Store(s0r, a0r);
-    Store(s0i, a0i);
-    Store(s1r, a1r);
-    Store(s1i, a1i);
+    StorePoles<V>(state, c, q, {a0r, a0i, a1r, a1i});
     Store(out + Grouped(c, q, kQuantities),
           g.wr[0] * a0r - g.wi[0] * a0i + g.wr[1] * a1r - g.wi[1] * a1i);
   }
 }
 
-// One step of the anticausal recursion: a = pole (a + x_next) - tail x_tail; out = causal + its
-// output (both [quantity], their strides apart).
+// One step of the anticausal recursion: a = pole (a + x_next) - tail x_tail; out = causal (a
+// grouped row) + its output ([quantity], `out_stride` apart).
 template <typename V>
 MS_ALWAYS_INLINE void AnticausalColumns(const FloatGaussian& g, float* __restrict state,
                                         const RowInputs& x_next, const RowInputs& x_tail,
@@ -145,18 +161,13 @@ MS_ALWAYS_INLINE void AnticausalColumns(const FloatGaussian& g, float* __restric
   Products(x_tail, c, tv);
 #pragma GCC unroll 6
   for (int q = 0; q < kQuantities; ++q) {
-    float* s0r = state + Grouped(c, 4 * q, kStates);
-    float *s0i = s0r + kLanes, *s1r = s0r + 2 * kLanes, *s1i = s0r + 3 * kLanes;
-    const V r0 = Load<V>(s0r), i0 = Load<V>(s0i), r1 = Load<V>(s1r), i1 = Load<V>(s1i);
+    const auto [r0, i0, r1, i1] = LoadPoles<V>(state, c, q);
     const V u0 = r0 + xv[q], u1 = r1 + xv[q];
     const V a0r = g.pr[0] * u0 - g.pi[0] * i0 - g.tr[0] * tv[q];
     const V a0i = g.pr[0] * i0 + g.pi[0] * u0 - g.ti[0] * tv[q];
     const V a1r = g.pr[1] * u1 - g.pi[1] * i1 - g.tr[1] * tv[q];
     const V a1i = g.pr[1] * i1 + g.pi[1] * u1 - g.ti[1] * tv[q];
-    Store(s0r, a0r);
-    Store(s0i, a0i);
-    Store(s1r, a1r);
-    Store(s1i, a1i);
+    StorePoles<V>(state, c, q, {a0r, a0i, a1r, a1i});
     Store(out + q * out_stride + c, Load<V>(causal + Grouped(c, q, kQuantities)) + g.wr[0] * a0r -
                                         g.wi[0] * a0i + g.wr[1] * a1r - g.wi[1] * a1i);
   }
