@@ -4,40 +4,11 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "refine/pair_sampling.h"
 #include "sweep/software_raster.h"
 
 namespace ms {
 namespace {
-
-// Near clipping plane of a rendering from `view`: 1e-3 of the median camera z of the vertices
-// in front of it, so faces behind the camera are clipped and nothing in front is.
-double NearPlane(const Mesh& mesh, const View& view) {
-  std::vector<double> z;
-  z.reserve(mesh.vertices.size());
-  for (const Eigen::Vector3d& v : mesh.vertices) {
-    const double vz = view.ToCamera(v).z();
-    if (vz > 0) z.push_back(vz);
-  }
-  if (z.empty()) return 1e-9;
-  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
-  return std::max(1e-9, 1e-3 * z[z.size() / 2]);
-}
-
-// Bilinear sample of `image` (CV_64F) at array coordinates (x, y) with its exact derivatives.
-// The caller keeps (x, y) within [0, cols - 1] x [0, rows - 1].
-struct Sample {
-  double value, dx, dy;
-};
-Sample Bilinear(const cv::Mat& image, double x, double y) {
-  const int x0 = std::min(static_cast<int>(x), image.cols - 2);
-  const int y0 = std::min(static_cast<int>(y), image.rows - 2);
-  const double fx = x - x0, fy = y - y0;
-  const double* r0 = image.ptr<double>(y0) + x0;
-  const double* r1 = image.ptr<double>(y0 + 1) + x0;
-  const double i00 = r0[0], i10 = r0[1], i01 = r1[0], i11 = r1[1];
-  return {(1 - fy) * ((1 - fx) * i00 + fx * i10) + fy * ((1 - fx) * i01 + fx * i11),
-          (1 - fy) * (i10 - i00) + fy * (i11 - i01), (1 - fx) * (i01 - i00) + fx * (i11 - i10)};
-}
 
 // The Gaussian window as a separable filter with zero outside the image, so that filtering is
 // the same sum in both directions (the gradient's second filtering is the first's adjoint).
@@ -72,8 +43,8 @@ PixelSamples SamplePixels(const Mesh& mesh, const RefineView& reference,
                           const RefineView& neighbour, const RefineOptions& options) {
   const Intrinsics& ki = reference.view.intrinsics;
   const Intrinsics& kj = neighbour.view.intrinsics;
-  SoftwareRasterizer seen(reference.view, NearPlane(mesh, reference.view), true);
-  const double near_j = NearPlane(mesh, neighbour.view);
+  SoftwareRasterizer seen(reference.view, RefineNearPlane(mesh, reference.view), true);
+  const double near_j = RefineNearPlane(mesh, neighbour.view);
   SoftwareRasterizer shadow(neighbour.view, near_j, false);
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const auto& t = mesh.faces[f];
@@ -115,7 +86,7 @@ PixelSamples SamplePixels(const Mesh& mesh, const RefineView& reference,
       if (y.z() > shadow.depth()[shadow.Index(qc, qr)] * (1 + options.occlusion_tolerance)) {
         continue;  // something nearer hides the point from the neighbour
       }
-      const Sample j = Bilinear(neighbour.image, ax, ay);
+      const BilinearSample j = SampleBilinear(neighbour.image, ax, ay);
       const Eigen::Vector3d dy = rj * ray;  // d(camera-j coordinates)/dd
       const double z2 = y.z() * y.z();
       const double du = kj.fx * (dy.x() * y.z() - y.x() * dy.z()) / z2;
@@ -151,8 +122,9 @@ void PairGradient::Add(const PairGradient& other) {
   }
 }
 
-PairGradient ComputePairGradient(const Mesh& mesh, const RefineView& reference,
-                                 const RefineView& neighbour, const RefineOptions& options) {
+PairGradient ComputePairGradientReference(const Mesh& mesh, const RefineView& reference,
+                                          const RefineView& neighbour,
+                                          const RefineOptions& options) {
   PairGradient out;
   out.Resize(mesh.vertices.size());
   const PixelSamples s = SamplePixels(mesh, reference, neighbour, options);
@@ -221,6 +193,13 @@ PairGradient ComputePairGradient(const Mesh& mesh, const RefineView& reference,
     }
   }
   return out;
+}
+
+PairGradient ComputePairGradient(const Mesh& mesh, const RefineView& reference,
+                                 const RefineView& neighbour, const RefineOptions& options) {
+  return options.reference_kernel
+             ? ComputePairGradientReference(mesh, reference, neighbour, options)
+             : ComputePairGradientFast(mesh, reference, neighbour, options);
 }
 
 }  // namespace ms

@@ -8,7 +8,8 @@
 //   dE/dv = sum_p dE/dJ(p) * dJ/dd(p) * phi_v(p) * n_f / (n_f . r_p),
 // phi_v the barycentric weight, n_f the face's normal, r_p the unit ray. Changes of visibility
 // and of the set of covered pixels are ignored (they are not differentiable). This is the exact
-// C++ reference: double precision, rasterised by the sweep's software rules.
+// C++ reference: double precision, rasterised by the sweep's software rules; the fast CPU kernel
+// computes the same in float maps (photometric_gradient_fast.cc).
 #pragma once
 
 #include <Eigen/Core>
@@ -48,8 +49,23 @@ struct PairGradient {
 };
 
 // `reference` and `neighbour` are at the same scale. Faces of `mesh` are drawn as they are
-// (both orientations); the reference's pixel sees the nearest.
+// (both orientations); the reference's pixel sees the nearest. The kernel the options pick:
+// the fast one unless options.reference_kernel.
 PairGradient ComputePairGradient(const Mesh& mesh, const RefineView& reference,
                                  const RefineView& neighbour, const RefineOptions& options);
+
+// The exact reference: double precision throughout, the sweep's SoftwareRasterizer (world
+// position per pixel), OpenCV's separable Gaussian in double, the chain rule pixel by pixel.
+PairGradient ComputePairGradientReference(const Mesh& mesh, const RefineView& reference,
+                                          const RefineView& neighbour,
+                                          const RefineOptions& options);
+
+// The fast CPU kernel: the same pixels and formulas with the sweep's span rasteriser (face ids
+// and 1/z in float; each pixel's point is its ray's intersection with the face's plane, in
+// double), the window's sums as float maps, and the chain rule summed per face before per
+// vertex. Its buffers persist per thread. Agrees with the reference to float rounding (energy
+// within 1e-4 relative on the test scenes: refine_test); not bit-identical to it.
+PairGradient ComputePairGradientFast(const Mesh& mesh, const RefineView& reference,
+                                     const RefineView& neighbour, const RefineOptions& options);
 
 }  // namespace ms

@@ -30,20 +30,24 @@ MS_VECTOR_CLONES void FillSpan(float* __restrict inv_z, int32_t* __restrict face
 }  // namespace
 
 SpanRasterizer::SpanRasterizer(const View& view, double near, bool keep_face)
-    : R_(view.R),
-      t_(view.t),
-      fx_(view.intrinsics.fx),
-      fy_(view.intrinsics.fy),
-      cx_(view.intrinsics.cx),
-      cy_(view.intrinsics.cy),
-      near_(near),
-      width_(view.intrinsics.width),
-      height_(view.intrinsics.height),
-      keep_face_(keep_face) {
+    : keep_face_(keep_face) {
+  SetView(view, near);
+  Clear();
+}
+
+void SpanRasterizer::SetView(const View& view, double near) {
+  R_ = view.R;
+  t_ = view.t;
+  fx_ = view.intrinsics.fx;
+  fy_ = view.intrinsics.fy;
+  cx_ = view.intrinsics.cx;
+  cy_ = view.intrinsics.cy;
+  near_ = near;
+  width_ = view.intrinsics.width;
+  height_ = view.intrinsics.height;
   MS_CHECK(width_ > 0 && height_ > 0 && near_ > 0) << "bad raster target";
   const int bytes_per_row = width_ * (keep_face_ ? 8 : 4);
   band_rows_ = std::clamp((256 << 10) / bytes_per_row, 4, 256);
-  Clear();
 }
 
 void SpanRasterizer::Clear() {

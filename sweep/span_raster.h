@@ -19,6 +19,10 @@ class SpanRasterizer {
   // `view` must be a pinhole view (distortion is ignored). keep_face: also record face ids.
   SpanRasterizer(const View& view, double near, bool keep_face);
 
+  // Targets another view (the image is undefined until the next DrawSoup); the buffers are
+  // kept, so a rasteriser reused view after view allocates once.
+  void SetView(const View& view, double near);
+
   // Clears the image and draws the triangles (world coordinates) with face ids = their indices;
   // nearest wins, ties to the lower index. Triangles are set up first, then filled a band of
   // rows at a time (each band's rows fit in the cache), every band in index order: the same

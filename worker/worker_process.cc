@@ -461,7 +461,9 @@ class Worker::Impl {
       out->set_iteration(c.job.iteration());
       out->set_session_id(c.job.session_id());
       out->set_worker_id(id());
-      out->set_kernel(c.refine ? "refine-reference" : kernel_->Name());
+      out->set_kernel(!c.refine                            ? kernel_->Name()
+                      : c.refine->options.reference_kernel ? "refine-reference"
+                                                           : "refine-fast-cpu");
       out->set_images_seconds(images_s);
       out->set_sweep_seconds(sweep.Seconds());
     } catch (const InputError& e) {

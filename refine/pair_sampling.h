@@ -1,0 +1,34 @@
+// What both photometric-gradient kernels (photometric_gradient.h) share, so that they sample the
+// same pixels the same way: the near plane of a rendering and the neighbour's bilinear sample
+// with its derivatives.
+#pragma once
+
+#include <algorithm>
+#include <opencv2/core/mat.hpp>
+
+#include "mesh/mesh.h"
+#include "scene/camera.h"
+
+namespace ms {
+
+// Near clipping plane of a rendering from `view`: 1e-3 of the median camera z of the vertices
+// in front of it, so faces behind the camera are clipped and nothing in front is.
+double RefineNearPlane(const Mesh& mesh, const View& view);
+
+// Bilinear sample of `image` (CV_64F) at array coordinates (x, y) with its exact derivatives.
+// The caller keeps (x, y) within [0, cols - 1] x [0, rows - 1].
+struct BilinearSample {
+  double value, dx, dy;
+};
+inline BilinearSample SampleBilinear(const cv::Mat& image, double x, double y) {
+  const int x0 = std::min(static_cast<int>(x), image.cols - 2);
+  const int y0 = std::min(static_cast<int>(y), image.rows - 2);
+  const double fx = x - x0, fy = y - y0;
+  const double* r0 = image.ptr<double>(y0) + x0;
+  const double* r1 = image.ptr<double>(y0 + 1) + x0;
+  const double i00 = r0[0], i10 = r0[1], i01 = r1[0], i11 = r1[1];
+  return {(1 - fy) * ((1 - fx) * i00 + fx * i10) + fy * ((1 - fx) * i01 + fx * i11),
+          (1 - fy) * (i10 - i00) + fy * (i11 - i01), (1 - fx) * (i01 - i00) + fx * (i11 - i10)};
+}
+
+}  // namespace ms
