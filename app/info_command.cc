@@ -14,6 +14,7 @@
 
 #include "app/commands.h"
 #include "gl/context.h"
+#include "refine/gradient_kernel.h"
 #include "scene/scene.h"
 #include "scene/scene_io.h"
 #include "sweep/sweep_kernel_factory.h"
@@ -46,6 +47,9 @@ void RunInfo(const InfoOptions& options) {
   std::string why;
   const std::unique_ptr<SweepKernel> kernel = MakeSweepKernel("auto", {}, &why);
   std::printf("  sweep       kernel '%s' for --kernel auto: %s\n", kernel->Name().c_str(),
+              why.c_str());
+  const std::unique_ptr<PairGradientKernel> refine = MakePairGradientKernel("auto", &why);
+  std::printf("  refine      kernel '%s' for --refine.kernel auto: %s\n", refine->Name().c_str(),
               why.c_str());
   if (!options.input.empty()) {
     const SceneFormat format =

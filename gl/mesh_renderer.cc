@@ -172,23 +172,20 @@ MeshRenderer::~MeshRenderer() = default;
 
 const GpuMesh& MeshRenderer::mesh() const { return impl_->mesh; }
 
-DepthMaps MeshRenderer::Render(const View& view, const DepthRenderOptions& options) {
+void MeshRenderer::SetMesh(const Mesh& mesh) {
+  const GlContext& context = *impl_->context;
+  if (!context.IsCurrent()) context.MakeCurrent();
+  impl_->mesh = GpuMesh(mesh);
+}
+
+bool MeshRenderer::RenderTargets(const View& view, const DepthRenderOptions& options,
+                                 std::unique_ptr<Framebuffer>* target) {
   options.Check();
   const GlContext& context = *impl_->context;
   if (!context.IsCurrent()) context.MakeCurrent();
   CheckView(view, context);
   const int width = view.intrinsics.width, height = view.intrinsics.height;
-  DepthMaps maps;
-  maps.depth = cv::Mat::zeros(height, width, CV_32F);
-  if (options.world_positions) maps.world = cv::Mat::zeros(height, width, CV_32FC3);
-  if (options.face_ids) maps.face_id = cv::Mat(height, width, CV_32S, cv::Scalar(-1));
-  double near = 0, far = 0;
-  if (impl_->mesh.num_faces() == 0 ||
-      !ChooseDepthRange(context, impl_->mesh, view, options.near, options.far, &near, &far)) {
-    return maps;  // nothing in front of the camera
-  }
-
-  std::unique_ptr<Framebuffer>& fb = impl_->framebuffer;
+  std::unique_ptr<Framebuffer>& fb = *target;
   if (!fb || fb->width() != width || fb->height() != height) {
     fb = std::make_unique<Framebuffer>(
         width, height,
@@ -196,10 +193,15 @@ DepthMaps MeshRenderer::Render(const View& view, const DepthRenderOptions& optio
                                    TextureFormat::kR32I});
   }
   fb->Bind();
-  const DepthRange range = ApplyDepthState(context);
   fb->Clear(0, Eigen::Vector4f::Zero());
   fb->Clear(1, Eigen::Vector4f::Zero());
   fb->ClearInt(2, Eigen::Vector4i::Constant(-1));
+  double near = 0, far = 0;
+  if (impl_->mesh.num_faces() == 0 ||
+      !ChooseDepthRange(context, impl_->mesh, view, options.near, options.far, &near, &far)) {
+    return false;  // nothing in front of the camera
+  }
+  const DepthRange range = ApplyDepthState(context);
   fb->ClearDepth(ClearDepthFor(range));
   ApplyCulling(options.cull_back_faces);
   glDisable(GL_BLEND);
@@ -212,13 +214,25 @@ DepthMaps MeshRenderer::Render(const View& view, const DepthRenderOptions& optio
   impl_->mesh.Draw();
   RestoreDefaultDepthState(context);
   CheckGlError("rendering depth");
+  return true;
+}
 
-  maps.depth = fb->Read(0);
+DepthMaps MeshRenderer::Render(const View& view, const DepthRenderOptions& options) {
+  const int width = view.intrinsics.width, height = view.intrinsics.height;
+  DepthMaps maps;
+  if (!RenderTargets(view, options, &impl_->framebuffer)) {
+    maps.depth = cv::Mat::zeros(height, width, CV_32F);
+    if (options.world_positions) maps.world = cv::Mat::zeros(height, width, CV_32FC3);
+    if (options.face_ids) maps.face_id = cv::Mat(height, width, CV_32S, cv::Scalar(-1));
+    return maps;
+  }
+  const Framebuffer& fb = *impl_->framebuffer;
+  maps.depth = fb.Read(0);
   if (options.world_positions) {
-    const cv::Mat world4 = fb->Read(1);
+    const cv::Mat world4 = fb.Read(1);
     cv::cvtColor(world4, maps.world, cv::COLOR_BGRA2BGR);  // drops w, keeps x,y,z order
   }
-  if (options.face_ids) maps.face_id = fb->Read(2);
+  if (options.face_ids) maps.face_id = fb.Read(2);
   return maps;
 }
 

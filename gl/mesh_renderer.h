@@ -73,6 +73,13 @@ class MeshRenderer {
   // Renders at view.intrinsics.width x height. Throws InputError for a view with bad
   // intrinsics or a size above the driver's limit.
   DepthMaps Render(const View& view, const DepthRenderOptions& options = {});
+  // The same rendering left on the GPU for later passes: `target` is (re)made at the view's size
+  // when it does not fit, with attachments 0 depth (R32F), 1 world (RGBA32F), 2 face id (R32I),
+  // cleared to 0, 0, -1. False, with the target cleared, when nothing lies in front of the view.
+  bool RenderTargets(const View& view, const DepthRenderOptions& options,
+                     std::unique_ptr<Framebuffer>* target);
+  // Replaces the mesh; the program and framebuffers stay.
+  void SetMesh(const Mesh& mesh);
   const GpuMesh& mesh() const;
 
  private:

@@ -195,11 +195,4 @@ PairGradient ComputePairGradientReference(const Mesh& mesh, const RefineView& re
   return out;
 }
 
-PairGradient ComputePairGradient(const Mesh& mesh, const RefineView& reference,
-                                 const RefineView& neighbour, const RefineOptions& options) {
-  return options.reference_kernel
-             ? ComputePairGradientReference(mesh, reference, neighbour, options)
-             : ComputePairGradientFast(mesh, reference, neighbour, options);
-}
-
 }  // namespace ms

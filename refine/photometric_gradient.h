@@ -48,11 +48,9 @@ struct PairGradient {
   void Add(const PairGradient& other);  // sums, vertex by vertex
 };
 
-// `reference` and `neighbour` are at the same scale. Faces of `mesh` are drawn as they are
-// (both orientations); the reference's pixel sees the nearest. The kernel the options pick:
-// the fast one unless options.reference_kernel.
-PairGradient ComputePairGradient(const Mesh& mesh, const RefineView& reference,
-                                 const RefineView& neighbour, const RefineOptions& options);
+// The kernels (refine/gradient_kernel.h picks one by --refine.kernel; glsl_gradient.h is the
+// GPU's): `reference` and `neighbour` are at the same scale. Faces of `mesh` are drawn as they
+// are (both orientations); the reference's pixel sees the nearest.
 
 // The exact reference: double precision throughout, the sweep's SoftwareRasterizer (world
 // position per pixel), OpenCV's separable Gaussian in double, the chain rule pixel by pixel.

@@ -16,6 +16,10 @@ struct RefineOptions {
   // Throws InputError naming the flag.
   void Check() const {
     CheckOptionGroup(*this);
+    if (kernel != "auto" && kernel != "glsl" && kernel != "cpu" && kernel != "reference") {
+      throw InputError("--refine.kernel: must be one of auto, glsl, cpu, reference, got '" +
+                       kernel + "'");
+    }
     if (max_edge_px > 0 && min_edge_px >= max_edge_px / 2) {
       throw InputError("--refine.min-edge-px: must be below half of --refine.max-edge-px (" +
                        std::to_string(max_edge_px) + "), or a split edge's halves collapse again");

@@ -64,10 +64,10 @@ MS_OPTION(int64_t, max_vertices, 2000000, "max-vertices",
 MS_OPTION(double, flip_dihedral_deg, 10, "flip-dihedral-deg",
           "with remeshing, flip edges of face pairs this flat (degrees; 0: no flips)",
           InRange(0, 90))
-// The pairs' gradients: the fast CPU kernel, or the exact double-precision reference it is
-// checked against (refine/photometric_gradient.h). Travels with the jobs, so every worker of a
-// run uses the same one.
-MS_OPTION(bool, reference_kernel, false, "reference-kernel",
-          "compute the gradients with the exact double-precision reference (slow; for checks)",
-          AnyValue())
+// The pairs' gradients (refine/gradient_kernel.h): auto (GLSL on a GPU, else the fast CPU
+// kernel), glsl, cpu, or the exact double-precision reference (slow; for checks). Travels with
+// the jobs; "auto" is resolved by each worker, so name one for identical bytes across a cluster
+// whose machines differ.
+MS_OPTION(std::string, kernel, "auto", "kernel",
+          "gradient kernel: auto (glsl on a GPU, else cpu), glsl, cpu, reference", AnyValue())
 MS_OPTION(int, threads, 0, "threads", "threads for the camera pairs (0: one per core)", AtLeast(0))

@@ -1,14 +1,17 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <type_traits>
 #include <vector>
 
 #include "base/error.h"
+#include "gl/context.h"
 #include "mesh/float_robustness.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/test_meshes.h"
+#include "refine/gradient_kernel.h"
 #include "refine/mesh_moves.h"
 #include "refine/photometric_gradient.h"
 #include "refine/refine_wire.h"
@@ -118,7 +121,15 @@ double RelativeL1(const std::vector<T>& x, const std::vector<T>& y) {
 // The fast kernel computes the reference's sums in float maps: the same pixels (bar a few where
 // float 1/z decides between two faces), energies and gradients equal to float rounding; the
 // bounds sit a few times above the measured differences, so a wrong factor anywhere fails.
-TEST(PhotometricGradient, FastKernelAgreesWithTheReference) {
+// How far a kernel may be from the reference on the agreement scenes.
+struct KernelBounds {
+  int64_t pixels;
+  double energy, gradient, parallax, weight;
+};
+
+// A kernel against the reference on a bumpy grid and on the pyramid with its apex lowered (so
+// the gradient is not zero), at window sizes below, at and above the default.
+void ExpectAgreesWithTheReference(PairGradientKernel& kernel, const KernelBounds& bounds) {
   struct Case {
     const char* name;
     Mesh mesh;
@@ -138,17 +149,46 @@ TEST(PhotometricGradient, FastKernelAgreesWithTheReference) {
       RefineOptions options;
       options.gaussian_sigma_px = sigma;
       const PairGradient ref = ComputePairGradientReference(c.mesh, c.a, c.b, options);
-      const PairGradient fast = ComputePairGradientFast(c.mesh, c.a, c.b, options);
+      const PairGradient got = kernel.Compute(c.mesh, c.a, c.b, options);
       ASSERT_GT(ref.pixels, 5000);
-      // Measured (2026-11-25): equal pixel counts, energies within 1.1e-5, gradients 1.8e-5,
-      // parallax rates 1.2e-9 (float storage), weights 2e-15.
-      EXPECT_LE(std::abs(fast.pixels - ref.pixels), 10) << "sigma " << sigma;
-      EXPECT_NEAR(fast.energy / ref.energy, 1, 5e-5) << "sigma " << sigma;
-      EXPECT_LT(RelativeL1(fast.gradient, ref.gradient), 1e-4) << "sigma " << sigma;
-      EXPECT_LT(RelativeL1(fast.parallax_rate2, ref.parallax_rate2), 1e-7) << "sigma " << sigma;
-      EXPECT_LT(RelativeL1(fast.weight, ref.weight), 1e-12) << "sigma " << sigma;
+      EXPECT_LE(std::abs(got.pixels - ref.pixels), bounds.pixels) << "sigma " << sigma;
+      EXPECT_NEAR(got.energy / ref.energy, 1, bounds.energy) << "sigma " << sigma;
+      EXPECT_LT(RelativeL1(got.gradient, ref.gradient), bounds.gradient) << "sigma " << sigma;
+      EXPECT_LT(RelativeL1(got.parallax_rate2, ref.parallax_rate2), bounds.parallax)
+          << "sigma " << sigma;
+      EXPECT_LT(RelativeL1(got.weight, ref.weight), bounds.weight) << "sigma " << sigma;
     }
   }
+}
+
+// Measured (2026-11-25): equal pixel counts, energies within 1.1e-5, gradients 1.8e-5,
+// parallax rates 1.2e-9 (float storage), weights 2e-15.
+TEST(PhotometricGradient, FastKernelAgreesWithTheReference) {
+  const std::unique_ptr<PairGradientKernel> fast = MakePairGradientKernel("cpu");
+  ExpectAgreesWithTheReference(*fast, {10, 5e-5, 1e-4, 1e-7, 1e-12});
+}
+
+// The GLSL kernel on this machine's GL (llvmpipe without a GPU): GL's own rasteriser, rays,
+// projections and barycentric weights in float. Measured on llvmpipe (2026-11-25): equal pixel
+// counts, energies within 2.7e-5, gradients 4.0e-5, parallax rates 9.0e-6, weights 1.9e-7.
+TEST(PhotometricGradient, GlslKernelAgreesWithTheReference) {
+  const std::unique_ptr<PairGradientKernel> glsl = MakePairGradientKernel("glsl");
+  ASSERT_EQ(glsl->Name(), "refine-glsl");
+  ExpectAgreesWithTheReference(*glsl, {10, 1e-4, 1e-4, 5e-5, 1e-6});
+}
+
+// "auto" takes the GPU only where there is one: on a software rasteriser the fast CPU kernel.
+TEST(PhotometricGradient, KernelChoice) {
+  std::string why;
+  const std::unique_ptr<PairGradientKernel> chosen = MakePairGradientKernel("auto", &why);
+  const gl::GlContext probe;
+  EXPECT_EQ(chosen->Name(), probe.info().software ? "refine-fast-cpu" : "refine-glsl") << why;
+  EXPECT_NE(why, "");
+  EXPECT_EQ(MakePairGradientKernel("reference")->Name(), "refine-reference");
+  EXPECT_THROW(MakePairGradientKernel("cuda"), InputError);
+  RefineOptions options;
+  options.kernel = "cuda";
+  EXPECT_THROW(options.Check(), InputError);
 }
 
 // The thin-plate gradient is the derivative of 1/2 sum |L(v)|^2.
@@ -389,7 +429,7 @@ TEST(RefineWire, RoundTripsBitForBitAndRefusesWhatDoesNotFit) {
   const RefineView b = NoiseView(LookAtView({0.6, 0.1, 2.9}, {0, 0, 0}, 160, 120, 150), 2);
   Mesh mesh = BumpyGrid();
   mesh.vertices.emplace_back(50, 50, 50);  // seen by nobody: stays off the wire
-  const PairGradient g = ComputePairGradient(mesh, a, b, RefineOptions());
+  const PairGradient g = ComputePairGradientFast(mesh, a, b, RefineOptions());
   wire::PairGradient packed;
   PairGradientToWire(g, &packed);
   EXPECT_LT(packed.vertices().size() / 4, mesh.vertices.size());

@@ -10,6 +10,7 @@
 #include "base/log.h"
 #include "base/parallel_for.h"
 #include "mesh/float_robustness.h"
+#include "refine/gradient_kernel.h"
 #include "refine/mesh_moves.h"
 #include "refine/photometric_gradient.h"
 #include "refine/remesh.h"
@@ -30,7 +31,7 @@ int FinestLevel(const std::vector<SweepCamera>& cameras, const RefineOptions& op
 // threads, or workers through `source`).
 PairGradient SumPairs(const Mesh& mesh, const std::vector<RefineView>& views, int level,
                       const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
-                      const PairGradientSource& source) {
+                      const PairGradientSource& source, PairGradientKernel* kernel) {
   std::vector<PairGradient> per_pair(pairs.size());
   if (source) {
     if (!source(mesh, level, &per_pair)) throw RefineInterrupted();
@@ -43,9 +44,9 @@ PairGradient SumPairs(const Mesh& mesh, const std::vector<RefineView>& views, in
         pairs.size(),
         [&](size_t i) {
           per_pair[i] =
-              ComputePairGradient(mesh, views[pairs[i].first], views[pairs[i].second], options);
+              kernel->Compute(mesh, views[pairs[i].first], views[pairs[i].second], options);
         },
-        options.threads);
+        kernel->ThreadSafe() ? options.threads : 1);
   }
   PairGradient total;
   total.Resize(mesh.vertices.size());
@@ -158,6 +159,12 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
   RefineStats stats;
   Timer total;
   if (mesh->faces.empty() || pairs.empty()) return stats;
+  std::unique_ptr<PairGradientKernel> kernel;
+  if (!hooks.pair_gradients) {
+    std::string why;
+    kernel = MakePairGradientKernel(options.kernel, &why);
+    spdlog::info("refine: gradients by {} ({})", kernel->Name(), why);
+  }
   MoveOptions move_options;
   // The cleanup's margin over check-mesh's tolerance (mesh/float_cleanup.h), fixed for the
   // whole refinement so it does not drift with the mesh's extent.
@@ -193,11 +200,13 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     if (!accepted.empty()) {  // the gradient there, as the interrupted run had it
       Mesh at_accepted = *mesh;
       at_accepted.vertices = accepted;
-      accepted_data = SumPairs(at_accepted, views, level, pairs, options, hooks.pair_gradients);
+      accepted_data =
+          SumPairs(at_accepted, views, level, pairs, options, hooks.pair_gradients, kernel.get());
     }
     for (int i = resumed ? resume->iteration_in_level : 0; i < count; ++i) {
       Timer timer;
-      PairGradient data = SumPairs(*mesh, views, level, pairs, options, hooks.pair_gradients);
+      PairGradient data =
+          SumPairs(*mesh, views, level, pairs, options, hooks.pair_gradients, kernel.get());
       RefineIteration it;
       it.level = level;
       it.iteration = ++iteration;
@@ -245,7 +254,8 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
       }
     }
     if (l == 0 && !accepted.empty()) {  // the last step is kept only if it lowered the energy
-      const PairGradient last = SumPairs(*mesh, views, level, pairs, options, hooks.pair_gradients);
+      const PairGradient last =
+          SumPairs(*mesh, views, level, pairs, options, hooks.pair_gradients, kernel.get());
       const double energy = last.MeanEnergy();
       if (energy > accepted_energy) mesh->vertices = accepted;
       stats.final_energy = std::min(energy, accepted_energy);

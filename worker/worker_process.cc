@@ -16,6 +16,7 @@
 #include "base/log.h"
 #include "proto/content_hash.h"
 #include "proto/options_codec.h"
+#include "refine/gradient_kernel.h"
 #include "refine/refine_wire.h"
 #include "refine/refiner.h"
 #include "worker/job_codec.h"
@@ -335,6 +336,18 @@ class Worker::Impl {
   // Refinement compares images whatever the sweep kernel (the replay kernel included).
   bool NeedsImages(const Current& c) const { return c.refine || kernel_->NeedsImages(); }
 
+  // The gradient kernel `name` asks for, made on first use (on the compute thread: a GLSL
+  // kernel's context is bound only while it computes) and kept while jobs ask for the same.
+  PairGradientKernel& RefineKernel(const std::string& name) {
+    if (!refine_kernel_ || refine_kernel_asked_ != name) {
+      std::string why;
+      refine_kernel_ = MakePairGradientKernel(name, &why);
+      refine_kernel_asked_ = name;
+      spdlog::info("worker {}: refinement kernel {} ({})", id(), refine_kernel_->Name(), why);
+    }
+    return *refine_kernel_;
+  }
+
   static RefinePair ReadRefinePair(const wire::Job& job, const std::string& what) {
     RefinePair pair;
     pair.level = job.refine().pyramid_level();
@@ -451,9 +464,9 @@ class Worker::Impl {
       if (c.refine) {
         const RefineView reference = RefineViewAtLevel(c.sweep.camera, c.refine->level);
         const RefineView neighbour = RefineViewAtLevel(c.sweep.neighbours[0], c.refine->level);
-        PairGradientToWire(
-            ComputePairGradient(c.sweep.mesh, reference, neighbour, c.refine->options),
-            out->mutable_gradient());
+        PairGradientKernel& kernel = RefineKernel(c.refine->options.kernel);
+        PairGradientToWire(kernel.Compute(c.sweep.mesh, reference, neighbour, c.refine->options),
+                           out->mutable_gradient());
       } else {
         SweepResultToWire(kernel_->Run(c.sweep), out);
       }
@@ -461,9 +474,7 @@ class Worker::Impl {
       out->set_iteration(c.job.iteration());
       out->set_session_id(c.job.session_id());
       out->set_worker_id(id());
-      out->set_kernel(!c.refine                            ? kernel_->Name()
-                      : c.refine->options.reference_kernel ? "refine-reference"
-                                                           : "refine-fast-cpu");
+      out->set_kernel(c.refine ? refine_kernel_->Name() : kernel_->Name());
       out->set_images_seconds(images_s);
       out->set_sweep_seconds(sweep.Seconds());
     } catch (const InputError& e) {
@@ -511,6 +522,8 @@ class Worker::Impl {
   WorkerOptions options_;
   ClientTransportFactory connect_;
   std::unique_ptr<SweepKernel> kernel_;
+  std::unique_ptr<PairGradientKernel> refine_kernel_;  // compute thread only
+  std::string refine_kernel_asked_;
   ImageCache cache_;
   EnvelopeStamper stamper_;
   std::unique_ptr<ClientTransport> transport_;

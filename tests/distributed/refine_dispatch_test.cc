@@ -13,6 +13,7 @@
 #include "mesh/mesh_io.h"
 #include "proto/transport.h"
 #include "proto/wire.h"
+#include "refine/gradient_kernel.h"
 #include "refine/refiner.h"
 #include "scene/scene_io.h"
 #include "sweep/sweep_images.h"
@@ -57,10 +58,11 @@ class RefineDispatch : public ::testing::Test {
   // What `manisweep refine` computes in this process.
   std::vector<PairGradient> Local() const {
     std::vector<PairGradient> out;
+    const std::unique_ptr<PairGradientKernel> kernel = MakePairGradientKernel(options_.kernel);
     for (const auto& [a, b] : pairs_) {
       const RefineView reference = RefineViewAtLevel(LoadSweepCamera(a, scene_.views[a]), kLevel);
       const RefineView neighbour = RefineViewAtLevel(LoadSweepCamera(b, scene_.views[b]), kLevel);
-      out.push_back(ComputePairGradient(mesh_, reference, neighbour, options_));
+      out.push_back(kernel->Compute(mesh_, reference, neighbour, options_));
     }
     return out;
   }
