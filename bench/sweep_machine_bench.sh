@@ -6,7 +6,9 @@
 #     of the CPU kernel on all cores, at 640x480, 1536x1024 and 3072x2048;
 #   - fountain-P11 `reconstruct` (../shared/data, its COLMAP sparse model) with the auto kernel
 #     at half size (1536x1024) and full size (3072x2048), with 1 worker (all cores) and with 2
-#     workers (the cores shared): seconds per iteration.
+#     workers (the cores shared): seconds per iteration;
+#   - refinement of the half-size run's final.ply at 1536x1024 (3 iterations, one level) with
+#     --refine.kernel auto (GLSL on a GPU) and cpu: seconds per iteration.
 #
 #   bench/sweep_machine_bench.sh [RESULTS_FILE]      (default bench_results/sweep_HOST_DATE.txt)
 # Environment: ITERATIONS (2), WORKERS (worker counts, "1 2"), KERNEL (auto), SKIP_SETUP=1 (use
@@ -66,5 +68,17 @@ for it in summary["iterations"]:
           f'{it["seconds_insert"]:8.2f}  {it["points_found"]:12d}  {it["vertices"]:8d}')
 PY
 done
+done
+
+# Refinement's kernels on the last half-size run's mesh.
+last_workers=${worker_counts##* }
+mesh=$work/run_1600_$last_workers/final.ply
+for refine_kernel in auto cpu; do
+  echo "## fountain-P11 refine of that final.ply, 3 iterations at 1536x1024, --refine.kernel $refine_kernel"
+  log=$work/refine_$refine_kernel.log
+  "$manisweep" refine --input "$fountain" --mesh "$mesh" --output "$work/refined_$refine_kernel.ply" \
+    --refine.iterations 3 --refine.levels 1 --refine.kernel "$refine_kernel" > "$log" 2>&1 ||
+    { tail -20 "$log"; exit 1; }
+  grep -E "gradients by|refine: iteration|refine: done" "$log" || tail -5 "$log"
 done
 echo "# written to $results"

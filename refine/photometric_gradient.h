@@ -61,7 +61,7 @@ PairGradient ComputePairGradientReference(const Mesh& mesh, const RefineView& re
 // The fast CPU kernel: the same pixels and formulas with the sweep's span rasteriser (face ids
 // and 1/z in float; each pixel's point is its ray's intersection with the face's plane, in
 // double), the window's sums as float maps, and the chain rule summed per face before per
-// vertex. Its buffers persist per thread. Agrees with the reference to float rounding (energy
+// vertex. Its buffers are pooled between calls. Agrees with the reference to float rounding (energy
 // within 1e-4 relative on the test scenes: refine_test); not bit-identical to it.
 PairGradient ComputePairGradientFast(const Mesh& mesh, const RefineView& reference,
                                      const RefineView& neighbour, const RefineOptions& options);

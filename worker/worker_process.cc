@@ -8,8 +8,10 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <optional>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "base/error.h"
@@ -348,6 +350,22 @@ class Worker::Impl {
     return *refine_kernel_;
   }
 
+  // Camera `index` of refinement job `c` (0: the reference, 1: the neighbour) at the job's
+  // level, made once per round's level: a round asks for each camera twice or more, and scaling
+  // a full-size image takes about as long as a coarse level's gradient.
+  const RefineView& LevelView(const Current& c, size_t index) {
+    const SweepCamera& camera = index == 0 ? c.sweep.camera : c.sweep.neighbours[index - 1];
+    const LevelViewKey key{c.job.session_id(), camera.id, c.refs[index].hash, c.refine->level};
+    if (!level_views_.empty() && std::get<3>(level_views_.begin()->first) != c.refine->level) {
+      level_views_.clear();  // a new level: the old views are done with
+    }
+    auto it = level_views_.find(key);
+    if (it == level_views_.end()) {
+      it = level_views_.emplace(key, RefineViewAtLevel(camera, c.refine->level)).first;
+    }
+    return it->second;
+  }
+
   static RefinePair ReadRefinePair(const wire::Job& job, const std::string& what) {
     RefinePair pair;
     pair.level = job.refine().pyramid_level();
@@ -462,8 +480,8 @@ class Worker::Impl {
       Timer sweep;
       wire::Result* out = outcome_.mutable_result();
       if (c.refine) {
-        const RefineView reference = RefineViewAtLevel(c.sweep.camera, c.refine->level);
-        const RefineView neighbour = RefineViewAtLevel(c.sweep.neighbours[0], c.refine->level);
+        const RefineView& reference = LevelView(c, 0);
+        const RefineView& neighbour = LevelView(c, 1);
         PairGradientKernel& kernel = RefineKernel(c.refine->options.kernel);
         PairGradientToWire(kernel.Compute(c.sweep.mesh, reference, neighbour, c.refine->options),
                            out->mutable_gradient());
@@ -524,6 +542,9 @@ class Worker::Impl {
   std::unique_ptr<SweepKernel> kernel_;
   std::unique_ptr<PairGradientKernel> refine_kernel_;  // compute thread only
   std::string refine_kernel_asked_;
+  // Session, camera, image hash, level (compute thread only).
+  using LevelViewKey = std::tuple<uint64_t, int32_t, uint64_t, int>;
+  std::map<LevelViewKey, RefineView> level_views_;
   ImageCache cache_;
   EnvelopeStamper stamper_;
   std::unique_ptr<ClientTransport> transport_;
