@@ -216,7 +216,7 @@ PairGradient GlslPairGradient::Impl::Compute(const Mesh& mesh, const RefineView&
       const int32_t f = f_row[col];
       if (f < 0) continue;
       const cv::Vec4f& c = c_row[col];
-      const double phi[3] = {c[2], c[3], 1.0 - c[2] - c[3]};
+      const std::array<double, 3> phi = BarycentricOnFace(c[2], c[3]);
       std::array<double, 9>& s = sums[f];
       for (int k = 0; k < 3; ++k) {
         s[k] += c[0] * phi[k];

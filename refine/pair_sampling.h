@@ -1,9 +1,10 @@
-// What both photometric-gradient kernels (photometric_gradient.h) share, so that they sample the
-// same pixels the same way: the near plane of a rendering and the neighbour's bilinear sample
-// with its derivatives.
+// What the photometric-gradient kernels (photometric_gradient.h) share, so that they sample the
+// same pixels the same way: the near plane of a rendering, the neighbour's bilinear sample
+// with its derivatives, and a pixel's barycentric weights.
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <opencv2/core/mat.hpp>
 
 #include "mesh/mesh.h"
@@ -29,6 +30,17 @@ inline BilinearSample SampleBilinear(const cv::Mat& image, double x, double y) {
   const double i00 = r0[0], i10 = r0[1], i01 = r1[0], i11 = r1[1];
   return {(1 - fy) * ((1 - fx) * i00 + fx * i10) + fy * ((1 - fx) * i01 + fx * i11),
           (1 - fy) * (i10 - i00) + fy * (i11 - i01), (1 - fx) * (i01 - i00) + fx * (i11 - i10)};
+}
+
+// The barycentric weights (phi0, phi1, 1 - phi0 - phi1) of a pixel's point, clamped to its face
+// and renormalised: a rasteriser gives an edge pixel to a face by its own rounding, and the
+// pixel's point may lie a rounding error outside it; a negative weight could make a vertex's
+// summed weight and parallax rate negative, which the coordinator refuses from a worker.
+inline std::array<double, 3> BarycentricOnFace(double phi0, double phi1) {
+  const double a = std::max(phi0, 0.0), b = std::max(phi1, 0.0);
+  const double c = std::max(1 - phi0 - phi1, 0.0);
+  const double sum = a + b + c;  // at least 1
+  return {a / sum, b / sum, c / sum};
 }
 
 }  // namespace ms

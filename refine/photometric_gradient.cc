@@ -1,6 +1,7 @@
 #include "refine/photometric_gradient.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -180,7 +181,7 @@ PairGradient ComputePairGradientReference(const Mesh& mesh, const RefineView& re
       const Eigen::Vector3d& x = s.world[q];
       const double phi0 = (p2 - p1).cross(x - p1).dot(n) / n2;
       const double phi1 = (p0 - p2).cross(x - p2).dot(n) / n2;
-      const double phi[3] = {phi0, phi1, 1 - phi0 - phi1};  // barycentric weights of x
+      const std::array<double, 3> phi = BarycentricOnFace(phi0, phi1);
       const Eigen::Vector3d unit = n / std::sqrt(n2);
       const double cos = unit.dot(s.ray[q]);
       const Eigen::Vector3d dd_dv = unit / cos;  // times phi_k: dd/dv_k

@@ -324,7 +324,7 @@ PairGradient ComputePairGradientFast(const Mesh& mesh, const RefineView& referen
       const Eigen::Vector3d x = centre + (plane.offset / cos) * ray;
       const double phi0 = (x - plane.p1).dot(plane.g0);
       const double phi1 = (x - plane.p2).dot(plane.g1);
-      const double phi[3] = {phi0, phi1, 1 - phi0 - phi1};
+      const std::array<double, 3> phi = BarycentricOnFace(phi0, phi1);
       const double per_phi_gradient = de_dd / cos;
       const double per_phi_parallax = parallax2[col] / (cos * cos);
       FaceSums& s = ws.sums[f];

@@ -157,6 +157,10 @@ void ExpectAgreesWithTheReference(PairGradientKernel& kernel, const KernelBounds
       EXPECT_LT(RelativeL1(got.parallax_rate2, ref.parallax_rate2), bounds.parallax)
           << "sigma " << sigma;
       EXPECT_LT(RelativeL1(got.weight, ref.weight), bounds.weight) << "sigma " << sigma;
+      for (size_t v = 0; v < got.weight.size(); ++v) {  // what the coordinator accepts
+        ASSERT_GE(got.weight[v], 0) << "vertex " << v;
+        ASSERT_GE(got.parallax_rate2[v], 0) << "vertex " << v;
+      }
     }
   }
 }
