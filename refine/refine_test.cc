@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -13,6 +15,7 @@
 #include "mesh/test_meshes.h"
 #include "refine/gradient_kernel.h"
 #include "refine/mesh_moves.h"
+#include "refine/pair_sampling.h"
 #include "refine/photometric_gradient.h"
 #include "refine/refine_wire.h"
 #include "refine/refiner.h"
@@ -179,6 +182,23 @@ TEST(PhotometricGradient, GlslKernelAgreesWithTheReference) {
   const std::unique_ptr<PairGradientKernel> glsl = MakePairGradientKernel("glsl");
   ASSERT_EQ(glsl->Name(), "refine-glsl");
   ExpectAgreesWithTheReference(*glsl, {10, 1e-4, 1e-4, 5e-5, 1e-6});
+}
+
+// Inside the face the weights are the point's own; a rounding error outside, they are clamped
+// onto the face, never negative, and still sum to 1 (a default reconstruct of the downward
+// pyramid had its workers sent away for a vertex whose summed weight came out negative).
+TEST(PhotometricGradient, BarycentricWeightsStayOnTheFace) {
+  const std::array<double, 3> inside = BarycentricOnFace(0.2, 0.3);
+  EXPECT_DOUBLE_EQ(inside[0], 0.2);
+  EXPECT_DOUBLE_EQ(inside[1], 0.3);
+  EXPECT_DOUBLE_EQ(inside[2], 0.5);
+  for (const auto& [phi0, phi1] : {std::pair{-1e-9, 0.4}, std::pair{0.7, 0.3 + 1e-9},
+                                   std::pair{1 + 1e-7, -1e-7}, std::pair{-1e-9, -1e-9}}) {
+    const std::array<double, 3> w = BarycentricOnFace(phi0, phi1);
+    for (double x : w) EXPECT_GE(x, 0);
+    EXPECT_NEAR(w[0] + w[1] + w[2], 1, 1e-15);
+    EXPECT_NEAR(w[0], std::max(phi0, 0.0), 1e-6);
+  }
 }
 
 // "auto" takes the GPU only where there is one: on a software rasteriser the fast CPU kernel.
