@@ -185,6 +185,30 @@ TEST_F(RefineDispatch, WorkersGiveTheLocalGradientsBitForBitAndARogueIsSentAway)
   EXPECT_EQ(exit2, "shutdown: refinement is over");
 }
 
+// --refine.kernel glsl travels with the jobs: a worker computes each job on a fresh thread,
+// binding its GL context there, and gives what this process's GLSL kernel gives, bit for bit,
+// round after round (llvmpipe here; the same code on a GPU).
+TEST_F(RefineDispatch, AGlslWorkerGivesTheLocalGlslGradientsBitForBit) {
+  options_.kernel = "glsl";
+  auto network = InMemoryNetwork::Create();
+  auto server = network->Bind();
+  std::atomic<bool> stop{false};
+  std::string exit_reason;
+  std::thread worker = StartWorker(network, 1, &stop, &exit_reason);
+  std::vector<PairGradient> first, second;
+  {
+    RefineDispatcher dispatcher(scene_, pairs_, options_, server.get(), scheduler_, WireLimits(),
+                                {});
+    ASSERT_TRUE(dispatcher.Compute(mesh_, kLevel, &first));
+    ASSERT_TRUE(dispatcher.Compute(mesh_, kLevel, &second));
+  }
+  worker.join();
+  ExpectSame(first, second);
+  ExpectSame(first, Local());
+  EXPECT_GT(first[0].pixels, 100);
+  EXPECT_EQ(exit_reason, "shutdown: refinement is over");
+}
+
 TEST_F(RefineDispatch, AStopEndsARoundThatNoWorkerTakes) {
   auto network = InMemoryNetwork::Create();
   auto server = network->Bind();
