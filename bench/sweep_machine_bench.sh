@@ -79,6 +79,6 @@ for refine_kernel in auto cpu; do
   "$manisweep" refine --input "$fountain" --mesh "$mesh" --output "$work/refined_$refine_kernel.ply" \
     --refine.iterations 3 --refine.levels 1 --refine.kernel "$refine_kernel" > "$log" 2>&1 ||
     { tail -20 "$log"; exit 1; }
-  grep -E "gradients by|refine: iteration|refine: done" "$log" || tail -5 "$log"
+  grep -E "gradients by|iteration [0-9]+ \(level|^refined" "$log" || tail -5 "$log"
 done
 echo "# written to $results"
