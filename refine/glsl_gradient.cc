@@ -58,7 +58,8 @@ struct GlslPairGradient::Impl {
   std::unique_ptr<gl::Framebuffer> seen, shadow;  // the reference's and the neighbour's renderings
   std::unique_ptr<gl::ShaderProgram> sample, blur, coefficients, chain;
   gl::Buffer faces, weights;
-  Mesh uploaded;  // the mesh the renderer holds (pairs of one round share it)
+  double weights_sigma = -1;  // the window `weights` holds
+  Mesh uploaded;              // the mesh the renderer holds (pairs of one round share it)
 
   // Maps of the reference's size.
   struct Maps {
@@ -168,8 +169,12 @@ PairGradient GlslPairGradient::Impl::Compute(const Mesh& mesh, const RefineView&
 
   // The window's sums (the fast CPU kernel's float Gaussian).
   const int radius = static_cast<int>(std::ceil(3 * options.gaussian_sigma_px));
-  const cv::Mat kernel = cv::getGaussianKernel(2 * radius + 1, options.gaussian_sigma_px, CV_32F);
-  weights = gl::Buffer::FromVector(std::vector<float>(kernel.begin<float>(), kernel.end<float>()));
+  if (weights_sigma != options.gaussian_sigma_px) {
+    const cv::Mat kernel = cv::getGaussianKernel(2 * radius + 1, options.gaussian_sigma_px, CV_32F);
+    weights =
+        gl::Buffer::FromVector(std::vector<float>(kernel.begin<float>(), kernel.end<float>()));
+    weights_sigma = options.gaussian_sigma_px;
+  }
   Blur(maps->window0, maps->sums0, radius);
   Blur(maps->window1, maps->sums1, radius);
 

@@ -10,25 +10,27 @@
 namespace ms {
 namespace {
 
-class FastCpuKernel : public PairGradientKernel {
+// The CPU kernels: free functions, safe on any number of threads.
+class CpuKernel : public PairGradientKernel {
  public:
+  using Function = PairGradient (*)(const Mesh&, const RefineView&, const RefineView&,
+                                    const RefineOptions&);
+  CpuKernel(Function function, std::string name) : function_(function), name_(std::move(name)) {}
   PairGradient Compute(const Mesh& mesh, const RefineView& reference, const RefineView& neighbour,
                        const RefineOptions& options) override {
-    return ComputePairGradientFast(mesh, reference, neighbour, options);
+    return function_(mesh, reference, neighbour, options);
   }
-  std::string Name() const override { return "refine-fast-cpu"; }
+  std::string Name() const override { return name_; }
   bool ThreadSafe() const override { return true; }
+
+ private:
+  Function function_;
+  std::string name_;
 };
 
-class ReferenceKernel : public PairGradientKernel {
- public:
-  PairGradient Compute(const Mesh& mesh, const RefineView& reference, const RefineView& neighbour,
-                       const RefineOptions& options) override {
-    return ComputePairGradientReference(mesh, reference, neighbour, options);
-  }
-  std::string Name() const override { return "refine-reference"; }
-  bool ThreadSafe() const override { return true; }
-};
+std::unique_ptr<PairGradientKernel> FastCpuKernel() {
+  return std::make_unique<CpuKernel>(ComputePairGradientFast, "refine-fast-cpu");
+}
 
 class GlslKernel : public PairGradientKernel {
  public:
@@ -53,8 +55,10 @@ std::unique_ptr<PairGradientKernel> MakePairGradientKernel(const std::string& na
   const auto because = [&](std::string reason) {
     if (why != nullptr) *why = std::move(reason);
   };
-  if (name == "cpu") return because("asked for"), std::make_unique<FastCpuKernel>();
-  if (name == "reference") return because("asked for"), std::make_unique<ReferenceKernel>();
+  if (name == "cpu") return because("asked for"), FastCpuKernel();
+  if (name == "reference")
+    return because("asked for"),
+           std::make_unique<CpuKernel>(ComputePairGradientReference, "refine-reference");
   if (name == "glsl") {
     return because("asked for"), std::make_unique<GlslKernel>(std::make_unique<GlslPairGradient>());
   }
@@ -64,14 +68,14 @@ std::unique_ptr<PairGradientKernel> MakePairGradientKernel(const std::string& na
       context = std::make_unique<gl::GlContext>();
     } catch (const InternalError& e) {
       because(fmt::format("no usable OpenGL 4.3 context ({})", e.what()));
-      return std::make_unique<FastCpuKernel>();
+      return FastCpuKernel();
     }
     const gl::GlInfo info = context->info();
     if (info.software) {
       // llvmpipe would run the GLSL passes on the CPU, slower than the CPU kernel.
       context->ReleaseCurrent();
       because(fmt::format("OpenGL renderer '{}' is a software rasteriser", info.renderer));
-      return std::make_unique<FastCpuKernel>();
+      return FastCpuKernel();
     }
     because(fmt::format("OpenGL renderer '{}' is a GPU", info.renderer));
     return std::make_unique<GlslKernel>(std::make_unique<GlslPairGradient>(std::move(context)));

@@ -1,6 +1,6 @@
 // What the photometric-gradient kernels (photometric_gradient.h) share, so that they sample the
-// same pixels the same way: the near plane of a rendering, the neighbour's bilinear sample
-// with its derivatives, and a pixel's barycentric weights.
+// same pixels the same way: the near plane of a rendering, a pixel's ray, the neighbour's
+// projection rate and bilinear sample with its derivatives, and a pixel's barycentric weights.
 #pragma once
 
 #include <algorithm>
@@ -15,6 +15,29 @@ namespace ms {
 // Near clipping plane of a rendering from `view`: 1e-3 of the median camera z of the vertices
 // in front of it, so faces behind the camera are clipped and nothing in front is.
 double RefineNearPlane(const Mesh& mesh, const View& view);
+
+// The unit world ray through the centre of pixel (col, row) of a pinhole view.
+class PixelRays {
+ public:
+  explicit PixelRays(const View& view) : rt_(view.R.transpose()), k_(view.intrinsics) {}
+  Eigen::Vector3d operator()(int col, int row) const {
+    return (rt_ * Eigen::Vector3d((col + 0.5 - k_.cx) / k_.fx, (row + 0.5 - k_.cy) / k_.fy, 1))
+        .normalized();
+  }
+
+ private:
+  Eigen::Matrix3d rt_;
+  Intrinsics k_;
+};
+
+// How far the neighbour's pixel moves per unit of depth along a ray: d(u, v)/dd for the point y
+// (the neighbour's camera coordinates) moving along ray_j (the ray in those coordinates).
+inline Eigen::Vector2d ProjectionRate(const Intrinsics& kj, const Eigen::Vector3d& y,
+                                      const Eigen::Vector3d& ray_j) {
+  const double z2 = y.z() * y.z();
+  return {kj.fx * (ray_j.x() * y.z() - y.x() * ray_j.z()) / z2,
+          kj.fy * (ray_j.y() * y.z() - y.y() * ray_j.z()) / z2};
+}
 
 // Bilinear sample of `image` (CV_64F) at array coordinates (x, y) with its exact derivatives.
 // The caller keeps (x, y) within [0, cols - 1] x [0, rows - 1].

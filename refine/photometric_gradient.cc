@@ -64,16 +64,14 @@ PixelSamples SamplePixels(const Mesh& mesh, const RefineView& reference,
   s.face.assign(s.dj_dd.size(), -1);
   s.world.assign(s.dj_dd.size(), Eigen::Vector3d::Zero());
   s.ray.assign(s.dj_dd.size(), Eigen::Vector3d::Zero());
-  const Eigen::Matrix3d ri_t = reference.view.R.transpose();
+  const PixelRays rays(reference.view);
   const Eigen::Matrix3d& rj = neighbour.view.R;
   for (int row = 0; row < h; ++row) {
     for (int col = 0; col < w; ++col) {
       const size_t p = seen.Index(col, row);
       const int32_t f = seen.face()[p];
       if (f < 0) continue;
-      const Eigen::Vector3d ray =
-          (ri_t * Eigen::Vector3d((col + 0.5 - ki.cx) / ki.fx, (row + 0.5 - ki.cy) / ki.fy, 1))
-              .normalized();
+      const Eigen::Vector3d ray = rays(col, row);
       const Eigen::Vector3d normal = mesh.FaceNormal(f);
       if (std::abs(normal.dot(ray)) < options.min_cos_incidence) continue;
       const Eigen::Vector3d& x = seen.world()[p];
@@ -88,10 +86,8 @@ PixelSamples SamplePixels(const Mesh& mesh, const RefineView& reference,
         continue;  // something nearer hides the point from the neighbour
       }
       const BilinearSample j = SampleBilinear(neighbour.image, ax, ay);
-      const Eigen::Vector3d dy = rj * ray;  // d(camera-j coordinates)/dd
-      const double z2 = y.z() * y.z();
-      const double du = kj.fx * (dy.x() * y.z() - y.x() * dy.z()) / z2;
-      const double dv = kj.fy * (dy.y() * y.z() - y.y() * dy.z()) / z2;
+      const Eigen::Vector2d rate = ProjectionRate(kj, y, rj * ray);
+      const double du = rate.x(), dv = rate.y();
       s.mask.at<double>(row, col) = 1;
       s.reprojected.at<double>(row, col) = j.value;
       s.dj_dd[p] = j.dx * du + j.dy * dv;

@@ -129,20 +129,6 @@ void PlanFaces(const Mesh& mesh, const Eigen::Vector3d& centre, Workspace* ws) {
   }
 }
 
-// The unit world ray through pixel (col, row) of a pinhole view, as the reference computes it.
-class PixelRays {
- public:
-  explicit PixelRays(const View& view) : rt_(view.R.transpose()), k_(view.intrinsics) {}
-  Eigen::Vector3d operator()(int col, int row) const {
-    return (rt_ * Eigen::Vector3d((col + 0.5 - k_.cx) / k_.fx, (row + 0.5 - k_.cy) / k_.fy, 1))
-        .normalized();
-  }
-
- private:
-  Eigen::Matrix3d rt_;
-  Intrinsics k_;
-};
-
 // Samples the neighbour through the mesh for every pixel of the reference (the reference
 // kernel's SamplePixels): fills ws->face, the window's six inputs m, mI, mJ, mI^2, mJ^2, mIJ,
 // and J, dJ/dd and the squared parallax rate where the mask is 1.
@@ -202,9 +188,8 @@ void SamplePixels(const Mesh& mesh, const RefineView& reference, const RefineVie
         continue;  // something nearer hides the point from the neighbour
       }
       const BilinearSample s = SampleBilinear(neighbour.image, ax, ay);
-      const double z2 = y.z() * y.z();
-      const double du = kj.fx * (ray_j.x() * y.z() - y.x() * ray_j.z()) / z2;
-      const double dv = kj.fy * (ray_j.y() * y.z() - y.y() * ray_j.z()) / z2;
+      const Eigen::Vector2d rate = ProjectionRate(kj, y, ray_j);
+      const double du = rate.x(), dv = rate.y();
       const double i = image_i[col], j = s.value;
       face[col] = f;
       m[col] = 1;
