@@ -8,6 +8,7 @@
 #include <future>
 #include <limits>
 #include <map>
+#include <optional>
 #include <random>
 #include <set>
 
@@ -133,6 +134,8 @@ class Coordinator::Impl {
         Dispatch(now);
         if (scheduler_.IterationComplete()) {
           round_.seconds_sweep = Now() - sweep_started_;
+          RecordJobStats();
+          jobs_.reset();  // and with it this iteration's mesh
           // The step must not read the scheduler or the batch while the loop keeps using them.
           round_.jobs_by_worker = scheduler_.iteration_job_counts();
           round_.jobs_requeued = static_cast<int32_t>(scheduler_.num_requeued());
@@ -193,31 +196,36 @@ class Coordinator::Impl {
 
   void StartIteration(StepOutcome&& outcome) {
     iteration_ = static_cast<uint32_t>(run_.completed_iterations() + 1);
-    jobs_.clear();
+    jobs_ = std::move(outcome.jobs);
     bounds_.clear();
     batch_ = InsertionBatch();
     round_ = SweepRound();
-    round_.seconds_jobs = outcome.seconds_jobs;
-    round_.job_bytes = static_cast<int64_t>(outcome.jobs.bytes);
-    round_.job_max_bytes = static_cast<int64_t>(outcome.jobs.max_bytes);
-    round_.cameras_skipped = static_cast<int32_t>(outcome.jobs.skipped.size());
-    round_.jobs = static_cast<int32_t>(outcome.jobs.jobs.size());
-    std::vector<uint64_t> ids;
-    for (wire::Job& job : outcome.jobs.jobs) {
-      ids.push_back(job.job_id());
-      bounds_.emplace(job.job_id(), JobBoundsFromWire(job));
-      jobs_.emplace(job.job_id(), std::move(job));
+    const std::vector<uint64_t>& ids = jobs_->job_ids();
+    for (const std::string& skipped : jobs_->stats().skipped) {
+      spdlog::info("iteration {}: no job for {}", iteration_, skipped);
     }
     scheduler_.StartIteration(iteration_, ids);
     job_order_ = ids;  // by camera, the order of the batch
     early_jobs_ = 0;
     sweep_started_ = Now();
     phase_ = Phase::kSweeping;
+    spdlog::info("iteration {}/{}: {} jobs, {} workers", iteration_, options_.run.max_iterations,
+                 ids.size(), scheduler_.num_workers());
+  }
+
+  // The round's job figures, once every job is done.
+  void RecordJobStats() {
+    const JobBuildStats stats = jobs_->stats();
+    round_.jobs = static_cast<int32_t>(stats.jobs);
+    round_.cameras_skipped = static_cast<int32_t>(stats.skipped.size());
+    round_.seconds_jobs = stats.seconds;
+    round_.job_bytes = static_cast<int64_t>(stats.bytes);
+    round_.job_max_bytes = static_cast<int64_t>(stats.max_bytes);
     spdlog::info(
-        "iteration {}/{}: {} jobs ({} visible faces, {:.1f} MiB, the largest {:.0f} KiB), {} "
-        "workers",
-        iteration_, options_.run.max_iterations, ids.size(), outcome.jobs.faces,
-        outcome.jobs.bytes / 1048576.0, outcome.jobs.max_bytes / 1024.0, scheduler_.num_workers());
+        "iteration {}: {} jobs swept ({} visible faces, {:.1f} MiB, the largest {:.0f} KiB, "
+        "built in {:.2f} s while sweeping), {} cameras without a job",
+        iteration_, stats.jobs, stats.faces, stats.bytes / 1048576.0, stats.max_bytes / 1024.0,
+        stats.seconds, stats.skipped.size());
   }
 
   // Hands the points of the next jobs in camera order whose results are all in to the
@@ -239,13 +247,33 @@ class Coordinator::Impl {
         std::async(std::launch::async, [this, part = std::move(part)] { run_.InsertEarly(part); });
   }
 
+  // Builds the jobs the scheduler hands out (in parallel when there are several, as at the
+  // start of an iteration) and sends them. A camera that turns out to see no face has nothing
+  // to sweep: its job is done without points and its worker takes the next one.
   void Dispatch(double now) {
-    for (const JobScheduler::Assignment& a : scheduler_.Assign(now)) {
-      wire::Envelope envelope = stamper_.New();
-      *envelope.mutable_job() = jobs_.at(a.job_id);
-      transport_->Send(a.peer, Serialize(envelope));
-      spdlog::debug("job {} -> {}{}", JobName(a.job_id), PeerTag(a.peer),
-                    a.attempt > 1 ? fmt::format(" (attempt {})", a.attempt) : "");
+    while (true) {
+      const std::vector<JobScheduler::Assignment> assigned = scheduler_.Assign(now);
+      if (assigned.empty()) break;
+      std::vector<uint64_t> ids;
+      for (const JobScheduler::Assignment& a : assigned) ids.push_back(a.job_id);
+      std::vector<std::optional<wire::Job>> jobs = jobs_->Build(ids);
+      bool withdrawn = false;
+      for (size_t i = 0; i < assigned.size(); ++i) {
+        const JobScheduler::Assignment& a = assigned[i];
+        if (!jobs[i]) {
+          scheduler_.Withdraw(a.peer, a.job_id);
+          batch_.AddEmpty(a.job_id);
+          withdrawn = true;
+          continue;
+        }
+        if (!bounds_.count(a.job_id)) bounds_.emplace(a.job_id, JobBoundsFromWire(*jobs[i]));
+        wire::Envelope envelope = stamper_.New();
+        *envelope.mutable_job() = std::move(*jobs[i]);
+        transport_->Send(a.peer, Serialize(envelope));
+        spdlog::debug("job {} -> {}{}", JobName(a.job_id), PeerTag(a.peer),
+                      a.attempt > 1 ? fmt::format(" (attempt {})", a.attempt) : "");
+      }
+      if (!withdrawn) break;  // else the withdrawn jobs' workers are idle again
     }
     if (scheduler_.exhausted_job()) {
       const uint64_t job = *scheduler_.exhausted_job();
@@ -420,8 +448,8 @@ class Coordinator::Impl {
 
   // The current iteration (the loop writes them while sweeping; the step reads them after).
   uint32_t iteration_ = 0;
-  std::map<uint64_t, wire::Job> jobs_;
-  std::map<uint64_t, JobBounds> bounds_;  // what each job's points must fit
+  std::unique_ptr<IterationJobSource> jobs_;
+  std::map<uint64_t, JobBounds> bounds_;  // what each job handed out must fit
   InsertionBatch batch_;
   std::vector<uint64_t> job_order_;  // this iteration's jobs, by camera
   size_t early_jobs_ = 0;            // of which handed to InsertEarly

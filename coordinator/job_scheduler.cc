@@ -131,6 +131,17 @@ void JobScheduler::OnWorkerFailure(const std::string& peer, const std::string& n
   }
 }
 
+void JobScheduler::Withdraw(const std::string& peer, uint64_t job_id) {
+  auto worker = workers_.find(peer);
+  // Its idle time stands: it never started, so it stays first in line for the next job.
+  if (worker != workers_.end() && worker->second.job == job_id) worker->second.job = 0;
+  auto it = jobs_.find(job_id);
+  if (it == jobs_.end() || it->second.state == State::kDone) return;
+  it->second.holders.erase(peer);
+  it->second.state = State::kDone;
+  ++num_done_;
+}
+
 void JobScheduler::Remove(const std::string& peer) {
   auto it = workers_.find(peer);
   if (it == workers_.end()) return;

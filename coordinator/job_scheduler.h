@@ -72,6 +72,9 @@ class JobScheduler {
   // the queue; the worker is idle.
   void OnWorkerFailure(const std::string& peer, const std::string& name, uint64_t job_id,
                        double now);
+  // The job handed to `peer` turned out to have nothing to do before it was sent (its camera
+  // sees no face): it is done, counted for no worker, and the peer is idle as before.
+  void Withdraw(const std::string& peer, uint64_t job_id);
   // Forget a peer now (e.g. it speaks another protocol version); its job is requeued.
   void Remove(const std::string& peer);
 

@@ -149,6 +149,33 @@ TEST(JobScheduler, WorkerFailureRequeuesAndBadJobCompletes) {
   EXPECT_EQ(s.num_done(), 1u);
 }
 
+TEST(JobScheduler, AWithdrawnJobIsDoneAndItsWorkerTakesTheNext) {
+  FakeClock clock;
+  JobScheduler s(TestOptions());
+  s.StartIteration(1, {11, 12});
+  s.OnReady("pa", "a", clock.now);
+  clock.Advance(0.1);
+  s.OnReady("pb", "b", clock.now);
+  auto first = s.Assign(clock.now);
+  ASSERT_EQ(first.size(), 2u);
+  s.Withdraw(first[0].peer, first[0].job_id);  // job 11 sees no face
+  EXPECT_EQ(s.num_done(), 1u);
+  EXPECT_EQ(s.num_running(), 1u);
+  EXPECT_TRUE(s.iteration_job_counts().empty()) << "a withdrawn job is nobody's work";
+  EXPECT_TRUE(s.Assign(clock.now).empty()) << "no job is pending";
+  EXPECT_EQ(s.OnResult("pb", "b", 12, clock.now), Outcome::kAccepted);
+  EXPECT_TRUE(s.IterationComplete());
+  // A late message about the withdrawn job is a duplicate.
+  EXPECT_EQ(s.OnResult("pa", "a", 11, clock.now), Outcome::kDuplicate);
+
+  // The withdrawn job's worker is idle and keeps its place in line.
+  s.StartIteration(2, {21, 22});
+  auto second = s.Assign(clock.now);
+  ASSERT_EQ(second.size(), 2u);
+  EXPECT_EQ(second[0].peer, "pa");
+  EXPECT_EQ(second[0].job_id, 21u);
+}
+
 TEST(JobScheduler, AJobThatNeverSucceedsExhaustsItsAttempts) {
   FakeClock clock;
   JobScheduler s(TestOptions());

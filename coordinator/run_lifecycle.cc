@@ -214,8 +214,8 @@ StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const Swe
     row.seconds_kernel += w.seconds_kernel;
     record_.workers.push_back(w);
   }
-  row.seconds_total =
-      row.seconds_jobs + row.seconds_sweep + row.seconds_insert + row.seconds_extract;
+  // Jobs are built while the sweep runs: their seconds are inside seconds_sweep.
+  row.seconds_total = row.seconds_sweep + row.seconds_insert + row.seconds_extract;
   record_.batches.push_back(std::move(batch));
   record_.iterations.push_back(row);
   Checkpoint();
@@ -233,7 +233,7 @@ StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const Swe
 
 void RunLifecycle::Extract() {
   mesh_ = manifold_->ExtractSurface(&surface_info_);
-  surface_ = SurfaceWithoutSteinerFaces(mesh_, surface_info_);
+  surface_ = std::make_shared<const Mesh>(SurfaceWithoutSteinerFaces(mesh_, surface_info_));
 }
 
 OutputMeshes RunLifecycle::WriteOutputMeshes(const std::string& name, bool with_surface,
@@ -318,15 +318,11 @@ StepOutcome RunLifecycle::NextOrStop() {
   } else if (done >= options_.run.max_iterations) {
     reason = fmt::format("reached --max-iterations {}", options_.run.max_iterations);
   } else {
-    Timer timer;
-    outcome.jobs = BuildIterationJobs(record_.scene, neighbours_, surface_, *catalog_,
-                                      static_cast<uint32_t>(done + 1), session_id_, job_options_);
-    outcome.seconds_jobs = timer.Seconds();
-    for (const std::string& skipped : outcome.jobs.skipped) {
-      spdlog::info("iteration {}: no job for {}", done + 1, skipped);
-    }
-    spdlog::info("memory with iteration {}'s jobs: {}", done + 1, MemoryReport());
-    if (outcome.jobs.jobs.empty()) reason = "no camera has a job (no neighbours or no face)";
+    outcome.jobs = std::make_unique<IterationJobSource>(record_.scene, neighbours_, surface_,
+                                                        *catalog_, static_cast<uint32_t>(done + 1),
+                                                        session_id_, job_options_);
+    spdlog::info("memory at the start of iteration {}: {}", done + 1, MemoryReport());
+    if (outcome.jobs->job_ids().empty()) reason = "no camera has a neighbour";
   }
   if (reason.empty()) return outcome;
   Finish(reason);

@@ -29,7 +29,7 @@ struct SweepRound {
   int32_t jobs_bad = 0;       // refused by the kernel (no points from that camera)
   int32_t jobs_requeued = 0;  // handed out again (lease expired, worker died or failed)
   int32_t cameras_skipped = 0;
-  double seconds_jobs = 0;                   // building the jobs
+  double seconds_jobs = 0;                   // building the jobs (while the sweep runs)
   int64_t job_bytes = 0, job_max_bytes = 0;  // job messages: all, the largest
   double seconds_sweep = 0;                  // first job out -> last result in
   std::map<std::string, int64_t> jobs_by_worker;
@@ -40,8 +40,7 @@ struct SweepRound {
 // What a step hands back: the next iteration's jobs, or the end of the run.
 struct StepOutcome {
   bool stop = false;
-  IterationJobs jobs;  // unless stop
-  double seconds_jobs = 0;
+  std::unique_ptr<IterationJobSource> jobs;  // unless stop; built as they are handed out
 };
 
 class RunLifecycle {
@@ -106,9 +105,9 @@ class RunLifecycle {
   std::vector<RayPoint> early_points_;
   double early_seconds_ = 0;
   // The closed manifold, and the surface proper (without the Steiner faces that close it): what
-  // the sweep jobs are built from (docs/manifold.md).
+  // the sweep jobs are built from (docs/manifold.md), shared with the iteration's job source.
   Mesh mesh_;
-  Mesh surface_;
+  std::shared_ptr<const Mesh> surface_;
   SurfaceInfo surface_info_;  // of mesh_
   CoordinatorResult final_;
   std::string final_check_;

@@ -49,7 +49,7 @@ struct IterationStats {
   int64_t cleanup_collapses = 0;
   int64_t cleanup_splits = 0;
   int64_t float_problems_left = 0;
-  double seconds_jobs = 0;          // building this iteration's jobs (visible meshes)
+  double seconds_jobs = 0;          // building this iteration's jobs, during the sweep
   double seconds_sweep = 0;         // first job sent -> last result in
   double seconds_kernel = 0;        // sum of the workers' kernel times
   double seconds_insert = 0;        // Insert (Build for iteration 0), after the sweep

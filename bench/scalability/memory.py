@@ -3,13 +3,22 @@
 
 For each SCENE (VIEWS:POINTS), synthesises a street with that many cameras and sparse points
 (`manisweep synth city --no-images`, reused when OUT/city_VIEWS_POINTS holds it already), then
-starts the real coordinator on it (`coordinator --no-images`, no worker) and waits until it has
-built the first iteration's jobs: the initial manifold, the meshes users get and one job per
-camera are then all in memory. Reads the coordinator's resident memory from /proc, its own
-`memory after ...` log lines (heap in use after each step) and the job line (total and largest
-job message), stops it with SIGINT and writes OUT/memory.json and OUT/memory.csv.
+starts the real coordinator on it (`coordinator --no-images`) and waits until its first
+iteration starts: the scene, the initial manifold and the iteration's mesh are then in memory.
+Then it lets the coordinator build and hand out every job of that iteration: WORKERS replay
+workers (`worker --kernel replay`) take them from it and refuse each at once (they replay the
+coordinator's own first checkpoint, which has no iteration 1: a kernel refusal, after which the
+camera gives no points), so the coordinator builds all its jobs at the pace of a fast cluster
+and logs their sizes. Jobs are built as they are handed out and freed once sent, so only the
+jobs in flight are ever held.
+
+Reads the coordinator's resident memory from /proc (at the start of the iteration, and the
+largest sample while the jobs go out), its own `memory after ...` log lines (heap in use after
+each step) and the jobs line (total and largest job message), kills it and writes
+OUT/memory.json and OUT/memory.csv.
 
   memory.py --manisweep build/app/manisweep --out /tmp/memory [--scenes 4096:1000000]
+            [--workers 4]
 
 Bytes per point are divided by the scene's sparse points (the coordinator's own count after
 merging is in the log).
@@ -54,46 +63,71 @@ def measure(args, views, points):
     os.makedirs(out)
     log_path = os.path.join(out, "coordinator.log")
     start = time.monotonic()
+    def wait_for(pattern, process):
+        while True:
+            time.sleep(0.5)
+            if process.poll() is not None:
+                sys.exit(f"the coordinator exited with {process.returncode} (see {log_path})")
+            with open(log_path) as f:
+                line = next((l for l in f if re.search(pattern, l)), None)
+            if line:
+                return line
+            yield
+
     with open(log_path, "w") as log:
         coordinator = subprocess.Popen(
             [args.manisweep, "coordinator", "--input", scene, "--output", out, "--no-images",
-             "--bind", "tcp://127.0.0.1:*"], stdout=log, stderr=subprocess.STDOUT)
-        jobs_line = None
-        while jobs_line is None:
-            time.sleep(0.5)
-            if coordinator.poll() is not None:
-                sys.exit(f"the coordinator exited with {coordinator.returncode} (see {log_path})")
-            with open(log_path) as f:
-                jobs_line = next((l for l in f if re.search(r"iteration 1/\d+: \d+ jobs", l)), None)
+             "--bind", "tcp://127.0.0.1:*", "--progress-interval", "60"],
+            stdout=log, stderr=subprocess.STDOUT)
+        for _ in wait_for(r"iteration 1/\d+: \d+ jobs", coordinator):
+            pass
         row = {"views": views, "points": points,
-               "resident_mib": status_bytes(coordinator.pid, "VmRSS") / MIB,
-               "peak_mib": status_bytes(coordinator.pid, "VmHWM") / MIB,
-               "seconds_to_first_jobs": time.monotonic() - start}
-        coordinator.send_signal(signal.SIGINT)
+               "resident_at_start_mib": status_bytes(coordinator.pid, "VmRSS") / MIB,
+               "peak_before_jobs_mib": status_bytes(coordinator.pid, "VmHWM") / MIB,
+               "seconds_to_first_iteration": time.monotonic() - start}
+        with open(log_path) as f:
+            endpoint = re.search(r"coordinator listening on (\S+)", f.read()).group(1)
+        recording = os.path.join(out, "iteration0.h5")
+        shutil.copyfile(os.path.join(out, "run.h5"), recording)
+        workers = [subprocess.Popen(
+            [args.manisweep, "worker", "--connect", endpoint, "--id", f"m{i}", "--kernel",
+             "replay", "--replay.run", recording, "--replay.delay-s", "0", "--give-up-after",
+             "60"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            for i in range(args.workers)]
+        resident = row["resident_at_start_mib"]
+        for _ in wait_for(r"iteration 1: \d+ jobs swept", coordinator):
+            resident = max(resident, status_bytes(coordinator.pid, "VmRSS") / MIB)
+        row["resident_while_sweeping_mib"] = resident
+        row["peak_mib"] = status_bytes(coordinator.pid, "VmHWM") / MIB
+        coordinator.kill()
         coordinator.wait(timeout=120)
+        for w in workers:
+            w.kill()
+            w.wait()
     with open(log_path) as f:
         text = f.read()
     for step in ["the scene", "the initial manifold", "the initial meshes"]:
         m = re.search(rf"memory after {step}: (\d+) MiB in use, (\d+) MiB resident", text)
         key = step.replace("the ", "").replace(" ", "_")
         row[f"in_use_after_{key}_mib"] = float(m.group(1)) if m else None
-    m = re.search(r"memory with iteration 1's jobs: (\d+) MiB in use", text)
-    row["in_use_with_jobs_mib"] = float(m.group(1)) if m else None
+    m = re.search(r"memory at the start of iteration 1: (\d+) MiB in use", text)
+    row["in_use_at_start_mib"] = float(m.group(1)) if m else None
     m = re.search(r"manifold about (\d+) MiB", text)
     row["manifold_estimate_mib"] = float(m.group(1)) if m else None
-    m = re.search(r"iteration 1/\d+: (\d+) jobs \((\d+) visible faces, ([\d.]+) MiB, the largest "
-                  r"(\d+) KiB\)", text)
+    m = re.search(r"iteration 1: (\d+) jobs swept \((\d+) visible faces, ([\d.]+) MiB, the "
+                  r"largest (\d+) KiB", text)
     if not m:
-        sys.exit(f"no job line in {log_path}")
+        sys.exit(f"no jobs line in {log_path}")
     row["jobs"] = int(m.group(1))
     row["job_mib_total"] = float(m.group(3))
     row["job_kib_mean"] = float(m.group(3)) * 1024 / max(int(m.group(1)), 1)
     row["job_kib_max"] = float(m.group(4))
     m = re.search(r"initial mesh: (\d+) vertices", text)
     row["mesh_vertices"] = int(m.group(1)) if m else None
-    row["bytes_per_point_resident"] = row["resident_mib"] * MIB / points
+    row["bytes_per_point_resident"] = row["resident_while_sweeping_mib"] * MIB / points
     row["bytes_per_point_peak"] = row["peak_mib"] * MIB / points
-    print(f"{views} cameras, {points} points: resident {row['resident_mib']:.0f} MiB "
+    print(f"{views} cameras, {points} points: resident while the jobs go out "
+          f"{row['resident_while_sweeping_mib']:.0f} MiB "
           f"({row['bytes_per_point_resident']:.0f} B/point), peak {row['peak_mib']:.0f} MiB "
           f"({row['bytes_per_point_peak']:.0f} B/point); jobs {row['jobs']}, "
           f"{row['job_kib_mean']:.0f} KiB mean, {row['job_kib_max']:.0f} KiB largest", flush=True)
@@ -107,6 +141,8 @@ def main():
     parser.add_argument("--out", required=True)
     parser.add_argument("--scenes", nargs="+", default=["4096:1000000"],
                         help="VIEWS:POINTS for each scene (default 4096:1000000)")
+    parser.add_argument("--workers", type=int, default=4,
+                        help="replay workers that take the jobs (default 4)")
     args = parser.parse_args()
     args.manisweep = os.path.abspath(args.manisweep)
     os.makedirs(args.out, exist_ok=True)
