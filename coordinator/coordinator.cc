@@ -83,10 +83,12 @@ class Coordinator::Impl {
  private:
   enum class Phase { kPreparing, kSweeping, kDone };
 
-  // The step in progress, then an early insertion still running (a step waits for it first).
+  // The step in progress, then an early insertion still running (a step waits for it first),
+  // and jobs being built ahead.
   void WaitForSteps() {
     if (step_.valid()) step_.wait();
     if (early_insert_.valid()) early_insert_.wait();
+    if (building_ahead_.valid()) building_ahead_.wait();
   }
 
   // ---- The network loop (calling thread)
@@ -131,9 +133,13 @@ class Coordinator::Impl {
         StartIteration(std::move(outcome));
       }
       if (phase_ == Phase::kSweeping) {
+        run_.CheckCheckpoint();  // the previous iteration's, written meanwhile
         Dispatch(now);
         if (scheduler_.IterationComplete()) {
           round_.seconds_sweep = Now() - sweep_started_;
+          if (building_ahead_.valid()) building_ahead_.wait();  // unused now
+          building_ahead_ = {};
+          built_ahead_.clear();
           RecordJobStats();
           jobs_.reset();  // and with it this iteration's mesh
           // The step must not read the scheduler or the batch while the loop keeps using them.
@@ -247,16 +253,32 @@ class Coordinator::Impl {
         std::async(std::launch::async, [this, part = std::move(part)] { run_.InsertEarly(part); });
   }
 
-  // Builds the jobs the scheduler hands out (in parallel when there are several, as at the
-  // start of an iteration) and sends them. A camera that turns out to see no face has nothing
-  // to sweep: its job is done without points and its worker takes the next one.
+  // Sends the jobs the scheduler hands out: built ahead when they could be (BuildAhead), else
+  // now (in parallel when there are several, as at the start of an iteration). A camera that
+  // turns out to see no face has nothing to sweep: its job is done without points, and its
+  // worker takes the next one.
   void Dispatch(double now) {
+    CollectBuiltAhead();
     while (true) {
       const std::vector<JobScheduler::Assignment> assigned = scheduler_.Assign(now);
       if (assigned.empty()) break;
-      std::vector<uint64_t> ids;
-      for (const JobScheduler::Assignment& a : assigned) ids.push_back(a.job_id);
-      std::vector<std::optional<wire::Job>> jobs = jobs_->Build(ids);
+      std::vector<std::optional<wire::Job>> jobs(assigned.size());
+      std::vector<uint64_t> missing;
+      std::vector<size_t> missing_at;
+      for (size_t i = 0; i < assigned.size(); ++i) {
+        auto ahead = built_ahead_.find(assigned[i].job_id);
+        if (ahead != built_ahead_.end()) {
+          jobs[i] = std::move(ahead->second);
+          built_ahead_.erase(ahead);
+        } else {
+          missing.push_back(assigned[i].job_id);
+          missing_at.push_back(i);
+        }
+      }
+      if (!missing.empty()) {
+        std::vector<std::optional<wire::Job>> built = jobs_->Build(missing);
+        for (size_t k = 0; k < missing.size(); ++k) jobs[missing_at[k]] = std::move(built[k]);
+      }
       bool withdrawn = false;
       for (size_t i = 0; i < assigned.size(); ++i) {
         const JobScheduler::Assignment& a = assigned[i];
@@ -275,6 +297,7 @@ class Coordinator::Impl {
       }
       if (!withdrawn) break;  // else the withdrawn jobs' workers are idle again
     }
+    BuildAhead();
     if (scheduler_.exhausted_job()) {
       const uint64_t job = *scheduler_.exhausted_job();
       throw InputError(fmt::format(
@@ -283,6 +306,35 @@ class Coordinator::Impl {
           JobIdCamera(job), options_.scheduler.max_attempts,
           last_failure_.count(job) ? last_failure_[job] : "none reported"));
     }
+  }
+
+  // Builds the next pending jobs on one background thread, as many as there are workers, so
+  // that a worker's next job is usually ready when its result comes in: the network loop then
+  // only sends it. One thread: the insertion of the results runs meanwhile.
+  void BuildAhead() {
+    if (building_ahead_.valid()) return;
+    const size_t want = std::max<size_t>(1, scheduler_.num_workers());
+    if (built_ahead_.size() >= want) return;
+    std::vector<uint64_t> ids;
+    for (uint64_t id : scheduler_.PendingJobs(want + built_ahead_.size())) {
+      if (!built_ahead_.count(id) && ids.size() < want - built_ahead_.size()) ids.push_back(id);
+    }
+    if (ids.empty()) return;
+    building_ahead_ = std::async(std::launch::async, [source = jobs_.get(), ids] {
+      std::vector<std::optional<wire::Job>> jobs = source->Build(ids, 1);
+      std::vector<std::pair<uint64_t, std::optional<wire::Job>>> out;
+      for (size_t i = 0; i < ids.size(); ++i) out.emplace_back(ids[i], std::move(jobs[i]));
+      return out;
+    });
+  }
+
+  // Takes the jobs built ahead if they are ready (rethrows what building them threw).
+  void CollectBuiltAhead() {
+    if (!building_ahead_.valid() ||
+        building_ahead_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+      return;
+    }
+    for (auto& [id, job] : building_ahead_.get()) built_ahead_.emplace(id, std::move(job));
   }
 
   void LogProgress() {
@@ -442,14 +494,17 @@ class Coordinator::Impl {
   JunkLog junk_;
   Phase phase_ = Phase::kPreparing;
   // The steps of the run; one at a time on a background thread (step_), while this loop keeps
-  // answering the network. The loop calls run_ only between steps, except run_.catalog().
+  // answering the network. The loop calls run_ only between steps, except run_.catalog() and
+  // run_.CheckCheckpoint() (the checkpoint written in the background during the sweep).
   RunLifecycle run_;
   std::future<StepOutcome> step_;
 
   // The current iteration (the loop writes them while sweeping; the step reads them after).
   uint32_t iteration_ = 0;
   std::unique_ptr<IterationJobSource> jobs_;
-  std::map<uint64_t, JobBounds> bounds_;  // what each job handed out must fit
+  std::future<std::vector<std::pair<uint64_t, std::optional<wire::Job>>>> building_ahead_;
+  std::map<uint64_t, std::optional<wire::Job>> built_ahead_;  // not handed out yet
+  std::map<uint64_t, JobBounds> bounds_;                      // what each job handed out must fit
   InsertionBatch batch_;
   std::vector<uint64_t> job_order_;  // this iteration's jobs, by camera
   size_t early_jobs_ = 0;            // of which handed to InsertEarly

@@ -18,9 +18,9 @@ namespace ms {
 
 IterationJobSource::IterationJobSource(const Scene& scene,
                                        const std::vector<std::vector<int>>& neighbours,
-                                       std::shared_ptr<const Mesh> mesh,
-                                       const ImageCatalog& images, uint32_t iteration,
-                                       uint64_t session_id, const JobBuildOptions& options)
+                                       std::shared_ptr<const Mesh> mesh, const ImageCatalog& images,
+                                       uint32_t iteration, uint64_t session_id,
+                                       const JobBuildOptions& options)
     : scene_(scene),
       neighbours_(neighbours),
       mesh_(std::move(mesh)),
@@ -79,7 +79,8 @@ std::optional<wire::Job> IterationJobSource::BuildOne(int c, std::string* skippe
   return out;
 }
 
-std::vector<std::optional<wire::Job>> IterationJobSource::Build(const std::vector<uint64_t>& ids) {
+std::vector<std::optional<wire::Job>> IterationJobSource::Build(const std::vector<uint64_t>& ids,
+                                                                int threads) {
   Timer timer;
   std::vector<int> cameras;
   for (uint64_t id : ids) {
@@ -93,11 +94,12 @@ std::vector<std::optional<wire::Job>> IterationJobSource::Build(const std::vecto
   std::vector<std::string> skipped(ids.size());
   const auto build = [&](size_t i) { jobs[i] = BuildOne(cameras[i], &skipped[i]); };
   // Cameras are independent; one job (the usual case once the sweep runs) stays on this thread.
-  if (ids.size() == 1) {
-    build(0);
+  if (ids.size() == 1 || threads == 1) {
+    for (size_t i = 0; i < ids.size(); ++i) build(i);
   } else {
-    ParallelFor(ids.size(), build);
+    ParallelFor(ids.size(), build, threads);
   }
+  const std::lock_guard<std::mutex> lock(stats_mutex_);
   for (size_t i = 0; i < ids.size(); ++i) {
     if (counted_[cameras[i]]) continue;
     counted_[cameras[i]] = true;
@@ -123,6 +125,9 @@ std::vector<wire::Job> IterationJobSource::BuildAll() {
   return all;
 }
 
-JobBuildStats IterationJobSource::stats() const { return stats_; }
+JobBuildStats IterationJobSource::stats() const {
+  const std::lock_guard<std::mutex> lock(stats_mutex_);
+  return stats_;
+}
 
 }  // namespace ms

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -57,8 +58,10 @@ class IterationJobSource {
   const std::vector<uint64_t>& job_ids() const { return job_ids_; }
   // The jobs of `ids` (ids of this source), built in parallel: std::nullopt for a camera that
   // sees no face of the mesh (it has nothing to sweep). Throws InputError if a job would exceed
-  // limits.max_message_bytes (naming the camera and the option to raise).
-  std::vector<std::optional<wire::Job>> Build(const std::vector<uint64_t>& ids);
+  // limits.max_message_bytes (naming the camera and the option to raise). Safe to call from
+  // several threads at once (the coordinator builds ahead on one while it sends from another).
+  // `threads`: 0 for one per core.
+  std::vector<std::optional<wire::Job>> Build(const std::vector<uint64_t>& ids, int threads = 0);
   // Every job, in id order, without the cameras that see no face (tests, tools).
   std::vector<wire::Job> BuildAll();
 
@@ -76,7 +79,8 @@ class IterationJobSource {
   JobBuildOptions options_;
   VisibleMeshIndex index_;
   std::vector<uint64_t> job_ids_;
-  std::vector<bool> counted_;  // by camera: its job is in stats_ already
+  mutable std::mutex stats_mutex_;  // guards counted_ and stats_
+  std::vector<bool> counted_;       // by camera: its job is in stats_ already
   JobBuildStats stats_;
 };
 

@@ -61,13 +61,13 @@ struct Fixture {
 TEST(IterationJobSource, BuildsTheSameJobsInAnyOrderAndCountsEachOnce) {
   const Fixture f;
   IterationJobSource all = f.Source();
-  ASSERT_EQ(all.job_ids(), (std::vector<uint64_t>{MakeJobId(3, 0), MakeJobId(3, 1),
-                                                  MakeJobId(3, 2), MakeJobId(3, 3)}));
+  ASSERT_EQ(all.job_ids(), (std::vector<uint64_t>{MakeJobId(3, 0), MakeJobId(3, 1), MakeJobId(3, 2),
+                                                  MakeJobId(3, 3)}));
   const std::vector<wire::Job> whole = all.BuildAll();
   ASSERT_EQ(whole.size(), 3u) << "camera 3 sees no face, camera 4 has no neighbour";
   EXPECT_EQ(all.stats().jobs, 3);
-  EXPECT_EQ(all.stats().skipped,
-            (std::vector<std::string>{"camera 4: no neighbour", "camera 3: sees no face of the mesh"}));
+  EXPECT_EQ(all.stats().skipped, (std::vector<std::string>{"camera 4: no neighbour",
+                                                           "camera 3: sees no face of the mesh"}));
 
   // Built one or two at a time, backwards, and again (a requeued job): the same bytes.
   IterationJobSource lazy = f.Source();

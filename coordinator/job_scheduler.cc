@@ -219,6 +219,15 @@ size_t JobScheduler::num_pending() const {
       jobs_.begin(), jobs_.end(), [](const auto& j) { return j.second.state == State::kPending; }));
 }
 
+std::vector<uint64_t> JobScheduler::PendingJobs(size_t max) const {
+  std::vector<uint64_t> ids;
+  for (const auto& [id, job] : jobs_) {
+    if (ids.size() == max) break;
+    if (job.state == State::kPending) ids.push_back(id);
+  }
+  return ids;
+}
+
 size_t JobScheduler::num_running() const {
   return static_cast<size_t>(std::count_if(
       jobs_.begin(), jobs_.end(), [](const auto& j) { return j.second.state == State::kRunning; }));

@@ -93,6 +93,8 @@ class JobScheduler {
   size_t num_jobs() const { return jobs_.size(); }
   size_t num_done() const { return num_done_; }
   size_t num_pending() const;
+  // The first `max` pending jobs, in the order Assign hands them out.
+  std::vector<uint64_t> PendingJobs(size_t max) const;
   size_t num_running() const;  // handed out, not done, lease not expired
   size_t num_workers() const { return workers_.size(); }
   size_t num_requeued() const { return requeued_; }  // this iteration

@@ -170,6 +170,7 @@ TEST(JobScheduler, AWithdrawnJobIsDoneAndItsWorkerTakesTheNext) {
 
   // The withdrawn job's worker is idle and keeps its place in line.
   s.StartIteration(2, {21, 22});
+  EXPECT_EQ(s.PendingJobs(1), (std::vector<uint64_t>{21}));
   auto second = s.Assign(clock.now);
   ASSERT_EQ(second.size(), 2u);
   EXPECT_EQ(second[0].peer, "pa");

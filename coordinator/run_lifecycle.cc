@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <chrono>
 #include <filesystem>
 
 #include "base/error.h"
@@ -22,6 +23,10 @@ RunLifecycle::RunLifecycle(const CoordinatorOptions& options, uint64_t session_i
   job_options_.sweep = options_.sweep;
   job_options_.lease_s = options_.scheduler.lease_s;
   job_options_.limits = options_.Limits();
+}
+
+RunLifecycle::~RunLifecycle() {
+  if (checkpoint_.valid()) checkpoint_.wait();
 }
 
 std::string RunLifecycle::Path(const std::string& name) const {
@@ -164,6 +169,7 @@ void RunLifecycle::InsertEarly(const std::vector<RayPoint>& points) {
 }
 
 StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const SweepRound& round) {
+  WaitForCheckpoint();  // the previous iteration's, which reads record_
   const int iteration = record_.completed_iterations() + 1;
   Timer insert;
   if (!insert_open_) manifold_->BeginInsert();
@@ -218,16 +224,16 @@ StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const Swe
   row.seconds_total = row.seconds_sweep + row.seconds_insert + row.seconds_extract;
   record_.batches.push_back(std::move(batch));
   record_.iterations.push_back(row);
-  Checkpoint();
   const IterationStats& done = record_.iterations.back();
   spdlog::info(
       "iteration {} done: {} points found, {} inserted, {} discarded; mesh {} vertices, {} "
-      "faces; jobs {:.2f} s, sweep {:.2f} s (inserting {:.2f} s meanwhile), insert {:.2f} s, "
-      "extract {:.2f} s, checkpoint {:.2f} s",
+      "faces; jobs {:.2f} s (while sweeping), sweep {:.2f} s (inserting {:.2f} s meanwhile), "
+      "insert {:.2f} s, extract {:.2f} s",
       iteration, done.points_found, done.points_inserted,
       done.discarded_conflict + done.discarded_duplicate + done.discarded_outside, done.vertices,
       done.faces, done.seconds_jobs, done.seconds_sweep, done.seconds_insert_early,
-      done.seconds_insert, done.seconds_extract, done.seconds_checkpoint);
+      done.seconds_insert, done.seconds_extract);
+  CheckpointInBackground();
   return NextOrStop();
 }
 
@@ -273,6 +279,27 @@ RunRecord RunLifecycle::ReadCheckpoint(const std::string& run_file) {
 }
 
 void RunLifecycle::Checkpoint() {
+  WaitForCheckpoint();
+  WriteCheckpoint();
+}
+
+void RunLifecycle::CheckpointInBackground() {
+  WaitForCheckpoint();
+  checkpoint_ = std::async(std::launch::async, [this] { WriteCheckpoint(); });
+}
+
+void RunLifecycle::WaitForCheckpoint() {
+  if (checkpoint_.valid()) checkpoint_.get();
+}
+
+void RunLifecycle::CheckCheckpoint() {
+  if (checkpoint_.valid() &&
+      checkpoint_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+    checkpoint_.get();
+  }
+}
+
+void RunLifecycle::WriteCheckpoint() {
   // Keep the checkpoint being replaced as run.prev.h5 (a hard link: no copy), then replace
   // run.h5 atomically, so a good checkpoint exists at every moment.
   const fs::path run = Path("run.h5"), previous = Path("run.prev.h5");
@@ -289,6 +316,8 @@ void RunLifecycle::Checkpoint() {
   record_.iterations.back().seconds_total += timer.Seconds();
   WriteSummaryJson(record_, SummaryInfo(record_.stop_reason.empty() ? "running" : "finished"),
                    Path("summary.json"));
+  spdlog::info("checkpoint of iteration {} written in {:.2f} s", record_.completed_iterations(),
+               timer.Seconds());
 }
 
 RunSummaryInfo RunLifecycle::SummaryInfo(const std::string& status) const {
@@ -305,7 +334,12 @@ RunSummaryInfo RunLifecycle::SummaryInfo(const std::string& status) const {
   return info;
 }
 
-void RunLifecycle::WriteInterruptedSummary() const {
+void RunLifecycle::WriteInterruptedSummary() {
+  try {
+    WaitForCheckpoint();
+  } catch (const std::exception& e) {
+    spdlog::warn("the checkpoint being written failed while stopping: {}", e.what());
+  }
   if (record_loaded_) WriteSummaryJson(record_, SummaryInfo("interrupted"), Path("summary.json"));
 }
 
@@ -324,13 +358,17 @@ StepOutcome RunLifecycle::NextOrStop() {
     spdlog::info("memory at the start of iteration {}: {}", done + 1, MemoryReport());
     if (outcome.jobs->job_ids().empty()) reason = "no camera has a neighbour";
   }
-  if (reason.empty()) return outcome;
+  if (reason.empty()) {
+    mesh_ = Mesh();  // not needed until the next Extract: the sweep holds only the surface
+    return outcome;
+  }
   Finish(reason);
   outcome.stop = true;
   return outcome;
 }
 
 void RunLifecycle::Finish(const std::string& reason) {
+  WaitForCheckpoint();  // the last iteration's: Finish changes its row
   const std::string path = Path("final.ply");
   const OutputMeshes written = WriteOutputMeshes("final", true, &record_.iterations.back());
   MeshCheckOptions check;

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <future>
 #include <map>
 #include <memory>
 #include <string>
@@ -47,6 +48,7 @@ class RunLifecycle {
  public:
   // options.Check() must have passed; session_id goes into every job.
   RunLifecycle(const CoordinatorOptions& options, uint64_t session_id);
+  ~RunLifecycle();
   RunLifecycle(const RunLifecycle&) = delete;
   RunLifecycle& operator=(const RunLifecycle&) = delete;
 
@@ -58,9 +60,15 @@ class RunLifecycle {
   // results are all in (DelaunayManifold::InsertPart), so that less is left for Integrate.
   void InsertEarly(const std::vector<RayPoint>& points);
   // An iteration's sweep is over: inserts `rest` (the points InsertEarly has not had, in
-  // order), completes the insertion, extracts the surface, records the statistics,
-  // checkpoints; then the next jobs, or the end.
+  // order), completes the insertion, extracts the surface, records the statistics, starts
+  // writing the checkpoint in the background (it overlaps the next sweep); then the next jobs,
+  // or the end (whose checkpoint is written before Integrate returns).
   StepOutcome Integrate(const std::vector<RayPoint>& rest, const SweepRound& round);
+  // Waits for the checkpoint being written in the background, if any; rethrows its error.
+  void WaitForCheckpoint();
+  // While the sweep runs: rethrows the background checkpoint's error as soon as it is known
+  // (a full disk stops the run then, not an iteration later). Never blocks.
+  void CheckCheckpoint();
 
   // Safe to call while a step runs: the image catalog once Prepare has hashed the images (it
   // does not change afterwards), else null.
@@ -70,9 +78,11 @@ class RunLifecycle {
   int completed_iterations() const { return record_.completed_iterations(); }
   int num_views() const { return static_cast<int>(record_.scene.views.size()); }
   const CoordinatorResult& final_result() const { return final_; }
-  const Mesh& mesh() const { return mesh_; }  // the closed manifold
+  // The surface proper the next jobs are built from (the closed mesh is held only while the
+  // meshes of an iteration are written).
+  const Mesh& surface() const { return *surface_; }
   // Writes summary.json for a run stopped early (if the run's record got as far as loading).
-  void WriteInterruptedSummary() const;
+  void WriteInterruptedSummary();
 
  private:
   std::string Path(const std::string& name) const;
@@ -83,7 +93,11 @@ class RunLifecycle {
   // robust in floating point; their size and the cleanup's counts go into `row`.
   OutputMeshes WriteOutputMeshes(const std::string& name, bool with_surface, IterationStats* row);
   RunRecord ReadCheckpoint(const std::string& run_file);
+  // Writes run.h5 and summary.json now (after waiting for one in the background).
   void Checkpoint();
+  // The same on a background thread; record_ must not change until WaitForCheckpoint.
+  void CheckpointInBackground();
+  void WriteCheckpoint();
   StepOutcome NextOrStop();
   void Finish(const std::string& reason);
   RunSummaryInfo SummaryInfo(const std::string& status) const;
@@ -104,13 +118,15 @@ class RunLifecycle {
   bool insert_open_ = false;
   std::vector<RayPoint> early_points_;
   double early_seconds_ = 0;
-  // The closed manifold, and the surface proper (without the Steiner faces that close it): what
-  // the sweep jobs are built from (docs/manifold.md), shared with the iteration's job source.
+  // The closed manifold (from Extract until the iteration's meshes are written), and the surface
+  // proper (without the Steiner faces that close it): what the sweep jobs are built from
+  // (docs/manifold.md), shared with the iteration's job source.
   Mesh mesh_;
   std::shared_ptr<const Mesh> surface_;
   SurfaceInfo surface_info_;  // of mesh_
   CoordinatorResult final_;
   std::string final_check_;
+  std::future<void> checkpoint_;  // the checkpoint being written in the background
 };
 
 }  // namespace ms

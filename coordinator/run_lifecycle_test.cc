@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
@@ -102,16 +103,17 @@ TEST(RunLifecycle, ResumingReplaysTheCheckpointToTheSameMesh) {
   EXPECT_EQ(run.completed_iterations(), 0);
   EXPECT_TRUE(std::filesystem::exists(dir / "run/initial.ply"));
   EXPECT_TRUE(std::filesystem::exists(dir / "run/run.h5"));
-  const size_t initial_vertices = run.mesh().NumVertices();
+  const size_t initial_vertices = run.surface().NumVertices();
 
   SweepRound round;
   round.jobs = static_cast<int32_t>(first_jobs.size());
   round.jobs_by_worker["w1"] = round.jobs;
   const StepOutcome second = run.Integrate(Batch(scene, 0.0).Sorted(), round);
   ASSERT_FALSE(second.stop);
+  run.WaitForCheckpoint();  // written in the background while the next sweep would run
   EXPECT_EQ(run.completed_iterations(), 1);
-  EXPECT_GT(run.mesh().NumVertices(), initial_vertices) << "no point of the batch was inserted";
-  const Mesh after_one = run.mesh();
+  EXPECT_GT(run.surface().NumVertices(), initial_vertices) << "no point of the batch was inserted";
+  const Mesh after_one = run.surface();
 
   // A coordinator restarted after iteration 1 rebuilds exactly that mesh.
   CoordinatorOptions resume = options;
@@ -120,8 +122,8 @@ TEST(RunLifecycle, ResumingReplaysTheCheckpointToTheSameMesh) {
   const StepOutcome again = resumed.Prepare();
   ASSERT_FALSE(again.stop);
   EXPECT_EQ(resumed.completed_iterations(), 1);
-  EXPECT_EQ(resumed.mesh().vertices, after_one.vertices);
-  EXPECT_EQ(resumed.mesh().faces, after_one.faces);
+  EXPECT_EQ(resumed.surface().vertices, after_one.vertices);
+  EXPECT_EQ(resumed.surface().faces, after_one.faces);
   const std::vector<wire::Job> again_jobs = again.jobs->BuildAll();
   ASSERT_FALSE(again_jobs.empty());
   EXPECT_EQ(again_jobs.front().session_id(), 43u);
@@ -160,9 +162,11 @@ TEST(RunLifecycle, InsertingDuringTheSweepGivesTheSameIteration) {
   early.InsertEarly(cut(0, 3));
   early.InsertEarly(cut(3, batch.size() / 2));
   early.Integrate(cut(batch.size() / 2, batch.size()), round);
+  at_end.WaitForCheckpoint();
+  early.WaitForCheckpoint();
 
-  EXPECT_EQ(early.mesh().vertices, at_end.mesh().vertices);
-  EXPECT_EQ(early.mesh().faces, at_end.mesh().faces);
+  EXPECT_EQ(early.surface().vertices, at_end.surface().vertices);
+  EXPECT_EQ(early.surface().faces, at_end.surface().faces);
   const RunRecord a = ReadRunFile(dir / "at_end/run.h5");
   const RunRecord b = ReadRunFile(dir / "early/run.h5");
   ASSERT_EQ(b.batches.size(), 1u);
@@ -187,6 +191,33 @@ TEST(RunLifecycle, AnExistingRunIsNeverOverwrittenOrResumedWithOtherOptions) {
   other.run.resume = true;
   other.manifold.w1 = 5;
   ExpectInputError([&] { RunLifecycle(other, 3).Prepare(); }, {"run.h5", "other options"});
+}
+
+// The checkpoint written during the next sweep: its failure (a full disk) must still stop the
+// run, and the one before stays in place.
+TEST(RunLifecycle, ABackgroundCheckpointThatFailsIsReported) {
+  const TempDir dir("lifecycle");
+  const std::string scene = WriteSphereScene(dir);
+  RunLifecycle run(Options(scene, dir / "run"), 1);
+  ASSERT_FALSE(run.Prepare().stop);
+  // run.h5 cannot be replaced: a directory that is not empty stands in its way.
+  std::filesystem::rename(dir / "run/run.h5", dir / "run/kept.h5");
+  std::filesystem::create_directory(dir / "run/run.h5");
+  std::ofstream(dir / "run/run.h5/blocker") << "x";
+  SweepRound round;
+  round.jobs = 3;
+  const StepOutcome next = run.Integrate(Batch(scene, 0.0).Sorted(), round);
+  ASSERT_FALSE(next.stop);
+  bool reported = false;
+  try {
+    run.WaitForCheckpoint();
+  } catch (const std::exception& e) {
+    reported = true;
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("run.h5"));
+  }
+  EXPECT_TRUE(reported) << "the failed checkpoint went unnoticed";
+  EXPECT_NO_THROW(run.WaitForCheckpoint()) << "reported once";
+  EXPECT_EQ(ReadRunFile(dir / "run/kept.h5").completed_iterations(), 0);
 }
 
 TEST(RunLifecycle, ABatchWithNothingNewEndsTheRun) {

@@ -16,8 +16,10 @@ peak RSS) and OUT/capacity.png.
               [--workers 1 2 4 8 16 32 64] [--delay 0.3] [--iterations 3]
 
 Efficiency of an iteration with W workers = (jobs x delay / W) / iteration wall time: 1 when
-every worker is busy the whole iteration, lower for the coordinator's serial steps (building
-the jobs, inserting, extracting, checkpointing) and for the tail of the sweep.
+every worker is busy the whole iteration, lower for the coordinator's serial steps (the rest of
+the insertion after the last result, extracting the surface; the checkpoint, where it is not
+written during the next sweep) and for the tail of the sweep. Jobs are built while the sweep
+runs (seconds_jobs, reported apart).
 """
 import argparse
 import filecmp

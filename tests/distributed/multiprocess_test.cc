@@ -205,7 +205,7 @@ TEST_F(MultiProcessTest, AKilledCoordinatorResumesToTheIdenticalMesh) {
       pool.push_back(
           std::make_unique<ChildProcess>(kBinary, WorkerArgs(port, id), out + "/" + id + ".log"));
     }
-    ASSERT_TRUE(first.WaitForLog("iteration 1 done", 60)) << first.Log();
+    ASSERT_TRUE(first.WaitForLog("checkpoint of iteration 1 written", 60)) << first.Log();
     first.Signal(SIGKILL);
     ASSERT_TRUE(first.Wait(5));
     EXPECT_EQ(first.term_signal(), SIGKILL);
