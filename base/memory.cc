@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <malloc.h>
 
+#include <algorithm>
 #include <fstream>
 #include <string>
 
@@ -28,6 +29,12 @@ int64_t ResidentBytes() { return StatusBytes("VmRSS:"); }
 int64_t HeapInUseBytes() {
   const struct mallinfo2 info = mallinfo2();
   return static_cast<int64_t>(info.uordblks + info.hblkhd);
+}
+
+int64_t ReleaseFreeMemory() {
+  const int64_t before = ResidentBytes();
+  malloc_trim(0);
+  return std::max<int64_t>(0, before - ResidentBytes());
 }
 
 std::string MemoryReport() {

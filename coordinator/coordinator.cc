@@ -11,6 +11,7 @@
 #include <optional>
 #include <random>
 #include <set>
+#include <thread>
 
 #include "base/error.h"
 #include "base/log.h"
@@ -308,9 +309,9 @@ class Coordinator::Impl {
     }
   }
 
-  // Builds the next pending jobs on one background thread, as many as there are workers, so
-  // that a worker's next job is usually ready when its result comes in: the network loop then
-  // only sends it. One thread: the insertion of the results runs meanwhile.
+  // Builds the next pending jobs in the background, as many as there are workers, so that a
+  // worker's next job is usually ready when its result comes in: the network loop then only
+  // sends it. On all cores but one: the insertion of the results runs meanwhile.
   void BuildAhead() {
     if (building_ahead_.valid()) return;
     const size_t want = std::max<size_t>(1, scheduler_.num_workers());
@@ -320,8 +321,9 @@ class Coordinator::Impl {
       if (!built_ahead_.count(id) && ids.size() < want - built_ahead_.size()) ids.push_back(id);
     }
     if (ids.empty()) return;
-    building_ahead_ = std::async(std::launch::async, [source = jobs_.get(), ids] {
-      std::vector<std::optional<wire::Job>> jobs = source->Build(ids, 1);
+    const int threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
+    building_ahead_ = std::async(std::launch::async, [source = jobs_.get(), ids, threads] {
+      std::vector<std::optional<wire::Job>> jobs = source->Build(ids, threads);
       std::vector<std::pair<uint64_t, std::optional<wire::Job>>> out;
       for (size_t i = 0; i < ids.size(); ++i) out.emplace_back(ids[i], std::move(jobs[i]));
       return out;

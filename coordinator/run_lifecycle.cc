@@ -154,6 +154,7 @@ void RunLifecycle::WriteInitial(const BuildStats& stats, double build_s) {
   Checkpoint();
   spdlog::info("initial mesh: {} vertices, {} faces -> {}", written.closed.NumVertices(),
                written.closed.NumFaces(), Path("initial.ply"));
+  ReleaseFreeMemory();  // the float cleanup's structures, gone for good
   spdlog::info("memory after the initial meshes: {}", MemoryReport());
 }
 
@@ -355,11 +356,12 @@ StepOutcome RunLifecycle::NextOrStop() {
     outcome.jobs = std::make_unique<IterationJobSource>(record_.scene, neighbours_, surface_,
                                                         *catalog_, static_cast<uint32_t>(done + 1),
                                                         session_id_, job_options_);
-    spdlog::info("memory at the start of iteration {}: {}", done + 1, MemoryReport());
     if (outcome.jobs->job_ids().empty()) reason = "no camera has a neighbour";
   }
   if (reason.empty()) {
     mesh_ = Mesh();  // not needed until the next Extract: the sweep holds only the surface
+    ReleaseFreeMemory();
+    spdlog::info("memory at the start of iteration {}: {}", done + 1, MemoryReport());
     return outcome;
   }
   Finish(reason);
