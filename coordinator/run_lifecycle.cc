@@ -314,7 +314,6 @@ void RunLifecycle::WriteCheckpoint() {
   Timer timer;
   WriteRunFile(record_, Path("run.h5"));
   record_.iterations.back().seconds_checkpoint = timer.Seconds();
-  record_.iterations.back().seconds_total += timer.Seconds();
   WriteSummaryJson(record_, SummaryInfo(record_.stop_reason.empty() ? "running" : "finished"),
                    Path("summary.json"));
   spdlog::info("checkpoint of iteration {} written in {:.2f} s", record_.completed_iterations(),

@@ -55,8 +55,8 @@ struct IterationStats {
   double seconds_insert = 0;        // Insert (Build for iteration 0), after the sweep
   double seconds_insert_early = 0;  // inserting while the sweep ran (RunLifecycle::InsertEarly)
   double seconds_extract = 0;       // surface extraction and mesh files
-  double seconds_checkpoint = 0;    // writing run.h5 (of the previous iteration's checkpoint)
-  double seconds_total = 0;         // wall time of the iteration
+  double seconds_checkpoint = 0;    // writing run.h5, during the next iteration's sweep
+  double seconds_total = 0;         // sweep + insert + extract (iteration 0: Build + extract)
 };
 
 // One row of /stats/workers: what one worker did in one iteration.
