@@ -276,13 +276,38 @@ Eigen::Vector3d WinnerPosition(const TileWinner& w, const SweepJob& job, const P
     v[i] = SweepVertex(job.mesh.vertices[job.mesh.faces[w.face][i]], normals[w.face], center,
                        prep.alpha * w.offset);
   }
-  const Eigen::Vector3d n = (v[1] - v[0]).cross(v[2] - v[0]);
-  const Eigen::Vector3d ray = view.PixelRay(Eigen::Vector2d(w.col + 0.5, w.row + 0.5));
-  const double s = n.dot(v[0] - center) / n.dot(ray);
-  return center + s * ray;
+  return PixelRayOnFacet(view, Eigen::Vector2d(w.col + 0.5, w.row + 0.5), v, prep.near);
 }
 
 }  // namespace
+
+Eigen::Vector3d PixelRayOnFacet(const View& view, const Eigen::Vector2d& pixel,
+                                const std::array<Eigen::Vector3d, 3>& facet, double near) {
+  const Eigen::Vector3d center = view.Center();
+  const Eigen::Vector3d n = (facet[1] - facet[0]).cross(facet[2] - facet[0]);
+  const Eigen::Vector3d ray = view.PixelRay(pixel);
+  double s = n.dot(facet[0] - center) / n.dot(ray);
+  // Camera z along the ray is s * ray_z: s's range for the facet's depths.
+  const double ray_z = (view.R * ray).z();
+  double z_min = INFINITY, z_max = -INFINITY;
+  for (const Eigen::Vector3d& v : facet) {
+    const double z = view.ToCamera(v).z();
+    z_min = std::min(z_min, z);
+    z_max = std::max(z_max, z);
+  }
+  z_min = std::max(z_min, near);
+  if (ray_z > 0 && z_max >= z_min) {
+    // Within rounding of the range the crossing stays as computed (results do not move).
+    const double slack = 1e-9 * std::max(std::abs(z_min), std::abs(z_max));
+    const double z = s * ray_z;
+    if (!std::isfinite(s)) {
+      s = 0.5 * (z_min + z_max) / ray_z;
+    } else if (z < z_min - slack || z > z_max + slack) {
+      s = std::clamp(z, z_min, z_max) / ray_z;
+    }
+  }
+  return center + s * ray;
+}
 
 SweepResult CpuSweepKernel::Run(const SweepJob& job) {
   Timer total;

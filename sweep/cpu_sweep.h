@@ -10,6 +10,8 @@
 // plane of the swept facet, which is where the reference's interpolation puts it.
 #pragma once
 
+#include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -51,6 +53,14 @@ class CpuSweepSlab {
   WindowedNcc ncc_;
   std::vector<float> J_, mask_;
 };
+
+// Where view's ray through `pixel` meets the plane of `facet` (world coordinates), kept within
+// the facet's depth range (camera z, and beyond `near`): a winner's pixel centre is inside its
+// rasterised facet, but where the facet grazes the ray, rounding can put the plane's crossing
+// far outside the facet, and so outside the depths the job can sweep (the coordinator rejects
+// such a point, coordinator/insertion_batch.h). The point stays on the pixel's ray.
+Eigen::Vector3d PixelRayOnFacet(const View& view, const Eigen::Vector2d& pixel,
+                                const std::array<Eigen::Vector3d, 3>& facet, double near);
 
 class CpuSweepKernel : public SweepKernel {
  public:
