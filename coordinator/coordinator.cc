@@ -263,7 +263,7 @@ class Coordinator::Impl {
     while (true) {
       const std::vector<JobScheduler::Assignment> assigned = scheduler_.Assign(now);
       if (assigned.empty()) break;
-      std::vector<std::optional<wire::Job>> jobs(assigned.size());
+      std::vector<std::optional<BuiltJob>> jobs(assigned.size());
       std::vector<uint64_t> missing;
       std::vector<size_t> missing_at;
       for (size_t i = 0; i < assigned.size(); ++i) {
@@ -277,7 +277,7 @@ class Coordinator::Impl {
         }
       }
       if (!missing.empty()) {
-        std::vector<std::optional<wire::Job>> built = jobs_->Build(missing);
+        std::vector<std::optional<BuiltJob>> built = jobs_->Build(missing);
         for (size_t k = 0; k < missing.size(); ++k) jobs[missing_at[k]] = std::move(built[k]);
       }
       bool withdrawn = false;
@@ -289,9 +289,9 @@ class Coordinator::Impl {
           withdrawn = true;
           continue;
         }
-        if (!bounds_.count(a.job_id)) bounds_.emplace(a.job_id, JobBoundsFromWire(*jobs[i]));
+        bounds_.try_emplace(a.job_id, std::move(jobs[i]->bounds));
         wire::Envelope envelope = stamper_.New();
-        *envelope.mutable_job() = std::move(*jobs[i]);
+        *envelope.mutable_job() = std::move(jobs[i]->job);
         transport_->Send(a.peer, Serialize(envelope));
         spdlog::debug("job {} -> {}{}", JobName(a.job_id), PeerTag(a.peer),
                       a.attempt > 1 ? fmt::format(" (attempt {})", a.attempt) : "");
@@ -323,8 +323,8 @@ class Coordinator::Impl {
     if (ids.empty()) return;
     const int threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
     building_ahead_ = std::async(std::launch::async, [source = jobs_.get(), ids, threads] {
-      std::vector<std::optional<wire::Job>> jobs = source->Build(ids, threads);
-      std::vector<std::pair<uint64_t, std::optional<wire::Job>>> out;
+      std::vector<std::optional<BuiltJob>> jobs = source->Build(ids, threads);
+      std::vector<std::pair<uint64_t, std::optional<BuiltJob>>> out;
       for (size_t i = 0; i < ids.size(); ++i) out.emplace_back(ids[i], std::move(jobs[i]));
       return out;
     });
@@ -504,9 +504,9 @@ class Coordinator::Impl {
   // The current iteration (the loop writes them while sweeping; the step reads them after).
   uint32_t iteration_ = 0;
   std::unique_ptr<IterationJobSource> jobs_;
-  std::future<std::vector<std::pair<uint64_t, std::optional<wire::Job>>>> building_ahead_;
-  std::map<uint64_t, std::optional<wire::Job>> built_ahead_;  // not handed out yet
-  std::map<uint64_t, JobBounds> bounds_;                      // what each job handed out must fit
+  std::future<std::vector<std::pair<uint64_t, std::optional<BuiltJob>>>> building_ahead_;
+  std::map<uint64_t, std::optional<BuiltJob>> built_ahead_;  // not handed out yet
+  std::map<uint64_t, JobBounds> bounds_;                     // what each job handed out must fit
   InsertionBatch batch_;
   std::vector<uint64_t> job_order_;  // this iteration's jobs, by camera
   size_t early_jobs_ = 0;            // of which handed to InsertEarly

@@ -22,13 +22,15 @@ bool InsertionOrder(const FoundPoint& a, const FoundPoint& b) {
 }  // namespace
 
 JobBounds JobBoundsFromWire(const wire::Job& job) {
+  return JobBoundsFromWire(job, UnpackMesh(job.mesh(), fmt::format("job {}", job.job_id())));
+}
+
+JobBounds JobBoundsFromWire(const wire::Job& job, const Mesh& mesh) {
   JobBounds b;
-  const std::string what = fmt::format("job {}", job.job_id());
   b.camera = job.camera().id();
   b.cameras.push_back(b.camera);
   for (const wire::JobCamera& n : job.neighbours()) b.cameras.push_back(n.id());
-  b.view = ViewFromWire(job.camera(), what);
-  const Mesh mesh = UnpackMesh(job.mesh(), what);
+  b.view = ViewFromWire(job.camera(), fmt::format("job {}", job.job_id()));
   std::vector<double> depths;
   for (const Eigen::Vector3d& v : mesh.vertices) depths.push_back(b.view.ToCamera(v).z());
   if (depths.empty()) return b;  // no point can fit

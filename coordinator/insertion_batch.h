@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "manifold/delaunay_manifold.h"
+#include "mesh/mesh.h"
 #include "proto/manisweep.pb.h"
 #include "scene/camera.h"
 
@@ -37,6 +38,8 @@ struct JobBounds {
 
 // The bounds of a job; throws InputError for a malformed job (the coordinator built it).
 JobBounds JobBoundsFromWire(const wire::Job& job);
+// The same, with the job's mesh given unpacked (the job builder has it: no second unpacking).
+JobBounds JobBoundsFromWire(const wire::Job& job, const Mesh& mesh);
 
 // A reported point's pixel and its projection into C may differ by this much (pixels): the
 // GLSL kernel places points in float32.

@@ -40,7 +40,7 @@ IterationJobSource::IterationJobSource(const Scene& scene,
   }
 }
 
-std::optional<wire::Job> IterationJobSource::BuildOne(int c, std::string* skipped) const {
+std::optional<BuiltJob> IterationJobSource::BuildOne(int c, std::string* skipped) const {
   const VisibleMesh visible = index_.Extract(scene_.views[c], options_.visible);
   if (visible.mesh.faces.empty()) {
     *skipped = fmt::format("camera {}: sees no face of the mesh", c);
@@ -53,8 +53,8 @@ std::optional<wire::Job> IterationJobSource::BuildOne(int c, std::string* skippe
     ref->set_content_hash(record.hash);
     ref->set_byte_size(record.size);
   };
-  std::optional<wire::Job> out;
-  wire::Job& job = out.emplace();
+  std::optional<BuiltJob> out;
+  wire::Job& job = out.emplace().job;
   job.set_job_id(MakeJobId(iteration_, static_cast<uint32_t>(c)));
   job.set_iteration(iteration_);
   job.set_session_id(session_id_);
@@ -76,11 +76,13 @@ std::optional<wire::Job> IterationJobSource::BuildOne(int c, std::string* skippe
         "bytes: raise --max-message-mb on the coordinator and the workers",
         c, visible.mesh.NumFaces(), bytes, options_.limits.max_message_bytes));
   }
+  out->bytes = bytes;
+  out->bounds = JobBoundsFromWire(job, visible.mesh);
   return out;
 }
 
-std::vector<std::optional<wire::Job>> IterationJobSource::Build(const std::vector<uint64_t>& ids,
-                                                                int threads) {
+std::vector<std::optional<BuiltJob>> IterationJobSource::Build(const std::vector<uint64_t>& ids,
+                                                               int threads) {
   Timer timer;
   std::vector<int> cameras;
   for (uint64_t id : ids) {
@@ -90,7 +92,7 @@ std::vector<std::optional<wire::Job>> IterationJobSource::Build(const std::vecto
         << "job " << id << " is not one of this iteration's";
     cameras.push_back(c);
   }
-  std::vector<std::optional<wire::Job>> jobs(ids.size());
+  std::vector<std::optional<BuiltJob>> jobs(ids.size());
   std::vector<std::string> skipped(ids.size());
   const auto build = [&](size_t i) { jobs[i] = BuildOne(cameras[i], &skipped[i]); };
   // Cameras are independent; one job (the usual case once the sweep runs) stays on this thread.
@@ -107,11 +109,10 @@ std::vector<std::optional<wire::Job>> IterationJobSource::Build(const std::vecto
       stats_.skipped.push_back(std::move(skipped[i]));
       continue;
     }
-    const uint64_t bytes = jobs[i]->ByteSizeLong();
     ++stats_.jobs;
-    stats_.faces += jobs[i]->mesh().num_faces();
-    stats_.bytes += bytes;
-    stats_.max_bytes = std::max(stats_.max_bytes, bytes);
+    stats_.faces += jobs[i]->job.mesh().num_faces();
+    stats_.bytes += jobs[i]->bytes;
+    stats_.max_bytes = std::max(stats_.max_bytes, jobs[i]->bytes);
   }
   stats_.seconds += timer.Seconds();
   return jobs;
@@ -119,8 +120,8 @@ std::vector<std::optional<wire::Job>> IterationJobSource::Build(const std::vecto
 
 std::vector<wire::Job> IterationJobSource::BuildAll() {
   std::vector<wire::Job> all;
-  for (std::optional<wire::Job>& job : Build(job_ids_)) {
-    if (job) all.push_back(std::move(*job));
+  for (std::optional<BuiltJob>& built : Build(job_ids_)) {
+    if (built) all.push_back(std::move(built->job));
   }
   return all;
 }

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "coordinator/image_catalog.h"
+#include "coordinator/insertion_batch.h"
 #include "mesh/mesh.h"
 #include "mesh/visible_mesh.h"
 #include "proto/manisweep.pb.h"
@@ -32,6 +33,13 @@ struct JobBuildOptions {
   SweepOptions sweep;
   double lease_s = 600;
   WireLimits limits;
+};
+
+// A job as it goes out, with what its result must fit and its serialized size.
+struct BuiltJob {
+  wire::Job job;
+  JobBounds bounds;
+  uint64_t bytes = 0;
 };
 
 // What the jobs built so far add up to (each job counted once, however often it was built).
@@ -56,19 +64,20 @@ class IterationJobSource {
   // The iteration's job ids, by camera: every camera with a neighbour. Whether a camera sees a
   // face is known only when its job is built.
   const std::vector<uint64_t>& job_ids() const { return job_ids_; }
-  // The jobs of `ids` (ids of this source), built in parallel: std::nullopt for a camera that
+  // The jobs of `ids` (ids of this source), built in parallel, each with the bounds its result
+  // must fit (from the visible mesh at hand, not unpacked again): std::nullopt for a camera that
   // sees no face of the mesh (it has nothing to sweep). Throws InputError if a job would exceed
   // limits.max_message_bytes (naming the camera and the option to raise). Safe to call from
   // several threads at once (the coordinator builds ahead on one while it sends from another).
   // `threads`: 0 for one per core.
-  std::vector<std::optional<wire::Job>> Build(const std::vector<uint64_t>& ids, int threads = 0);
+  std::vector<std::optional<BuiltJob>> Build(const std::vector<uint64_t>& ids, int threads = 0);
   // Every job, in id order, without the cameras that see no face (tests, tools).
   std::vector<wire::Job> BuildAll();
 
   JobBuildStats stats() const;
 
  private:
-  std::optional<wire::Job> BuildOne(int camera, std::string* skipped) const;
+  std::optional<BuiltJob> BuildOne(int camera, std::string* skipped) const;
 
   const Scene& scene_;
   const std::vector<std::vector<int>>& neighbours_;

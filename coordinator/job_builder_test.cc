@@ -71,16 +71,24 @@ TEST(IterationJobSource, BuildsTheSameJobsInAnyOrderAndCountsEachOnce) {
 
   // Built one or two at a time, backwards, and again (a requeued job): the same bytes.
   IterationJobSource lazy = f.Source();
-  std::vector<std::optional<wire::Job>> jobs = lazy.Build({MakeJobId(3, 3), MakeJobId(3, 2)});
+  std::vector<std::optional<BuiltJob>> jobs = lazy.Build({MakeJobId(3, 3), MakeJobId(3, 2)});
   EXPECT_FALSE(jobs[0].has_value());
   ASSERT_TRUE(jobs[1].has_value());
-  EXPECT_EQ(jobs[1]->SerializeAsString(), whole[2].SerializeAsString());
+  EXPECT_EQ(jobs[1]->job.SerializeAsString(), whole[2].SerializeAsString());
   for (int c : {1, 0, 1, 2}) {
     jobs = lazy.Build({MakeJobId(3, static_cast<uint32_t>(c))});
     ASSERT_TRUE(jobs[0].has_value());
-    EXPECT_EQ(jobs[0]->SerializeAsString(), whole[c].SerializeAsString()) << "camera " << c;
-    EXPECT_EQ(jobs[0]->session_id(), 77u);
-    EXPECT_EQ(jobs[0]->iteration(), 3u);
+    const BuiltJob& built = *jobs[0];
+    EXPECT_EQ(built.job.SerializeAsString(), whole[c].SerializeAsString()) << "camera " << c;
+    EXPECT_EQ(built.job.session_id(), 77u);
+    EXPECT_EQ(built.job.iteration(), 3u);
+    EXPECT_EQ(built.bytes, built.job.ByteSizeLong());
+    // The bounds made from the visible mesh are those the coordinator used to unpack the job for.
+    const JobBounds unpacked = JobBoundsFromWire(built.job);
+    EXPECT_EQ(built.bounds.cameras, unpacked.cameras);
+    EXPECT_EQ(built.bounds.min_depth, unpacked.min_depth);
+    EXPECT_EQ(built.bounds.max_depth, unpacked.max_depth);
+    EXPECT_GT(built.bounds.max_depth, built.bounds.min_depth);
   }
   const JobBuildStats a = all.stats(), b = lazy.stats();
   EXPECT_EQ(b.jobs, a.jobs);

@@ -63,15 +63,15 @@ def measure(args, views, points):
     os.makedirs(out)
     log_path = os.path.join(out, "coordinator.log")
     start = time.monotonic()
-    def wait_for(pattern, process):
+    def polls_until(pattern, process):
+        """Yields every half second until a line of the log matches `pattern`."""
         while True:
             time.sleep(0.5)
             if process.poll() is not None:
                 sys.exit(f"the coordinator exited with {process.returncode} (see {log_path})")
             with open(log_path) as f:
-                line = next((l for l in f if re.search(pattern, l)), None)
-            if line:
-                return line
+                if any(re.search(pattern, line) for line in f):
+                    return
             yield
 
     with open(log_path, "w") as log:
@@ -79,7 +79,7 @@ def measure(args, views, points):
             [args.manisweep, "coordinator", "--input", scene, "--output", out, "--no-images",
              "--bind", "tcp://127.0.0.1:*", "--progress-interval", "60"],
             stdout=log, stderr=subprocess.STDOUT)
-        for _ in wait_for(r"iteration 1/\d+: \d+ jobs", coordinator):
+        for _ in polls_until(r"iteration 1/\d+: \d+ jobs", coordinator):
             pass
         row = {"views": views, "points": points,
                "resident_at_start_mib": status_bytes(coordinator.pid, "VmRSS") / MIB,
@@ -95,7 +95,7 @@ def measure(args, views, points):
              "60"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
             for i in range(args.workers)]
         resident = row["resident_at_start_mib"]
-        for _ in wait_for(r"iteration 1: \d+ jobs swept", coordinator):
+        for _ in polls_until(r"iteration 1: \d+ jobs swept", coordinator):
             resident = max(resident, status_bytes(coordinator.pid, "VmRSS") / MIB)
         row["resident_while_sweeping_mib"] = resident
         row["peak_mib"] = status_bytes(coordinator.pid, "VmHWM") / MIB
