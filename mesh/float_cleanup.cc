@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <set>
 #include <utility>
 
@@ -33,6 +34,17 @@ struct Box3 {
   Box3 Grown(double d) const { return {lo.array() - d, hi.array() + d}; }
   bool Overlaps(const Box3& b) const {
     return (lo.array() <= b.hi.array()).all() && (b.lo.array() <= hi.array()).all();
+  }
+};
+
+// The problems a check found, every pair listed, sorted (as CheckFloatRobustness sorts them).
+struct ProblemPairs {
+  std::vector<std::array<int32_t, 2>> near_vertices;
+  std::vector<std::array<int64_t, 2>> close_faces, crossing_faces;
+  bool complete = true;  // false: a list stopped at the check's max_pairs
+
+  int64_t Count() const {
+    return static_cast<int64_t>(near_vertices.size() + close_faces.size() + crossing_faces.size());
   }
 };
 
@@ -106,8 +118,9 @@ class FaceTree {
   std::vector<Node> nodes_;
 };
 
-// The mesh under local edits: faces are never changed in place, only killed and appended, so
-// the tree built at the start of a round stays valid for the faces it holds.
+// The mesh under local edits, round after round: faces are never changed in place, only killed
+// and appended, so face and vertex indices hold from round to round (the mesh is compacted once,
+// at the end), and a tree built over some faces stays valid for them.
 class Cleaner {
  public:
   Cleaner(Mesh* mesh, std::vector<uint8_t>* scaffold, double tolerance, double max_collapse)
@@ -115,35 +128,49 @@ class Cleaner {
         scaffold_(*scaffold),
         tolerance_(tolerance),
         max_collapse_(max_collapse),
-        faces_of_(mesh->vertices.size()) {
+        faces_of_(mesh->vertices.size()),
+        first_made_face_(mesh->faces.size()) {
     alive_.assign(mesh_.faces.size(), 1);
     for (size_t f = 0; f < mesh_.faces.size(); ++f) {
       box_.push_back(FaceBox(mesh_.faces[f]));
       for (int32_t v : mesh_.faces[f]) faces_of_[v].push_back(static_cast<int32_t>(f));
     }
     for (const auto& faces : faces_of_) live_vertices_ += !faces.empty();
+    std::vector<int32_t> all(mesh_.faces.size());
+    std::iota(all.begin(), all.end(), 0);
+    tree_.Build(box_, std::move(all));
+  }
+
+  const std::vector<uint8_t>& alive() const { return alive_; }
+  bool Referenced(int32_t v) const { return !faces_of_[v].empty(); }
+  // Per face: made by the last round and alive.
+  std::vector<uint8_t> MadeLastRound() const {
+    std::vector<uint8_t> made(mesh_.faces.size(), 0);
+    for (size_t f = round_start_faces_; f < made.size(); ++f) made[f] = alive_[f];
+    return made;
   }
 
   int64_t collapses() const { return collapses_; }
   int64_t splits() const { return splits_; }
   int64_t moves() const { return moves_; }
 
-  // One pass over the problems of `report` (every pair listed); returns the operations done.
-  int64_t Round(const FloatRobustnessReport& report) {
-    std::vector<int32_t> alive;
-    for (size_t f = 0; f < mesh_.faces.size(); ++f) {
-      if (alive_[f]) alive.push_back(static_cast<int32_t>(f));
+  // One pass over the listed problems; returns the operations done.
+  int64_t Round(const ProblemPairs& problems) {
+    std::vector<int32_t> made_before;
+    for (size_t f = first_made_face_; f < mesh_.faces.size(); ++f) {
+      if (alive_[f]) made_before.push_back(static_cast<int32_t>(f));
     }
-    tree_.Build(box_, std::move(alive));
+    made_tree_.Build(box_, std::move(made_before));
+    round_start_faces_ = mesh_.faces.size();
     recent_.clear();
     touched_.assign(mesh_.faces.size(), 0);
     const int64_t before = collapses_ + splits_ + moves_;
-    for (const auto& pair : report.near_vertex_examples) {
+    for (const auto& pair : problems.near_vertices) {
       CollapseAround({pair[0], pair[1]});
     }
     std::set<std::pair<int64_t, int64_t>> face_pairs;
-    for (const auto& p : report.close_face_pair_examples) face_pairs.insert({p[0], p[1]});
-    for (const auto& p : report.float_intersection_examples) face_pairs.insert({p[0], p[1]});
+    for (const auto& p : problems.close_faces) face_pairs.insert({p[0], p[1]});
+    for (const auto& p : problems.crossing_faces) face_pairs.insert({p[0], p[1]});
     for (const auto& [f, g] : face_pairs) {
       if (Touched(f) || Touched(g)) continue;  // changed this round: checked again next round
       const Face& a = mesh_.faces[f];
@@ -491,6 +518,7 @@ class Cleaner {
         add(faces[i], mesh_.faces[f], old_i, &mesh_.faces[f]);
       };
       tree_.Query(box, visit);
+      made_tree_.Query(box, visit);
       for (int32_t f : recent_) {
         if (box_[f].Overlaps(box)) visit(f);
       }
@@ -547,14 +575,87 @@ class Cleaner {
   std::vector<uint8_t> alive_;                  // per face
   std::vector<Box3> box_;                       // per face
   std::vector<uint8_t> touched_;                // per face: removed or made this round
-  std::vector<int32_t> recent_;                 // faces made this round (not in tree_)
-  FaceTree tree_;                               // faces alive at the round's start
+  std::vector<int32_t> recent_;                 // faces made this round (in neither tree)
+  const size_t first_made_face_;                // faces from this index on were made
+  size_t round_start_faces_ = 0;                // ... from this one on, this round
+  FaceTree tree_;                               // the faces the cleanup started with
+  FaceTree made_tree_;                          // made in earlier rounds, alive at this one's start
   int64_t live_vertices_ = 0;                   // vertices with a face
   int64_t collapses_ = 0, splits_ = 0, moves_ = 0;
 };
 
 int64_t ProblemCount(const FloatRobustnessReport& r) {
   return r.num_near_vertex_pairs + r.num_close_face_pairs + r.num_float_intersections;
+}
+
+ProblemPairs ListedProblems(const FloatRobustnessReport& r) {
+  ProblemPairs p;
+  p.near_vertices = r.near_vertex_examples;
+  p.close_faces = r.close_face_pair_examples;
+  p.crossing_faces = r.float_intersection_examples;
+  p.complete = !r.near_vertex_pairs_truncated && !r.close_face_pairs_truncated &&
+               !r.float_intersections_truncated &&
+               static_cast<int64_t>(p.near_vertices.size()) == r.num_near_vertex_pairs &&
+               static_cast<int64_t>(p.close_faces.size()) == r.num_close_face_pairs &&
+               static_cast<int64_t>(p.crossing_faces.size()) == r.num_float_intersections;
+  return p;
+}
+
+ProblemPairs CheckWholeMesh(const Mesh& mesh, const std::vector<uint8_t>& alive,
+                            const FloatRobustnessOptions& check) {
+  return ListedProblems(CheckFloatRobustness(mesh, alive, check));
+}
+
+template <typename T>
+void SortUnique(std::vector<T>* v) {
+  std::sort(v->begin(), v->end());
+  v->erase(std::unique(v->begin(), v->end()), v->end());
+}
+
+// The problems of the mesh after a round, as a whole-mesh check would list them, from a check
+// of the faces the round made only: vertices never move (a move makes new ones), so a pair of
+// faces the round left alive, or of vertices on no face it made, is a problem exactly when it
+// was one before. Falls back to the whole check where a list was cut short.
+ProblemPairs CheckAfterRound(const Mesh& mesh, const Cleaner& cleaner, const ProblemPairs& before,
+                             FloatRobustnessOptions check) {
+  if (!before.complete) return CheckWholeMesh(mesh, cleaner.alive(), check);
+  check.focus_faces = cleaner.MadeLastRound();
+  ProblemPairs after = CheckWholeMesh(mesh, cleaner.alive(), check);
+  if (!after.complete) {
+    check.focus_faces.clear();
+    return CheckWholeMesh(mesh, cleaner.alive(), check);
+  }
+  std::vector<uint8_t> on_made_face(mesh.vertices.size(), 0);
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    if (!check.focus_faces[f]) continue;
+    for (int32_t v : mesh.faces[f]) on_made_face[v] = 1;
+  }
+  for (const auto& pair : before.near_vertices) {
+    const bool kept = cleaner.Referenced(pair[0]) && cleaner.Referenced(pair[1]);
+    if (kept && !on_made_face[pair[0]] && !on_made_face[pair[1]]) {
+      after.near_vertices.push_back(pair);
+    }
+  }
+  // Faces listed before are older than the round: alive, the round left them alone.
+  const auto carry = [&](const std::vector<std::array<int64_t, 2>>& pairs,
+                         std::vector<std::array<int64_t, 2>>* out) {
+    for (const auto& pair : pairs) {
+      if (cleaner.alive()[pair[0]] && cleaner.alive()[pair[1]]) out->push_back(pair);
+    }
+  };
+  carry(before.close_faces, &after.close_faces);
+  carry(before.crossing_faces, &after.crossing_faces);
+  SortUnique(&after.near_vertices);
+  SortUnique(&after.close_faces);
+  SortUnique(&after.crossing_faces);
+  // The whole check stops each list at max_pairs; past that it lists other pairs.
+  const auto full = [&](size_t n) { return static_cast<int64_t>(n) >= check.max_pairs; };
+  if (full(after.near_vertices.size()) || full(after.close_faces.size()) ||
+      full(after.crossing_faces.size())) {
+    check.focus_faces.clear();
+    return CheckWholeMesh(mesh, cleaner.alive(), check);
+  }
+  return after;
 }
 
 }  // namespace
@@ -577,25 +678,30 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
   FloatRobustnessOptions check = options.check;
   check.absolute_tolerance = stats.tolerance;
   check.max_examples = static_cast<int>(std::min<int64_t>(check.max_pairs, 1 << 30));
-  FloatRobustnessReport report = CheckFloatRobustness(*mesh, usable, check);
+  const FloatRobustnessReport report = CheckFloatRobustness(*mesh, usable, check);
+  ProblemPairs problems = ListedProblems(report);
   stats.problems_before = ProblemCount(report);
   const double max_collapse = options.max_collapse_fraction * report.diagonal;
   // Splits help only in numbers, and clusters of near vertices can defeat the collapses: a
   // cleanup that ends with no fewer problems leaves the mesh as it was.
   const Mesh original = *mesh;
   const std::vector<uint8_t> original_scaffold = *scaffold;
-  while (!report.IsRobust() && stats.rounds < options.max_rounds) {
-    ++stats.rounds;
+  int64_t problems_left = stats.problems_before;
+  if (problems_left > 0) {
     Cleaner cleaner(mesh, scaffold, stats.tolerance, max_collapse);
-    const int64_t operations = cleaner.Round(report);
+    while (problems_left > 0 && stats.rounds < options.max_rounds) {
+      ++stats.rounds;
+      if (cleaner.Round(problems) == 0) break;
+      problems = options.recheck_whole_mesh ? CheckWholeMesh(*mesh, cleaner.alive(), check)
+                                            : CheckAfterRound(*mesh, cleaner, problems, check);
+      problems_left = problems.Count();
+    }
     cleaner.Compact();
-    stats.collapses += cleaner.collapses();
-    stats.splits += cleaner.splits();
-    stats.moves += cleaner.moves();
-    if (operations == 0) break;
-    report = CheckFloatRobustness(*mesh, std::vector<uint8_t>(mesh->faces.size(), 1), check);
+    stats.collapses = cleaner.collapses();
+    stats.splits = cleaner.splits();
+    stats.moves = cleaner.moves();
   }
-  stats.problems_after = ProblemCount(report);
+  stats.problems_after = problems_left;
   if (stats.problems_after > 0 && stats.problems_after >= stats.problems_before) {
     *mesh = original;
     *scaffold = original_scaffold;

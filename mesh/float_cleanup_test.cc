@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <map>
 
 #include "mesh/mesh_checker.h"
 #include "mesh/test_meshes.h"
@@ -239,6 +240,66 @@ TEST(FloatCleanup, FinEdgeIsMovedAwayFromThePlateItAlmostTouches) {
   plate.faces = {{0, 1, 2}, {0, 3, 1}, {1, 3, 2}, {2, 3, 0}};
   OrientOutward(&plate);
   ExpectCleanedByMoves(Append(plate, Fin(V(1 + 1e-7 * std::sqrt(6.0), 0.5, 0.3), 0.4, 0.5, 0.004)));
+}
+
+// The icosahedron with each face cut in four `levels` times, projected to the unit sphere.
+Mesh Sphere(int levels) {
+  Mesh mesh = Icosahedron();
+  for (V& p : mesh.vertices) p.normalize();
+  for (int level = 0; level < levels; ++level) {
+    std::map<std::pair<int32_t, int32_t>, int32_t> midpoint;
+    const auto middle = [&](int32_t a, int32_t b) {
+      const auto key = std::minmax(a, b);
+      const auto [it, made] = midpoint.insert({key, static_cast<int32_t>(mesh.vertices.size())});
+      if (made) mesh.vertices.push_back((mesh.vertices[a] + mesh.vertices[b]).normalized());
+      return it->second;
+    };
+    std::vector<std::array<int32_t, 3>> faces;
+    for (const auto& [a, b, c] : mesh.faces) {
+      const int32_t ab = middle(a, b), bc = middle(b, c), ca = middle(c, a);
+      faces.insert(faces.end(), {{a, ab, ca}, {ab, b, bc}, {ca, bc, c}, {ab, bc, ca}});
+    }
+    mesh.faces = faces;
+  }
+  return mesh;
+}
+
+// After the first round the cleanup checks only the faces each round made and carries the
+// other problems over: on a mesh that takes several rounds, every round must see what a
+// whole-mesh check sees, so both end with the same mesh and the same figures.
+TEST(FloatCleanup, CheckingWhatARoundMadeEqualsCheckingTheWholeMesh) {
+  // Faces split near a corner, no two sharing a vertex: hundreds of near vertices and needles,
+  // close enough that a round's collapses keep some of their neighbours for the next.
+  Mesh noisy = Sphere(3);
+  std::vector<uint8_t> used(noisy.vertices.size(), 0);
+  const size_t faces = noisy.faces.size();
+  for (size_t f = 0; f < faces; ++f) {
+    const auto t = noisy.faces[f];
+    if (used[t[0]] || used[t[1]] || used[t[2]]) continue;
+    for (int32_t v : t) used[v] = 1;
+    noisy = SplitNearCorner(noisy, f, 1e-9 * static_cast<double>(1 + f % 5));
+  }
+  for (V& p : noisy.vertices) p = Rotation() * p;
+  Mesh local = noisy, whole = noisy;
+  std::vector<uint8_t> local_scaffold(noisy.vertices.size(), 0);
+  for (size_t v = 0; v < local_scaffold.size(); v += 3) local_scaffold[v] = 1;
+  std::vector<uint8_t> whole_scaffold = local_scaffold;
+  FloatCleanupOptions whole_options;
+  whole_options.recheck_whole_mesh = true;
+  const FloatCleanupStats a = CleanForFloatingPoint(&local, &local_scaffold);
+  const FloatCleanupStats b = CleanForFloatingPoint(&whole, &whole_scaffold, whole_options);
+  EXPECT_GE(a.rounds, 2);
+  EXPECT_GT(a.problems_before, 100);
+  EXPECT_EQ(a.problems_after, 0);
+  EXPECT_EQ(a.rounds, b.rounds);
+  EXPECT_EQ(a.problems_after, b.problems_after);
+  EXPECT_EQ(a.collapses, b.collapses);
+  EXPECT_EQ(a.splits, b.splits);
+  EXPECT_EQ(a.moves, b.moves);
+  EXPECT_EQ(local.vertices, whole.vertices);
+  EXPECT_EQ(local.faces, whole.faces);
+  EXPECT_EQ(local_scaffold, whole_scaffold);
+  ExpectValidAndRobust(local);
 }
 
 TEST(FloatCleanup, OptionsAreChecked) {
