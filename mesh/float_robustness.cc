@@ -14,6 +14,7 @@
 #include "base/check.h"
 #include "base/error.h"
 #include "base/log.h"
+#include "base/parallel_for.h"
 
 namespace ms {
 namespace float_robustness_internal {
@@ -507,31 +508,53 @@ void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
     const auto& t = mesh.faces[f];
     return Triangle{mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]};
   };
+  // The pairs the box search finds are tested a batch at a time on all cores, then taken in
+  // the order they were found: the same lists, cut at the same pair, as one pair at a time.
+  struct Candidate {
+    int64_t f, g;
+    double distance;
+    bool crosses;
+  };
+  std::vector<Candidate> batch;
+  constexpr size_t kBatch = 1 << 15, kPerTask = 256;
+  const auto test_batch = [&] {
+    ParallelFor((batch.size() + kPerTask - 1) / kPerTask, [&](size_t task) {
+      const size_t end = std::min(batch.size(), (task + 1) * kPerTask);
+      for (size_t i = task * kPerTask; i < end; ++i) {
+        Candidate& c = batch[i];
+        const Triangle p = triangle(c.f), q = triangle(c.g);
+        c.crosses = (hi[c.f].array() >= lo[c.g].array()).all() &&
+                    (hi[c.g].array() >= lo[c.f].array()).all() &&
+                    float_robustness_internal::TrianglesIntersectLikeOpen3d(p, q);
+        c.distance = float_robustness_internal::TriangleDistance(p, q);
+      }
+    });
+    for (const Candidate& c : batch) {
+      ++tested;
+      if (!crossing_full && c.crosses) {
+        crossing.push_back({c.f, c.g});
+        crossing_full = static_cast<int64_t>(crossing.size()) >= options.max_pairs;
+      }
+      if (!close_full && c.distance <= tol) {
+        close.push_back({{c.f, c.g}, c.distance});
+        close_full = static_cast<int64_t>(close.size()) >= options.max_pairs;
+      }
+      if (close_full && crossing_full) throw StopSearch{};
+    }
+    batch.clear();
+  };
   auto callback = [&](const Box& x, const Box& y) {
     const int64_t f = std::min(x.info(), y.info()), g = std::max(x.info(), y.info());
     const auto &a = mesh.faces[f], &b = mesh.faces[g];
     for (int32_t v : a) {
       if (v == b[0] || v == b[1] || v == b[2]) return;  // pairs sharing a vertex: not tested
     }
-    ++tested;
-    const Triangle p = triangle(f), q = triangle(g);
-    if (!crossing_full && (hi[f].array() >= lo[g].array()).all() &&
-        (hi[g].array() >= lo[f].array()).all() &&
-        float_robustness_internal::TrianglesIntersectLikeOpen3d(p, q)) {
-      crossing.push_back({f, g});
-      crossing_full = static_cast<int64_t>(crossing.size()) >= options.max_pairs;
-    }
-    if (!close_full) {
-      const double d = float_robustness_internal::TriangleDistance(p, q);
-      if (d <= tol) {
-        close.push_back({{f, g}, d});
-        close_full = static_cast<int64_t>(close.size()) >= options.max_pairs;
-      }
-    }
-    if (close_full && crossing_full) throw StopSearch{};
+    batch.push_back({f, g, 0, false});
+    if (batch.size() == kBatch) test_batch();
   };
   try {
     ForIntersectingBoxes(boxes, options.focus_faces, callback);
+    test_batch();
   } catch (const StopSearch&) {
   }
   r->close_face_pairs_truncated = close_full;
