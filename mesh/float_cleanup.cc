@@ -48,6 +48,12 @@ struct ProblemPairs {
   }
 };
 
+template <typename T>
+void SortUnique(std::vector<T>* v) {
+  std::sort(v->begin(), v->end());
+  v->erase(std::unique(v->begin(), v->end()), v->end());
+}
+
 // A bounding-volume hierarchy over the faces alive when it is built (median splits on the
 // longest axis); faces made later are scanned by the caller.
 class FaceTree {
@@ -143,11 +149,60 @@ class Cleaner {
 
   const std::vector<uint8_t>& alive() const { return alive_; }
   bool Referenced(int32_t v) const { return !faces_of_[v].empty(); }
-  // Per face: made by the last round and alive.
-  std::vector<uint8_t> MadeLastRound() const {
-    std::vector<uint8_t> made(mesh_.faces.size(), 0);
-    for (size_t f = round_start_faces_; f < made.size(); ++f) made[f] = alive_[f];
-    return made;
+  bool MadeLastRound(int64_t f) const {
+    return static_cast<size_t>(f) >= round_start_faces_ && alive_[f];
+  }
+
+  // The problem pairs with a face the last round made (faces) or a vertex of one (vertices), as
+  // CheckFloatRobustness lists them with those faces in focus, found through the cleaner's own
+  // trees: a query per made face or vertex instead of a box search over the whole mesh. The
+  // queries reach twice the tolerance, and the tests are the check's own.
+  ProblemPairs ProblemsOfMadeFaces(int64_t max_pairs) const {
+    FaceTree made_now;
+    made_now.Build(box_, recent_);
+    const auto query = [&](const Box3& box, auto&& visit) {
+      const auto alive_only = [&](int32_t f) {
+        if (alive_[f]) visit(f);
+      };
+      tree_.Query(box, alive_only);
+      made_tree_.Query(box, alive_only);
+      made_now.Query(box, alive_only);
+    };
+    ProblemPairs found;
+    std::vector<int32_t> vertices;
+    for (int32_t f : recent_) {
+      if (!alive_[f]) continue;
+      vertices.insert(vertices.end(), mesh_.faces[f].begin(), mesh_.faces[f].end());
+      const Face& a = mesh_.faces[f];
+      query(box_[f].Grown(2 * tolerance_), [&](int32_t g) {
+        if (g == f || SharedVertices(a, mesh_.faces[g]) > 0) return;
+        const int64_t lo = std::min(f, g), hi = std::max(f, g);
+        const Triangle p = Corners(mesh_.faces[lo]), q = Corners(mesh_.faces[hi]);
+        if (box_[lo].Overlaps(box_[hi]) && TrianglesIntersectLikeOpen3d(p, q)) {
+          found.crossing_faces.push_back({lo, hi});
+        }
+        if (TriangleDistance(p, q) <= tolerance_) found.close_faces.push_back({lo, hi});
+      });
+    }
+    SortUnique(&vertices);
+    for (int32_t v : vertices) {
+      Box3 box;
+      box.Add(mesh_.vertices[v]);
+      query(box.Grown(2 * tolerance_), [&](int32_t g) {
+        for (int32_t w : mesh_.faces[g]) {
+          if (w != v && (mesh_.vertices[v] - mesh_.vertices[w]).norm() <= tolerance_) {
+            found.near_vertices.push_back({std::min(v, w), std::max(v, w)});
+          }
+        }
+      });
+    }
+    SortUnique(&found.near_vertices);
+    SortUnique(&found.close_faces);
+    SortUnique(&found.crossing_faces);
+    const auto full = [&](size_t n) { return static_cast<int64_t>(n) >= max_pairs; };
+    found.complete = !full(found.near_vertices.size()) && !full(found.close_faces.size()) &&
+                     !full(found.crossing_faces.size());
+    return found;
   }
 
   int64_t collapses() const { return collapses_; }
@@ -606,33 +661,18 @@ ProblemPairs CheckWholeMesh(const Mesh& mesh, const std::vector<uint8_t>& alive,
   return ListedProblems(CheckFloatRobustness(mesh, alive, check));
 }
 
-template <typename T>
-void SortUnique(std::vector<T>* v) {
-  std::sort(v->begin(), v->end());
-  v->erase(std::unique(v->begin(), v->end()), v->end());
-}
-
-// The problems of the mesh after a round, as a whole-mesh check would list them, from a check
-// of the faces the round made only: vertices never move (a move makes new ones), so a pair of
-// faces the round left alive, or of vertices on no face it made, is a problem exactly when it
-// was one before. Falls back to the whole check where a list was cut short.
+// The problems of the mesh after a round, as a whole-mesh check would list them, from the
+// problems of the faces the round made: vertices never move (a move makes new ones), so a pair
+// of faces the round left alive, or of vertices still used, is a problem exactly when it was one
+// before. Falls back to the whole check where a list was cut short.
 ProblemPairs CheckAfterRound(const Mesh& mesh, const Cleaner& cleaner, const ProblemPairs& before,
-                             FloatRobustnessOptions check) {
+                             const FloatRobustnessOptions& check) {
   if (!before.complete) return CheckWholeMesh(mesh, cleaner.alive(), check);
-  check.focus_faces = cleaner.MadeLastRound();
-  ProblemPairs after = CheckWholeMesh(mesh, cleaner.alive(), check);
-  if (!after.complete) {
-    check.focus_faces.clear();
-    return CheckWholeMesh(mesh, cleaner.alive(), check);
-  }
-  std::vector<uint8_t> on_made_face(mesh.vertices.size(), 0);
-  for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    if (!check.focus_faces[f]) continue;
-    for (int32_t v : mesh.faces[f]) on_made_face[v] = 1;
-  }
+  ProblemPairs after = cleaner.ProblemsOfMadeFaces(check.max_pairs);
+  if (!after.complete) return CheckWholeMesh(mesh, cleaner.alive(), check);
+  // Vertices never move: a near pair whose vertices are both still used is still one.
   for (const auto& pair : before.near_vertices) {
-    const bool kept = cleaner.Referenced(pair[0]) && cleaner.Referenced(pair[1]);
-    if (kept && !on_made_face[pair[0]] && !on_made_face[pair[1]]) {
+    if (cleaner.Referenced(pair[0]) && cleaner.Referenced(pair[1])) {
       after.near_vertices.push_back(pair);
     }
   }
@@ -652,7 +692,6 @@ ProblemPairs CheckAfterRound(const Mesh& mesh, const Cleaner& cleaner, const Pro
   const auto full = [&](size_t n) { return static_cast<int64_t>(n) >= check.max_pairs; };
   if (full(after.near_vertices.size()) || full(after.close_faces.size()) ||
       full(after.crossing_faces.size())) {
-    check.focus_faces.clear();
     return CheckWholeMesh(mesh, cleaner.alive(), check);
   }
   return after;
@@ -692,8 +731,15 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
     while (problems_left > 0 && stats.rounds < options.max_rounds) {
       ++stats.rounds;
       if (cleaner.Round(problems) == 0) break;
-      problems = options.recheck_whole_mesh ? CheckWholeMesh(*mesh, cleaner.alive(), check)
-                                            : CheckAfterRound(*mesh, cleaner, problems, check);
+      problems = CheckAfterRound(*mesh, cleaner, problems, check);
+      if (options.verify_rechecks) {
+        const ProblemPairs whole = CheckWholeMesh(*mesh, cleaner.alive(), check);
+        MS_CHECK(problems.near_vertices == whole.near_vertices &&
+                 problems.close_faces == whole.close_faces &&
+                 problems.crossing_faces == whole.crossing_faces)
+            << "float cleanup, round " << stats.rounds
+            << ": the re-check of what the round made differs from a whole-mesh check";
+      }
       problems_left = problems.Count();
     }
     cleaner.Compact();

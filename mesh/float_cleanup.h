@@ -44,8 +44,9 @@ struct FloatCleanupOptions {
   int max_rounds = 40;
   // After each round only the faces it made are checked, against the whole mesh, and the
   // problems it left alone are carried over: the same lists as a whole-mesh check, in a
-  // fraction of the time on a large mesh. true: the whole mesh again (tests compare the two).
-  bool recheck_whole_mesh = false;
+  // fraction of the time on a large mesh. true: each round is checked both ways, and a
+  // difference stops the program (for tests).
+  bool verify_rechecks = false;
 };
 
 struct FloatCleanupStats {

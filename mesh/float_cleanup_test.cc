@@ -22,6 +22,13 @@ void ExpectValidAndRobust(const Mesh& mesh) {
   EXPECT_TRUE(r.is_float_robust) << r.ToTable();
 }
 
+// The cleanup, each round's re-check compared with a whole-mesh check.
+FloatCleanupStats Clean(Mesh* mesh, std::vector<uint8_t>* scaffold = nullptr) {
+  FloatCleanupOptions options;
+  options.verify_rechecks = true;
+  return CleanForFloatingPoint(mesh, scaffold, options);
+}
+
 bool HasVertex(const Mesh& mesh, const V& p) {
   return std::find(mesh.vertices.begin(), mesh.vertices.end(), p) != mesh.vertices.end();
 }
@@ -43,7 +50,7 @@ Mesh SplitNearCorner(Mesh mesh, size_t f, double offset) {
 TEST(FloatCleanup, CleanMeshesAreLeftAlone) {
   for (const Mesh& original : {Icosahedron(), Cube()}) {
     Mesh mesh = original;
-    const FloatCleanupStats stats = CleanForFloatingPoint(&mesh);
+    const FloatCleanupStats stats = Clean(&mesh);
     EXPECT_EQ(stats.problems_before, 0);
     EXPECT_EQ(stats.collapses + stats.splits, 0);
     EXPECT_EQ(mesh.vertices, original.vertices);
@@ -56,7 +63,7 @@ TEST(FloatCleanup, NearCoincidentVertexIsCollapsedOntoItsTwin) {
   Mesh mesh = SplitNearCorner(original, 3, 1e-9);
   ASSERT_FALSE(CheckMesh(mesh, MeshCheckOptions{}).is_float_robust);
   std::vector<uint8_t> scaffold(mesh.vertices.size(), 0);
-  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh, &scaffold);
+  const FloatCleanupStats stats = Clean(&mesh, &scaffold);
   EXPECT_GT(stats.problems_before, 0);
   EXPECT_EQ(stats.problems_after, 0);
   EXPECT_EQ(stats.collapses, 1);
@@ -79,7 +86,7 @@ TEST(FloatCleanup, CollapseKeepsTheSurfaceVertexOverTheScaffold) {
   // The corner is scaffolding (a Steiner point), its twin a real point: the twin stays.
   std::vector<uint8_t> scaffold(mesh.vertices.size(), 0);
   scaffold[Icosahedron().faces[3][0]] = 1;
-  CleanForFloatingPoint(&mesh, &scaffold);
+  Clean(&mesh, &scaffold);
   EXPECT_TRUE(HasVertex(mesh, twin));
   EXPECT_FALSE(HasVertex(mesh, corner));
   EXPECT_EQ(std::count(scaffold.begin(), scaffold.end(), 1), 0);
@@ -111,7 +118,7 @@ TEST(FloatCleanup, NeedlesAreCollapsed) {
   Mesh mesh = SplitEdgeNearEnd(original, original.faces[0][0], original.faces[0][1], 1e-9);
   for (V& p : mesh.vertices) p = Rotation() * p;
   ASSERT_FALSE(CheckMesh(mesh, MeshCheckOptions{}).is_float_robust);
-  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh);
+  const FloatCleanupStats stats = Clean(&mesh);
   EXPECT_EQ(stats.problems_after, 0);
   EXPECT_EQ(stats.collapses, 1);
   ExpectValidAndRobust(mesh);
@@ -124,7 +131,7 @@ TEST(FloatCleanup, WhatCannotBeCleanedIsLeftValidAndReported) {
   Mesh mesh = Bipyramid(1e-8);
   for (V& p : mesh.vertices) p = Rotation() * p;
   const Mesh original = mesh;
-  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh);
+  const FloatCleanupStats stats = Clean(&mesh);
   EXPECT_GT(stats.problems_before, 0);
   EXPECT_EQ(stats.problems_after, stats.problems_before);
   EXPECT_EQ(stats.collapses + stats.splits, 0);
@@ -154,7 +161,7 @@ TEST(FloatCleanup, SkinnyFaceOverATinyOneIsSplitAway) {
   ASSERT_GT(before.float_robustness.num_float_intersections, 0) << before.ToTable();
   ASSERT_EQ(before.float_robustness.num_close_face_pairs, 0);
   const Mesh original = mesh;
-  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh);
+  const FloatCleanupStats stats = Clean(&mesh);
   EXPECT_EQ(stats.problems_after, 0);
   EXPECT_EQ(stats.collapses, 0);
   EXPECT_GT(stats.splits, 0);
@@ -168,7 +175,7 @@ TEST(FloatCleanup, SplitVertexOfAScaffoldEdgeIsScaffold) {
   Mesh mesh = TinyCornerOverASkinnyFace();
   std::vector<uint8_t> scaffold(mesh.vertices.size(), 0);
   for (int v = 0; v < 4; ++v) scaffold[v] = 1;  // the skinny tetrahedron is all scaffolding
-  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh, &scaffold);
+  const FloatCleanupStats stats = Clean(&mesh, &scaffold);
   ASSERT_GT(stats.splits, 0);
   ASSERT_EQ(scaffold.size(), mesh.vertices.size());
   EXPECT_EQ(std::count(scaffold.begin(), scaffold.end(), 0), 4);  // the tiny corner only
@@ -185,7 +192,7 @@ TEST(FloatCleanup, ThinWallIsMovedApartWhereNoEdgeCanCollapse) {
   for (V& p : mesh.vertices) p = Rotation() * p;
   const Mesh original = mesh;
   ASSERT_FALSE(CheckMesh(mesh, MeshCheckOptions{}).is_float_robust);
-  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh);
+  const FloatCleanupStats stats = Clean(&mesh);
   EXPECT_GT(stats.problems_before, 0);
   EXPECT_EQ(stats.problems_after, 0);
   EXPECT_EQ(stats.collapses, 0);
@@ -217,7 +224,7 @@ Mesh Fin(const V& edge_start, double edge_length, double length, double half_wid
 void ExpectCleanedByMoves(Mesh mesh) {
   for (V& p : mesh.vertices) p = Rotation() * p;
   ASSERT_FALSE(CheckMesh(mesh, MeshCheckOptions{}).is_float_robust);
-  const FloatCleanupStats stats = CleanForFloatingPoint(&mesh);
+  const FloatCleanupStats stats = Clean(&mesh);
   EXPECT_GT(stats.problems_before, 0);
   EXPECT_EQ(stats.problems_after, 0);
   EXPECT_GT(stats.moves, 0);
@@ -264,42 +271,42 @@ Mesh Sphere(int levels) {
   return mesh;
 }
 
-// After the first round the cleanup checks only the faces each round made and carries the
-// other problems over: on a mesh that takes several rounds, every round must see what a
-// whole-mesh check sees, so both end with the same mesh and the same figures.
-TEST(FloatCleanup, CheckingWhatARoundMadeEqualsCheckingTheWholeMesh) {
-  // Faces split near a corner, no two sharing a vertex: hundreds of near vertices and needles,
-  // close enough that a round's collapses keep some of their neighbours for the next.
-  Mesh noisy = Sphere(3);
-  std::vector<uint8_t> used(noisy.vertices.size(), 0);
-  const size_t faces = noisy.faces.size();
+// `faces_per_split` 2: no two split faces share a vertex; 1: every face, so that near-vertex
+// clusters leave problems on the faces a round makes.
+Mesh SphereWithSplitCorners(bool clusters) {
+  Mesh mesh = Sphere(3);
+  std::vector<uint8_t> used(mesh.vertices.size(), 0);
+  const size_t faces = mesh.faces.size();
   for (size_t f = 0; f < faces; ++f) {
-    const auto t = noisy.faces[f];
-    if (used[t[0]] || used[t[1]] || used[t[2]]) continue;
+    const auto t = mesh.faces[f];
+    if (!clusters && (used[t[0]] || used[t[1]] || used[t[2]])) continue;
     for (int32_t v : t) used[v] = 1;
-    noisy = SplitNearCorner(noisy, f, 1e-9 * static_cast<double>(1 + f % 5));
+    mesh = SplitNearCorner(mesh, f, 1e-9 * static_cast<double>(1 + f % 5));
   }
-  for (V& p : noisy.vertices) p = Rotation() * p;
-  Mesh local = noisy, whole = noisy;
-  std::vector<uint8_t> local_scaffold(noisy.vertices.size(), 0);
-  for (size_t v = 0; v < local_scaffold.size(); v += 3) local_scaffold[v] = 1;
-  std::vector<uint8_t> whole_scaffold = local_scaffold;
-  FloatCleanupOptions whole_options;
-  whole_options.recheck_whole_mesh = true;
-  const FloatCleanupStats a = CleanForFloatingPoint(&local, &local_scaffold);
-  const FloatCleanupStats b = CleanForFloatingPoint(&whole, &whole_scaffold, whole_options);
-  EXPECT_GE(a.rounds, 2);
-  EXPECT_GT(a.problems_before, 100);
-  EXPECT_EQ(a.problems_after, 0);
-  EXPECT_EQ(a.rounds, b.rounds);
-  EXPECT_EQ(a.problems_after, b.problems_after);
-  EXPECT_EQ(a.collapses, b.collapses);
-  EXPECT_EQ(a.splits, b.splits);
-  EXPECT_EQ(a.moves, b.moves);
-  EXPECT_EQ(local.vertices, whole.vertices);
-  EXPECT_EQ(local.faces, whole.faces);
-  EXPECT_EQ(local_scaffold, whole_scaffold);
-  ExpectValidAndRobust(local);
+  for (V& p : mesh.vertices) p = Rotation() * p;
+  return mesh;
+}
+
+// After the first round the cleanup checks only the faces each round made and carries the
+// other problems over; verify_rechecks compares that with a whole-mesh check after every round
+// (and stops the program on a difference). Faces split near a corner give hundreds of near
+// vertices and needles over several rounds; with clusters of them, the faces a round makes have
+// problems of their own.
+TEST(FloatCleanup, CheckingWhatARoundMadeEqualsCheckingTheWholeMesh) {
+  for (const bool clusters : {false, true}) {
+    Mesh mesh = SphereWithSplitCorners(clusters);
+    std::vector<uint8_t> scaffold(mesh.vertices.size(), 0);
+    for (size_t v = 0; v < scaffold.size(); v += 3) scaffold[v] = 1;
+    FloatCleanupOptions options;
+    options.verify_rechecks = true;
+    const FloatCleanupStats stats = CleanForFloatingPoint(&mesh, &scaffold, options);
+    EXPECT_GE(stats.rounds, 2) << clusters;
+    EXPECT_GT(stats.problems_before, 100) << clusters;
+    if (!clusters) {
+      EXPECT_EQ(stats.problems_after, 0);
+      ExpectValidAndRobust(mesh);
+    }
+  }
 }
 
 TEST(FloatCleanup, OptionsAreChecked) {
