@@ -485,18 +485,22 @@ void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
   using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, int64_t>;
   const double tol = r->tolerance;
   const auto nf = static_cast<int64_t>(mesh.faces.size());
-  // The faces' own boxes (Open3D's pre-test: closed, not enlarged) and the enlarged ones.
-  std::vector<Eigen::Vector3d> lo(nf), hi(nf);
-  std::vector<Box> boxes;
-  for (int64_t f = 0; f < nf; ++f) {
-    if (!usable[f]) continue;
+  // The faces' own boxes (Open3D's pre-test: closed, not enlarged), computed where needed
+  // rather than stored (48 bytes a face at the cleanup's peak of memory), and the enlarged ones.
+  const auto box_of = [&](int64_t f, Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
     const auto& t = mesh.faces[f];
     const Eigen::Vector3d &p0 = mesh.vertices[t[0]], &p1 = mesh.vertices[t[1]],
                           &p2 = mesh.vertices[t[2]];
-    lo[f] = p0.array().min(p1.array().min(p2.array()));
-    hi[f] = p0.array().max(p1.array().max(p2.array()));
-    boxes.emplace_back(CGAL::Bbox_3(lo[f].x() - tol, lo[f].y() - tol, lo[f].z() - tol,
-                                    hi[f].x() + tol, hi[f].y() + tol, hi[f].z() + tol),
+    *lo = p0.array().min(p1.array().min(p2.array()));
+    *hi = p0.array().max(p1.array().max(p2.array()));
+  };
+  std::vector<Box> boxes;
+  for (int64_t f = 0; f < nf; ++f) {
+    if (!usable[f]) continue;
+    Eigen::Vector3d lo, hi;
+    box_of(f, &lo, &hi);
+    boxes.emplace_back(CGAL::Bbox_3(lo.x() - tol, lo.y() - tol, lo.z() - tol, hi.x() + tol,
+                                    hi.y() + tol, hi.z() + tol),
                        f);
   }
   const Timer timer;
@@ -523,8 +527,10 @@ void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
       for (size_t i = task * kPerTask; i < end; ++i) {
         Candidate& c = batch[i];
         const Triangle p = triangle(c.f), q = triangle(c.g);
-        c.crosses = (hi[c.f].array() >= lo[c.g].array()).all() &&
-                    (hi[c.g].array() >= lo[c.f].array()).all() &&
+        Eigen::Vector3d lo_f, hi_f, lo_g, hi_g;
+        box_of(c.f, &lo_f, &hi_f);
+        box_of(c.g, &lo_g, &hi_g);
+        c.crosses = (hi_f.array() >= lo_g.array()).all() && (hi_g.array() >= lo_f.array()).all() &&
                     float_robustness_internal::TrianglesIntersectLikeOpen3d(p, q);
         c.distance = float_robustness_internal::TriangleDistance(p, q);
       }
