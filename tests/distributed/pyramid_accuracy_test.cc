@@ -128,10 +128,10 @@ Outcome Reconstruct(const std::string& scene_name, const gl::GlContext& gl,
 }
 
 // One row of Table 1 and its regression bounds, about 5% above the measured values
-// (docs/performance.md; the runs are deterministic: the points are inserted sorted by camera and
+// (docs/accuracy.md; the runs are deterministic: the points are inserted sorted by camera and
 // pixel). The workers run the CPU kernel, auto's choice on a CPU machine, named so that a GPU
 // machine measures the same thing; other kernels give other figures within about +-0.003
-// (docs/sweep.md, "Which kernel auto picks"), and so do other CPUs (docs/performance.md). The
+// (docs/sweep.md, "Which kernel auto picks"), and so do other CPUs (docs/accuracy.md). The
 // closed mesh is the headline (every pixel); the surface proper covers fewer.
 struct Table1Row {
   const char* scene;
@@ -162,7 +162,7 @@ TEST(PyramidAccuracy, UpwardPyramidReproducesTable1) {
   ExpectTable1Row({"pyramid-up", 0, 0.09, 0.0127, 0.0072, 0.87});
 }
 
-// With 2 grey levels of Gaussian noise in every image (docs/performance.md, "Table 1 with noisy
+// With 2 grey levels of Gaussian noise in every image (docs/accuracy.md, "Table 1 with noisy
 // inputs"): the paper's t_NCC = 0.98 still finds the surface; the upward pyramid loses more to
 // the closure wedges at the image borders than the downward one.
 // Measured: 0.0142 / 0.0087 (91.3%).
