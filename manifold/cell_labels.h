@@ -59,6 +59,10 @@ class CellLabels {
     return Weight(c) >= free_threshold_;
   }
 
+  // Flips so far: a vertex whose VertexInfo::relabelled is at most a value read earlier has
+  // seen no cell around it flip since.
+  uint32_t relabels() const { return relabels_; }
+
   // Counts one ray crossing c; bit i of `spread_mask` says it spreads w2 across face i.
   void CountCrossing(const Cell_handle& c, unsigned spread_mask) {
     CellInfo& info = c->info();
@@ -68,14 +72,18 @@ class CellLabels {
   }
 
   // Puts c into O or takes it out, keeping |O| and the per-vertex counts (cells in O, surface
-  // faces) up to date.
+  // faces, the last flip around it) up to date.
   void SetOutside(const Cell_handle& c, bool outside) {
     MS_CHECK(!dt_.is_infinite(c));
     if (c->info().outside == outside) return;
     c->info().outside = outside;
     const int delta = outside ? 1 : -1;
     outside_count_ += delta;
-    for (int i = 0; i < 4; ++i) c->vertex(i)->info().outside_cells += delta;
+    ++relabels_;
+    for (int i = 0; i < 4; ++i) {
+      c->vertex(i)->info().outside_cells += delta;
+      c->vertex(i)->info().relabelled = relabels_;
+    }
     // Flipping c toggles whether each of its faces is on the surface.
     for (int i = 0; i < 4; ++i) {
       const int face_delta = InO(c->neighbor(i)) != outside ? 1 : -1;
@@ -92,6 +100,7 @@ class CellLabels {
   const W2Rule w2_rule_;
   bool graded_ = false;
   int64_t outside_count_ = 0;
+  uint32_t relabels_ = 0;  // flips so far (a wrap can only cost a growing some retests)
 };
 
 }  // namespace ms::manifold_detail

@@ -28,6 +28,7 @@ struct VertexInfo {
   int32_t cells = 0;               // incident cells, infinite ones included
   int32_t surface_faces = 0;       // incident faces between O and the rest
   uint32_t changed = 0;            // last insertion batch that changed a cell around it
+  uint32_t relabelled = 0;         // CellLabels::relabels() when a cell around it last flipped
 };
 
 struct CellInfo {
