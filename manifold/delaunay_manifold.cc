@@ -6,7 +6,6 @@
 #include <array>
 #include <cmath>
 #include <iterator>
-#include <unordered_map>
 #include <utility>
 
 #include "base/check.h"
@@ -579,8 +578,28 @@ void DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, const Insertion
 // Surface extraction
 
 Mesh DelaunayManifold::Impl::ExtractSurface(SurfaceInfo* info) const {
+  // The surface's vertices are those with a face between O and the rest (the count SetOutside
+  // keeps), numbered by id; ids run from the last Steiner point's (negative) to the last point's.
+  std::vector<std::pair<int32_t, Vertex_handle>> used;
+  for (auto v = dt_.finite_vertices_begin(); v != dt_.finite_vertices_end(); ++v) {
+    if (v->info().surface_faces > 0) used.emplace_back(v->info().id, v);
+  }
+  std::sort(used.begin(), used.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  const int32_t lowest = used.empty() ? 0 : used.front().first;
+  const int32_t highest = used.empty() ? -1 : used.back().first;
+  std::vector<int32_t> index_of(static_cast<size_t>(int64_t{highest} - lowest + 1), -1);
+  Mesh mesh;
+  mesh.vertices.reserve(used.size());
+  std::vector<int32_t> ids;
+  ids.reserve(used.size());
+  for (const auto& [id, v] : used) {
+    index_of[id - lowest] = static_cast<int32_t>(mesh.vertices.size());
+    const Point& p = v->point();
+    mesh.vertices.emplace_back(p.x(), p.y(), p.z());
+    ids.push_back(id);
+  }
   std::vector<std::array<int32_t, 3>> faces;  // by vertex id
-  std::unordered_map<int32_t, Vertex_handle> used;
   for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
     if (!c->info().outside) continue;
     for (int i = 0; i < 4; ++i) {
@@ -588,31 +607,22 @@ Mesh DelaunayManifold::Impl::ExtractSurface(SurfaceInfo* info) const {
       // This vertex order makes the normal point into c, i.e. towards O (free space).
       std::array<int32_t, 3> face;
       for (int j = 0; j < 3; ++j) {
-        const Vertex_handle v = c->vertex(Delaunay::vertex_triple_index(i, j));
-        face[j] = v->info().id;
-        used.emplace(face[j], v);
+        face[j] = c->vertex(Delaunay::vertex_triple_index(i, j))->info().id;
       }
       // Rotate so the smallest id leads (keeps orientation), for a canonical order.
       std::rotate(face.begin(), std::min_element(face.begin(), face.end()), face.end());
       faces.push_back(face);
     }
   }
-  std::vector<int32_t> ids;
-  ids.reserve(used.size());
-  for (const auto& entry : used) ids.push_back(entry.first);
-  std::sort(ids.begin(), ids.end());
-  std::unordered_map<int32_t, int32_t> index_of;
-  Mesh mesh;
-  mesh.vertices.reserve(ids.size());
-  for (int32_t id : ids) {
-    const Point& p = used[id]->point();
-    index_of[id] = static_cast<int32_t>(mesh.vertices.size());
-    mesh.vertices.emplace_back(p.x(), p.y(), p.z());
-  }
   std::sort(faces.begin(), faces.end());
   mesh.faces.reserve(faces.size());
   for (const auto& f : faces) {
-    mesh.faces.push_back({index_of[f[0]], index_of[f[1]], index_of[f[2]]});
+    std::array<int32_t, 3> face;
+    for (int j = 0; j < 3; ++j) {
+      face[j] = index_of[f[j] - lowest];
+      MS_CHECK(face[j] >= 0) << "a vertex of the surface counts no surface face";
+    }
+    mesh.faces.push_back(face);
   }
   if (info != nullptr) {
     info->vertex_ids = ids;
