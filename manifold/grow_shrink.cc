@@ -53,14 +53,13 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds) {
       queue.pop();
       c->info().queued = false;
       if (c->info().outside) continue;
-      if (!unchanged_since(c, entry.refused_after) && regularity_.FlipKeepsManifold(c)) {
+      const bool refused_again = unchanged_since(c, entry.refused_after);
+      if (!refused_again && regularity_.FlipKeepsManifold(c)) {
         labels_.SetOutside(c, true);
         ++added;
         for (int i = 0; i < 4; ++i) push(c->neighbor(i), 0);
       } else {
-        const uint32_t after =
-            unchanged_since(c, entry.refused_after) ? entry.refused_after : labels_.relabels() + 1;
-        refused.push_back({c, after});
+        refused.push_back({c, refused_again ? entry.refused_after : labels_.relabels() + 1});
       }
     }
     // A cell refused earlier may be accepted now that O has changed around it: retry until

@@ -639,10 +639,6 @@ class Cleaner {
   int64_t collapses_ = 0, splits_ = 0, moves_ = 0;
 };
 
-int64_t ProblemCount(const FloatRobustnessReport& r) {
-  return r.num_near_vertex_pairs + r.num_close_face_pairs + r.num_float_intersections;
-}
-
 ProblemPairs ListedProblems(const FloatRobustnessReport& r) {
   ProblemPairs p;
   p.near_vertices = r.near_vertex_examples;
@@ -719,7 +715,7 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
   check.max_examples = static_cast<int>(std::min<int64_t>(check.max_pairs, 1 << 30));
   const FloatRobustnessReport report = CheckFloatRobustness(*mesh, usable, check);
   ProblemPairs problems = ListedProblems(report);
-  stats.problems_before = ProblemCount(report);
+  stats.problems_before = problems.Count();  // every pair found is listed
   const double max_collapse = options.max_collapse_fraction * report.diagonal;
   // Splits help only in numbers, and clusters of near vertices can defeat the collapses: a
   // cleanup that ends with no fewer problems leaves the mesh as it was.
