@@ -232,10 +232,18 @@ class Cleaner {
       const Face& b = mesh_.faces[g];
       if (TriangleDistance(Corners(a), Corners(b)) > tolerance_) {
         SplitLongestEdge(f, g);  // far apart: only Möller's relative snapping sees them touch
-      } else if (!CollapseAround({a[0], a[1], a[2], b[0], b[1], b[2]})) {
+      } else if (!CollapseAround({a[0], a[1], a[2], b[0], b[1], b[2]}) &&
+                 !MoveApart(static_cast<int32_t>(f), static_cast<int32_t>(g))) {
         // Two sheets too close, with no edge short enough to collapse (a thin wall whose two
-        // sides are faces of 20 cm, half a millimetre apart): move them apart instead.
-        MoveApart(static_cast<int32_t>(f), static_cast<int32_t>(g));
+        // sides are faces of 20 cm, half a millimetre apart), are moved apart above. In a
+        // crumpled cluster of faces a tolerance or two across, every collapse and move of the
+        // pair's own corners folds a face: collapse an edge of a neighbour instead, which
+        // changes the pair's surroundings for the next round.
+        std::vector<int32_t> ring;
+        for (int32_t v : {a[0], a[1], a[2], b[0], b[1], b[2]}) {
+          for (int32_t w : Neighbours(v)) ring.push_back(w);
+        }
+        CollapseAround(std::move(ring));
       }
     }
     return collapses_ + splits_ + moves_ - before;
@@ -334,7 +342,8 @@ class Cleaner {
   // nothing forbidden: 4e-6 of the diagonal with the defaults (check-mesh's tolerance, times the
   // cleanup's margin, times 2). First along the line through their closest points (which
   // separates two sheets meeting at an angle), then along g's normal (two parallel sheets).
-  void MoveApart(int32_t f, int32_t g) {
+  // True if one moved.
+  bool MoveApart(int32_t f, int32_t g) {
     const Face a = mesh_.faces[f], b = mesh_.faces[g];
     std::vector<std::pair<std::vector<int32_t>, Vector3d>> tries;
     const auto [on_a, on_b] = TriangleClosestPoints(Corners(a), Corners(b));
@@ -365,8 +374,9 @@ class Cleaner {
       for (int32_t v : b) tries.push_back({{v}, -away});
     }
     for (const auto& [vertices, delta] : tries) {
-      if (TryMove(vertices, delta)) return;
+      if (TryMove(vertices, delta)) return true;
     }
+    return false;
   }
 
   // Moves `vertices` by `delta`: each gets a moved copy and their faces are made anew on the
@@ -712,6 +722,11 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
   stats.tolerance = options.margin * FloatCheckTolerance(*mesh, usable, options.check);
   FloatRobustnessOptions check = options.check;
   check.absolute_tolerance = stats.tolerance;
+  // The cleanup must see every problem: with the lists cut at check-mesh's max_pairs, a round
+  // fixes only the listed ones and every later round checks the whole mesh again. Four pairs a
+  // face is more than any mesh worth cleaning has (the whole-check fallback stays past it).
+  check.max_pairs =
+      std::max<int64_t>(check.max_pairs, 4 * static_cast<int64_t>(mesh->faces.size()));
   check.max_examples = static_cast<int>(std::min<int64_t>(check.max_pairs, 1 << 30));
   const FloatRobustnessReport report = CheckFloatRobustness(*mesh, usable, check);
   ProblemPairs problems = ListedProblems(report);

@@ -41,7 +41,7 @@ struct FloatCleanupOptions {
   // Edges longer than this fraction of the diagonal are never collapsed (a bound on how far
   // the surface moves).
   double max_collapse_fraction = 1e-3;
-  int max_rounds = 40;
+  int max_rounds = 100;  // a crumpled cluster takes a round per collapse around it
   // After each round only the faces it made are checked, against the whole mesh, and the
   // problems it left alone are carried over: the same lists as a whole-mesh check, in a
   // fraction of the time on a large mesh. true: each round is checked both ways, and a
