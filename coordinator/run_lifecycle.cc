@@ -1,8 +1,10 @@
 #include "coordinator/run_lifecycle.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 
@@ -147,6 +149,7 @@ void RunLifecycle::WriteInitial(const BuildStats& stats, double build_s) {
   row.points_inserted = stats.points - stats.merged_duplicates;
   row.discarded_duplicate = stats.merged_duplicates;
   row.outside_cells = stats.outside_cells;
+  row.cameras_in_matter = CountCamerasInMatter(0);
   row.seconds_insert = build_s;
   row.seconds_extract = extract.Seconds();
   row.seconds_total = build_s + row.seconds_extract;
@@ -202,6 +205,7 @@ StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const Swe
     WriteOutputMeshes(fmt::format("iteration_{:02d}", iteration), false, &row);
   }
   row.outside_cells = s.outside_cells;
+  row.cameras_in_matter = CountCamerasInMatter(iteration);
   row.seconds_jobs = round.seconds_jobs;
   row.job_bytes = round.job_bytes;
   row.job_max_bytes = round.job_max_bytes;
@@ -236,6 +240,20 @@ StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const Swe
       done.seconds_insert, done.seconds_extract);
   CheckpointInBackground();
   return NextOrStop();
+}
+
+int64_t RunLifecycle::CountCamerasInMatter(int iteration) {
+  const std::vector<int32_t> enclosed = manifold_->CamerasInMatter();
+  if (!enclosed.empty()) {
+    const size_t shown = std::min<size_t>(enclosed.size(), 10);
+    spdlog::warn(
+        "iteration {}: {} camera(s) inside the matter (their centre is in no free-space cell "
+        "of O, so they see the mesh from inside): {}{}; docs/manifold.md, \"Known limits\"",
+        iteration, enclosed.size(),
+        fmt::join(enclosed.begin(), enclosed.begin() + static_cast<std::ptrdiff_t>(shown), ", "),
+        shown < enclosed.size() ? ", ..." : "");
+  }
+  return static_cast<int64_t>(enclosed.size());
 }
 
 void RunLifecycle::Extract() {

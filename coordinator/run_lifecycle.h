@@ -88,6 +88,8 @@ class RunLifecycle {
   std::string Path(const std::string& name) const;
   void BuildOrReplay(bool resuming, const std::string& run_file);
   void WriteInitial(const BuildStats& stats, double build_s);
+  // Cameras inside the matter after an iteration, warned about by number (should be none).
+  int64_t CountCamerasInMatter(int iteration);
   void Extract();
   // Writes NAME.ply (and NAME_surface.ply with `with_surface`): the meshes users get, made
   // robust in floating point; their size and the cleanup's counts go into `row`.

@@ -56,6 +56,7 @@ std::vector<Column<IterationStats>> IterationColumns() {
           Field("vertices", &S::vertices),
           Field("faces", &S::faces),
           Field("outside_cells", &S::outside_cells),
+          Field("cameras_in_matter", &S::cameras_in_matter),
           Field("job_bytes", &S::job_bytes),
           Field("job_max_bytes", &S::job_max_bytes),
           Field("cleanup_collapses", &S::cleanup_collapses),
@@ -265,6 +266,7 @@ RunRecord ReadRunFile(const std::string& path) {
     read_if_there("job_bytes", &S::job_bytes);
     read_if_there("job_max_bytes", &S::job_max_bytes);
     read_if_there("seconds_insert_early", &S::seconds_insert_early);
+    read_if_there("cameras_in_matter", &S::cameras_in_matter);
     ReadColumnInto(file, t, "cleanup_collapses", &S::cleanup_collapses, &rows);
     ReadColumnInto(file, t, "cleanup_splits", &S::cleanup_splits, &rows);
     ReadColumnInto(file, t, "float_problems_left", &S::float_problems_left, &rows);
@@ -321,6 +323,7 @@ void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
          {"points_duplicate", s.discarded_duplicate},
          {"vertices", s.vertices},
          {"faces", s.faces},
+         {"cameras_in_matter", s.cameras_in_matter},
          {"job_bytes", s.job_bytes},
          {"job_max_bytes", s.job_max_bytes},
          {"cleanup_collapses", s.cleanup_collapses},

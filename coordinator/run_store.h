@@ -42,6 +42,9 @@ struct IterationStats {
   int64_t vertices = 0;  // of the surface after the iteration (as written, where it was)
   int64_t faces = 0;
   int64_t outside_cells = 0;
+  // Cameras whose centre is in no cell of O after the iteration (manifold.h CamerasInMatter):
+  // they see the surface from inside the matter. Should be 0.
+  int64_t cameras_in_matter = 0;
   int64_t job_bytes = 0;      // this iteration's job messages (visible meshes), all of them
   int64_t job_max_bytes = 0;  // the largest one
   // The float cleanup of the mesh written after this iteration (manifold/output_meshes.h): 0

@@ -85,6 +85,7 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   stats.seconds_growing = timer.Seconds();
   spdlog::info("manifold: grew O to {} of {} free cells in {:.2f} s", stats.outside_cells,
                stats.free_cells, stats.seconds_growing);
+  LogCameraStars(stats.camera_stars_completed);
   if (options_.validate_each_step) {
     const std::string problem = Validate(true);
     if (!problem.empty()) throw InternalError("manifold invalid after build: " + problem);
@@ -227,6 +228,7 @@ void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
     stats->free_cells += labels_.IsFree(c);
   }
   grow_shrink_.GrowFromHeaviest();
+  stats->camera_stars_completed = FreeEnclosedCameras();
   stats->outside_cells = labels_.outside_count();
   stats->free_cells_left_inside = CountFreeCellsInside();
   const manifold_detail::Regularity::Counts& counts = regularity_.counts();
@@ -288,7 +290,8 @@ InsertionStats DelaunayManifold::Impl::FinishInsert() {
   stats.seconds_insertion += timer.Seconds();
 
   timer.Restart();
-  Regrow(batch, stats);
+  stats.camera_stars_completed = Regrow(batch, stats);
+  LogCameraStars(stats.camera_stars_completed);
   stats.outside_cells = labels_.outside_count();
   stats.seconds_growing = timer.Seconds();
   spdlog::info(
@@ -568,10 +571,46 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
 // From the cells on the boundary of O that the batch may have changed: a cell none of whose
 // vertices touches a new or shrunk cell has the weight and neighbourhood it had when the last
 // growing refused it.
-void DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, const InsertionStats& stats) {
-  if (stats.inserted == 0 && stats.shrunk_cells == 0 && stats.gained_rays == 0) return;
+int64_t DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, const InsertionStats& stats) {
+  if (stats.inserted == 0 && stats.shrunk_cells == 0 && stats.gained_rays == 0) return 0;
   grow_shrink_.Grow(grow_shrink_.BoundarySeeds(options_.regrow_seeds, batch.number));
   if (labels_.outside_count() == 0) grow_shrink_.GrowFromHeaviest();
+  return FreeEnclosedCameras();
+}
+
+// A camera stands in free space, but greedy growing can leave the free cells around one out of
+// O: a pocket that touches O only where adding any one cell would pinch the surface (seen after
+// an insertion re-triangulated the space in front of a camera). Completing the star of a vertex
+// where the pocket touches O adds several cells at once; growing then goes on from there.
+void DelaunayManifold::Impl::LogCameraStars(int64_t completed) const {
+  if (completed == 0) return;
+  spdlog::info(
+      "manifold: growing had left cameras in the matter; {} vertex star(s) completed to bring "
+      "them back into free space",
+      completed);
+}
+
+int64_t DelaunayManifold::Impl::FreeEnclosedCameras() {
+  constexpr size_t kMaxPocketCells = 1 << 16;
+  for (int64_t completed = 0;; ++completed) {
+    bool flipped = false;
+    for (const int32_t camera : CamerasInMatter()) {
+      for (const Cell_handle& start : walker_.StartCandidates(walker_.StartOf(camera))) {
+        const std::vector<Cell_handle> pocket = grow_shrink_.Pocket(start, kMaxPocketCells);
+        flipped = grow_shrink_.FlipAllIfRegular(pocket);
+        for (size_t k = 0; !flipped && k < pocket.size(); ++k) {
+          for (int i = 0; !flipped && i < 4; ++i) {
+            const Vertex_handle v = pocket[k]->vertex(i);
+            if (v->info().outside_cells > 0) flipped = grow_shrink_.CompleteFreeStar(v);
+          }
+        }
+        if (flipped) break;
+      }
+      if (flipped) break;
+    }
+    if (!flipped) return completed;
+    grow_shrink_.Grow(grow_shrink_.BoundarySeeds(RegrowSeeds::kBoundary, 0));
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -673,6 +712,7 @@ int64_t DelaunayManifold::num_cells() const { return impl_->num_cells(); }
 int64_t DelaunayManifold::num_outside_cells() const { return impl_->num_outside_cells(); }
 int64_t DelaunayManifold::num_joinable_cells() const { return impl_->CountJoinableCells(); }
 int64_t DelaunayManifold::num_free_cells_inside() const { return impl_->CountFreeCellsInside(); }
+std::vector<int32_t> DelaunayManifold::CamerasInMatter() { return impl_->CamerasInMatter(); }
 size_t DelaunayManifold::MemoryBytes() const { return impl_->MemoryBytes(); }
 
 }  // namespace ms

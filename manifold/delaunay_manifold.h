@@ -46,6 +46,7 @@ struct BuildStats {
   int64_t rays = 0, ray_cell_steps = 0;
   int64_t free_cells = 0, outside_cells = 0;
   int64_t free_cells_left_inside = 0;  // free but not in O: refused by the manifold test
+  int64_t camera_stars_completed = 0;  // as InsertionStats's, after growing
   // Manifold tests while growing: all, those the fast (V,E,F) test could not decide, and the
   // surface edges walked by the full test.
   int64_t manifold_tests = 0, full_manifold_tests = 0, link_steps = 0;
@@ -66,6 +67,8 @@ struct InsertionStats {
   int64_t rewalk_steps = 0;    // cells those walks crossed (from their first hole box on)
   int64_t new_rays = 0;
   int64_t outside_cells = 0;  // |O| after regrowing
+  // Vertex stars completed to bring a camera left in the matter back into O (regrowing).
+  int64_t camera_stars_completed = 0;
   double seconds_insertion = 0, seconds_growing = 0;
 };
 
@@ -133,6 +136,10 @@ class DelaunayManifold {
   // Free cells not in O (refused by the manifold test or unreachable). Scans every cell, so
   // Insert, whose cost should follow the batch, does not report it; Build does.
   int64_t num_free_cells_inside() const;
+  // Cameras whose centre lies in no cell of O: a camera stands in free space, so from such a
+  // camera the surface is seen from inside the matter (docs/manifold.md, "Known limits").
+  // Locates only cameras whose start cell an insertion destroyed.
+  std::vector<int32_t> CamerasInMatter();
   size_t MemoryBytes() const;  // estimate of the triangulation + ray data
 
  private:

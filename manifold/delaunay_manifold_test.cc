@@ -234,6 +234,26 @@ TEST(DelaunayManifold, SphereIsReconstructedAsAClosedManifold) {
   EXPECT_GT(outward, 0.93 * sphere_faces);
 }
 
+// A camera stands in free space: its cell belongs to O. One at the centre of the sphere that
+// sees nothing stands in the matter, and is the one reported.
+TEST(DelaunayManifold, CamerasInTheMatterAreReported) {
+  RandomScene scene = SphereScene(300, 8, 3);
+  ManifoldCamera inside = scene.cameras.front();
+  inside.center = Eigen::Vector3d(0.01, -0.02, 0.03);
+  scene.cameras.push_back(inside);
+  DelaunayManifold manifold(scene.cameras, ManifoldOptions{});
+  manifold.Build(scene.points);
+  EXPECT_EQ(manifold.CamerasInMatter(), std::vector<int32_t>{8});
+  // This batch re-triangulates the space in front of camera 3: greedy regrowing alone leaves
+  // it in a pocket of free cells that touches O only where any one cell would pinch the
+  // surface; completing a vertex star frees it (and the start cells are located again).
+  const InsertionStats stats = manifold.Insert(SphereScene(60, 8, 9, 1.02).points);
+  EXPECT_GE(stats.camera_stars_completed, 1);
+  EXPECT_EQ(manifold.CamerasInMatter(), std::vector<int32_t>{8});
+  EXPECT_EQ(manifold.Validate(true), "");
+  EXPECT_EQ(SurfaceProblems(manifold.ExtractSurface()), "");
+}
+
 TEST(DelaunayManifold, IsDeterministic) {
   const RandomScene scene = SphereScene(300, 8, 5);
   DelaunayManifold a(scene.cameras, ManifoldOptions{}), b(scene.cameras, ManifoldOptions{});

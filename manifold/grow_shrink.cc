@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <iterator>
 #include <queue>
+#include <set>
 
 namespace ms::manifold_detail {
 namespace {
@@ -125,6 +126,52 @@ int64_t GrowShrink::CountJoinableCells(std::vector<Cell_handle>* first, size_t m
     if (first != nullptr && first->size() < max_kept) first->push_back(c);
   }
   return joinable;
+}
+
+bool GrowShrink::FlipAllIfRegular(const std::vector<Cell_handle>& cells) {
+  std::vector<Cell_handle> missing;
+  for (const Cell_handle& c : cells) {
+    if (!dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c)) missing.push_back(c);
+  }
+  if (missing.empty()) return false;
+  for (const Cell_handle& c : missing) labels_.SetOutside(c, true);
+  // A vertex's link depends only on the labels of its own cells: those of the flipped cells.
+  std::vector<Vertex_handle> touched;
+  for (const Cell_handle& c : missing) {
+    for (int i = 0; i < 4; ++i) touched.push_back(c->vertex(i));
+  }
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  const bool regular = std::all_of(touched.begin(), touched.end(), [&](const Vertex_handle& w) {
+    return regularity_.VertexRegular(w, Cell_handle());
+  });
+  if (!regular) {
+    for (auto c = missing.rbegin(); c != missing.rend(); ++c) labels_.SetOutside(*c, false);
+  }
+  return regular;
+}
+
+bool GrowShrink::CompleteFreeStar(const Vertex_handle& v) {
+  around_.clear();
+  dt_.incident_cells(v, std::back_inserter(around_));
+  return FlipAllIfRegular(std::vector<Cell_handle>(around_.begin(), around_.end()));
+}
+
+std::vector<Cell_handle> GrowShrink::Pocket(const Cell_handle& start, size_t max_cells) const {
+  const auto in_pocket = [&](const Cell_handle& c) {
+    return !dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c);
+  };
+  std::vector<Cell_handle> pocket;
+  if (!in_pocket(start)) return pocket;
+  pocket.push_back(start);
+  std::set<Cell_handle> seen{start};  // a rare repair: an ordered set will do
+  for (size_t k = 0; k < pocket.size() && pocket.size() < max_cells; ++k) {
+    for (int i = 0; i < 4; ++i) {
+      const Cell_handle n = pocket[k]->neighbor(i);
+      if (in_pocket(n) && seen.insert(n).second) pocket.push_back(n);
+    }
+  }
+  return pocket;
 }
 
 bool GrowShrink::ShrinkAround(const std::vector<Cell_handle>& conflicts, uint32_t stamp,

@@ -38,6 +38,18 @@ class GrowShrink {
   // manifold: none after a complete Grow (O is maximal). Counts them, keeps the first few.
   int64_t CountJoinableCells(std::vector<Cell_handle>* first, size_t max_kept);
 
+  // Flips every free cell of `cells` that is not in O into O at once, if every vertex of
+  // theirs stays regular; otherwise changes nothing. Escapes a state greedy growing cannot
+  // leave: a pocket of free space that touches O only where adding any one of its cells would
+  // pinch the surface. Returns whether it flipped.
+  bool FlipAllIfRegular(const std::vector<Cell_handle>& cells);
+  // FlipAllIfRegular on the cells around v.
+  bool CompleteFreeStar(const Vertex_handle& v);
+
+  // The free cells not in O reachable from `start` through shared faces (at most max_cells),
+  // in the order found; empty if start is not one.
+  std::vector<Cell_handle> Pocket(const Cell_handle& start, size_t max_cells) const;
+
   // Shrinks O around a new point's conflict region D (`conflicts`): removes cells of E (D,
   // then its neighbourhood, options.shrink_neighbourhood) from O where the surface stays
   // manifold, until D has left O or nothing more can be removed. Marks the vertices of removed

@@ -67,6 +67,22 @@ class DelaunayManifold::Impl {
     }
     return n;
   }
+  // Completes vertex stars until no camera with a free start cell is left in the matter;
+  // returns how many.
+  int64_t FreeEnclosedCameras();
+  void LogCameraStars(int64_t completed) const;
+  // Cameras none of whose start cells is in O (manifold.h).
+  std::vector<int32_t> CamerasInMatter() {
+    std::vector<int32_t> enclosed;
+    for (int32_t camera = 0; camera < static_cast<int32_t>(cameras_.size()); ++camera) {
+      const std::vector<Cell_handle> cells = walker_.StartCandidates(walker_.StartOf(camera));
+      if (std::none_of(cells.begin(), cells.end(),
+                       [&](const Cell_handle& c) { return labels_.InO(c); })) {
+        enclosed.push_back(camera);
+      }
+    }
+    return enclosed;
+  }
   size_t MemoryBytes() const {
     return dt_.number_of_cells() * sizeof(Delaunay::Cell) +
            dt_.number_of_vertices() * sizeof(Delaunay::Vertex) +
@@ -158,7 +174,8 @@ class DelaunayManifold::Impl {
   void GainCameras(const Vertex_handle& vertex, const std::vector<int32_t>& cameras,
                    InsertionBatch* batch);
   // Regrows O from its boundary where the batch changed something.
-  void Regrow(const InsertionBatch& batch, const InsertionStats& stats);
+  // Returns the vertex stars FreeEnclosedCameras completed.
+  int64_t Regrow(const InsertionBatch& batch, const InsertionStats& stats);
 
   // --- Validate layers (manifold_validate.cc), each run only when the one before passed ---
   std::string ValidateTriangulation() const;  // CGAL's own check

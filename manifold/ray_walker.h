@@ -78,13 +78,13 @@ class RayWalker {
   bool WalkBack(const Point& a, const Vertex_handle& target, double reach, Wants&& wants,
                 Visit&& visit, int64_t* steps);
 
+  // The cells around a camera located on a facet, an edge or a vertex (its one cell otherwise).
+  std::vector<Cell_handle> StartCandidates(const CameraStart& start) const;
+
  private:
   // Exhaustive enumeration for degenerate segments (see the definition).
   template <typename Visit>
   void WalkFallback(Cell_handle from, const Point& a, const Point& b, uint32_t stamp, Visit& visit);
-  // The cells around a camera located on a facet, an edge or a vertex (its one cell otherwise).
-  std::vector<Cell_handle> StartCandidates(const CameraStart& start) const;
-
   const Delaunay& dt_;
   std::vector<Point> camera_points_;
   std::vector<CameraStart> camera_cells_;
