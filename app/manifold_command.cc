@@ -2,6 +2,7 @@
 // per step.
 #include <cstdio>
 #include <memory>
+#include <vector>
 
 #include "app/commands.h"
 #include "app/option_registration.h"
@@ -64,6 +65,11 @@ void RunManifold(const ManifoldCommandOptions& options) {
   std::printf("  growing           %lld of %lld free cells outside, %.3f s\n",
               static_cast<long long>(stats.outside_cells), static_cast<long long>(stats.free_cells),
               stats.seconds_growing);
+  const std::vector<int32_t> enclosed = manifold.CamerasInMatter();
+  std::printf(
+      "  cameras           %zu in the matter%s (%lld vertex stars completed to free others)\n",
+      enclosed.size(), enclosed.empty() ? "" : ": they see the mesh from inside",
+      static_cast<long long>(stats.camera_stars_completed));
   std::printf("  surface           %zu vertices (%lld Steiner), %zu faces\n", mesh.NumVertices(),
               static_cast<long long>(info.steiner_vertices), mesh.NumFaces());
   if (options.manifold.float_cleanup) {
