@@ -37,10 +37,17 @@ std::vector<int32_t> CamerasSeeing(const Scene& scene, const Eigen::Vector3d& p)
   return cameras;
 }
 
-// The three views of MakeSyntheticScene looking at the side of a sphere that faces them.
-std::string WriteSphereScene(const TempDir& dir) {
+// The three views of MakeSyntheticScene looking at the side of a sphere that faces them; with
+// `camera_inside`, a fourth view from the sphere's centre that sees none of its points.
+std::string WriteSphereScene(const TempDir& dir, bool camera_inside = false) {
   Scene scene = testing::MakeSyntheticScene(dir.path().string());
   scene.points.clear();
+  if (camera_inside) {
+    View inside = scene.views.front();
+    inside.t = -inside.R * Eigen::Vector3d(0.01, -0.02, 0.03);
+    inside.name = "inside.png";
+    scene.views.push_back(inside);
+  }
   for (int i = 0; i < 12; ++i) {
     for (int j = 0; j < 8; ++j) {
       const Eigen::Vector3d p = OnSphere(-0.6 + 0.2 * i, -0.7 + 0.2 * j);
@@ -218,6 +225,21 @@ TEST(RunLifecycle, ABackgroundCheckpointThatFailsIsReported) {
   EXPECT_TRUE(reported) << "the failed checkpoint went unnoticed";
   EXPECT_NO_THROW(run.WaitForCheckpoint()) << "reported once";
   EXPECT_EQ(ReadRunFile(dir / "run/kept.h5").completed_iterations(), 0);
+}
+
+// A camera inside the matter is counted in every row of run.h5 (and warned about).
+TEST(RunLifecycle, CamerasInTheMatterAreCountedPerIteration) {
+  const TempDir dir("lifecycle");
+  const std::string scene = WriteSphereScene(dir, /*camera_inside=*/true);
+  RunLifecycle run(Options(scene, dir / "run"), 1);
+  ASSERT_FALSE(run.Prepare().stop);
+  SweepRound round;
+  run.Integrate(Batch(scene, 0.0).Sorted(), round);
+  run.WaitForCheckpoint();
+  const RunRecord record = ReadRunFile(dir / "run/run.h5");
+  ASSERT_EQ(record.iterations.size(), 2u);
+  EXPECT_EQ(record.iterations[0].cameras_in_matter, 1);
+  EXPECT_EQ(record.iterations[1].cameras_in_matter, 1);
 }
 
 TEST(RunLifecycle, ABatchWithNothingNewEndsTheRun) {
