@@ -67,7 +67,7 @@ void RunManifold(const ManifoldCommandOptions& options) {
               stats.seconds_growing);
   const std::vector<int32_t> enclosed = manifold.CamerasInMatter();
   std::printf(
-      "  cameras           %zu in the matter%s (%lld vertex stars completed to free others)\n",
+      "  cameras           %zu in the matter%s (%lld vertex stars completed to free cameras)\n",
       enclosed.size(), enclosed.empty() ? "" : ": they see the mesh from inside",
       static_cast<long long>(stats.camera_stars_completed));
   std::printf("  surface           %zu vertices (%lld Steiner), %zu faces\n", mesh.NumVertices(),

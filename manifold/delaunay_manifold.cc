@@ -578,10 +578,6 @@ int64_t DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, const Insert
   return FreeEnclosedCameras();
 }
 
-// A camera stands in free space, but greedy growing can leave the free cells around one out of
-// O: a pocket that touches O only where adding any one cell would pinch the surface (seen after
-// an insertion re-triangulated the space in front of a camera). Completing the star of a vertex
-// where the pocket touches O adds several cells at once; growing then goes on from there.
 void DelaunayManifold::Impl::LogCameraStars(int64_t completed) const {
   if (completed == 0) return;
   spdlog::info(
@@ -590,6 +586,11 @@ void DelaunayManifold::Impl::LogCameraStars(int64_t completed) const {
       completed);
 }
 
+// A camera stands in free space, but greedy growing can leave the free cells around one out of
+// O: a pocket that touches O only where adding any one cell would pinch the surface (seen after
+// an insertion re-triangulated the space in front of a camera). Completing the star of a vertex
+// where the pocket touches O adds several cells at once (the whole pocket at once is tried
+// first); growing then goes on from there.
 int64_t DelaunayManifold::Impl::FreeEnclosedCameras() {
   constexpr size_t kMaxPocketCells = 1 << 16;
   for (int64_t completed = 0;; ++completed) {
