@@ -9,6 +9,7 @@
 #include "base/binary_reader.h"
 #include "base/error.h"
 #include "base/file_util.h"
+#include "base/large_buffer.h"
 #include "base/parallel_for.h"
 #include "base/text_reader.h"
 
@@ -16,6 +17,28 @@ namespace ms {
 namespace {
 
 namespace fs = std::filesystem;
+
+TEST(LargeBuffer, ReusesFreedBlocksOfTheSameSizeAndStartsZeroed) {
+  large_buffer::ReleaseCache();
+  const size_t n = (large_buffer::kMinHugeBytes / sizeof(float)) + 12345;
+  const float* first = nullptr;
+  {
+    LargeBuffer<float> a(n, 0.0f);
+    first = a.data();
+    std::fill(a.begin(), a.end(), 7.0f);
+  }
+  EXPECT_GE(large_buffer::CachedBytes(), n * sizeof(float));
+  LargeBuffer<float> b(n);
+  EXPECT_EQ(b.data(), first) << "the freed block is reused";
+  EXPECT_EQ(std::count(b.begin(), b.end(), 0.0f), static_cast<std::ptrdiff_t>(n));
+  EXPECT_EQ(large_buffer::CachedBytes(), 0u);
+  // A block the cache has no size for comes from the system; small ones never enter the cache.
+  LargeBuffer<float> c(2 * n);
+  EXPECT_NE(c.data(), first);
+  { LargeBuffer<int> small(100, 1); }
+  EXPECT_EQ(large_buffer::CachedBytes(), 0u);
+  large_buffer::ReleaseCache();
+}
 
 TEST(ParallelFor, RunsEveryIndexOnce) {
   std::vector<int> runs(1000, 0);

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <string>
 
+#include "base/large_buffer.h"
+
 namespace ms {
 namespace {
 
@@ -33,6 +35,7 @@ int64_t HeapInUseBytes() {
 
 int64_t ReleaseFreeMemory() {
   const int64_t before = ResidentBytes();
+  large_buffer::ReleaseCache();
   malloc_trim(0);
   return std::max<int64_t>(0, before - ResidentBytes());
 }

@@ -240,7 +240,7 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep,
   ChunkResult out;
   out.best.resize(prep.tiles.NumTiles());
   CpuSweepSlab slab(job, prep);
-  std::vector<std::vector<float>> maps(num_neighbours, std::vector<float>(pixels));
+  std::vector<LargeBuffer<float>> maps(num_neighbours, LargeBuffer<float>(pixels));
   std::vector<const float*> map_pointers;
   for (const auto& m : maps) map_pointers.push_back(m.data());
   const float threshold = static_cast<float>(job.options.ncc_threshold);

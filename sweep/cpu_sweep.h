@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "base/large_buffer.h"
 #include "sweep/span_raster.h"
 #include "sweep/sweep_kernel.h"
 #include "sweep/windowed_ncc.h"
@@ -38,10 +39,10 @@ class CpuSweepSlab {
   int64_t Ncc(float* out);
   // The last reprojection: the neighbour's image minus 0.5 where valid (0 elsewhere), and the
   // mask of valid pixels (1 or 0), row-major at the swept resolution.
-  const std::vector<float>& reprojected() const { return J_; }
-  const std::vector<float>& valid() const { return mask_; }
+  const LargeBuffer<float>& reprojected() const { return J_; }
+  const LargeBuffer<float>& valid() const { return mask_; }
   // C's face per pixel of the last rendering (-1: nothing drawn) and their count.
-  const std::vector<int32_t>& faces() const { return camera_raster_.face(); }
+  const LargeBuffer<int32_t>& faces() const { return camera_raster_.face(); }
   int64_t CoveredPixels() const;
 
  private:
@@ -51,7 +52,7 @@ class CpuSweepSlab {
   SpanRasterizer camera_raster_;
   std::vector<SpanRasterizer> shadow_maps_;
   WindowedNcc ncc_;
-  std::vector<float> J_, mask_;
+  LargeBuffer<float> J_, mask_;
 };
 
 // Where view's ray through `pixel` meets the plane of `facet` (world coordinates), kept within

@@ -57,7 +57,10 @@ void SpanRasterizer::Clear() {
 }
 
 void SpanRasterizer::DrawSoup(const std::vector<std::array<Eigen::Vector3d, 3>>& soup) {
-  Clear();
+  // Each band is cleared just before it is filled, while its rows are in the cache.
+  const size_t pixels = static_cast<size_t>(width_) * height_;
+  inv_z_.resize(pixels);
+  if (keep_face_) face_.resize(pixels);
   projected_.clear();
   for (size_t f = 0; f < soup.size(); ++f) {
     const std::array<Eigen::Vector3d, 3> in = {R_ * soup[f][0] + t_, R_ * soup[f][1] + t_,
@@ -101,6 +104,10 @@ void SpanRasterizer::DrawSoup(const std::vector<std::array<Eigen::Vector3d, 3>>&
   }
   for (int b = 0; b < bands; ++b) {
     const int first = b * band_rows_, last = std::min(height_, first + band_rows_) - 1;
+    const size_t band_begin = static_cast<size_t>(first) * width_;
+    const size_t band_end = static_cast<size_t>(last + 1) * width_;
+    std::fill(inv_z_.begin() + band_begin, inv_z_.begin() + band_end, 0.0f);
+    if (keep_face_) std::fill(face_.begin() + band_begin, face_.begin() + band_end, -1);
     for (uint32_t k = band_start_[b]; k < band_start_[b + 1]; ++k) {
       const Projected& t = projected_[band_triangles_[k]];
       FillRows(t, std::max(first, t.row_lo), std::min(last, t.row_hi));
@@ -161,36 +168,57 @@ void SpanRasterizer::FillRows(const Projected& t, int row_begin, int row_end) {
   const std::array<Point2, 3>& p = t.p;
   // A pixel is covered when it passes the test of each edge. Along a row each edge's test is
   // monotone in the column (every rounding step of Edge is), so the covered columns are the
-  // intersection of three half-lines: per edge, its boundary is estimated from where the edge
+  // intersection of three half-lines: per edge, its boundary is guessed from where the edge
   // crosses the row's centre line and settled with the exact test a column or two around it.
+  // The exact test is raster::Edge and raster::Covers with what does not change along the
+  // edge (which end comes first, the fill rule) and along the row (the y product) taken out of
+  // the loop: the same operations on the same values, so the same pixels.
   struct RowEdge {
-    Point2 s, q;
-    double dy, dx_per_dy;
+    Point2 first;              // the lexicographically smaller end, as raster::Edge evaluates from
+    double ex, ey;             // second - first
+    bool negate;               // the edge runs from the larger end: Edge negates
+    bool top_left;             // raster::TopLeft of the directed edge
+    double dy;                 // of the directed edge (its sign says which side is inside)
+    double x0, y0, dx_per_dy;  // the crossing of a row: x0 + (y - y0) * dx_per_dy
   };
   std::array<RowEdge, 3> edges;
   const std::array<std::array<int, 2>, 3> ends = {{{1, 2}, {2, 0}, {0, 1}}};
   for (int e = 0; e < 3; ++e) {
     const Point2& s = p[ends[e][0]];
     const Point2& q = p[ends[e][1]];
+    const bool negate = raster::Before(q, s);
+    const Point2& first = negate ? q : s;
+    const Point2& second = negate ? s : q;
     const double dy = q.y - s.y;
-    edges[e] = {s, q, dy, dy == 0 ? 0 : (q.x - s.x) / dy};
+    edges[e] = {first,
+                second.x - first.x,
+                second.y - first.y,
+                negate,
+                raster::TopLeft(s, q),
+                dy,
+                s.x,
+                s.y,
+                dy == 0 ? 0 : (q.x - s.x) / dy};
   }
   for (int row = row_begin; row <= row_end; ++row) {
     const double y = row + 0.5;
     int begin = t.col_lo, end = t.col_hi;  // inclusive
     for (const RowEdge& e : edges) {
+      const double along = e.ex * (y - e.first.y);
       const auto passes = [&](int col) {
-        return Covers(Edge(e.s, e.q, Point2{col + 0.5, y}), e.s, e.q);
+        const double w = along - e.ey * ((col + 0.5) - e.first.x);
+        const bool inside = e.negate ? w < 0 : w > 0;
+        return inside || (w == 0 && e.top_left);
       };
       if (e.dy == 0) {  // the same for the whole row
         if (!passes(begin)) end = begin - 1;
       } else {
         // Centre x where the edge crosses y, as a column: x - 0.5. The interior lies where
         // d(edge)/dx = -dy is positive: right of the crossing for dy < 0, left for dy > 0.
-        const double x = e.s.x + (y - e.s.y) * e.dx_per_dy - 0.5;
-        const double guess = e.dy < 0 ? std::floor(x) : std::ceil(x);
-        int c = static_cast<int>(
-            std::clamp(guess, static_cast<double>(begin), static_cast<double>(end)));
+        // Only a guess (the walks below settle the column), so clamped before the integer
+        // conversion rather than rounded with floor/ceil, which are library calls here.
+        const double x = std::clamp(e.x0 + (y - e.y0) * e.dx_per_dy - 0.5, begin - 1.0, end + 1.0);
+        int c = std::clamp(static_cast<int>(x) + (e.dy < 0 ? 0 : 1), begin, end);
         if (e.dy < 0) {  // the first column that passes
           if (passes(c)) {
             while (c > begin && passes(c - 1)) --c;

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "base/large_buffer.h"
 #include "scene/camera.h"
 #include "sweep/raster_rules.h"
 
@@ -32,9 +33,9 @@ class SpanRasterizer {
   int width() const { return width_; }
   int height() const { return height_; }
   // 1 / camera z of the nearest surface, 0 where nothing was drawn. Row-major.
-  const std::vector<float>& inverse_depth() const { return inv_z_; }
+  const LargeBuffer<float>& inverse_depth() const { return inv_z_; }
   // Face of the nearest surface, -1 where empty (keep_face only).
-  const std::vector<int32_t>& face() const { return face_; }
+  const LargeBuffer<int32_t>& face() const { return face_; }
 
  private:
   // A triangle projected and set up for filling: its pixel bounds and 1/z = gx x + gy y + g0.
@@ -57,8 +58,8 @@ class SpanRasterizer {
   int width_, height_;
   bool keep_face_;
   int band_rows_;  // rows per band: about 256 KiB of image
-  std::vector<float> inv_z_;
-  std::vector<int32_t> face_;
+  LargeBuffer<float> inv_z_;
+  LargeBuffer<int32_t> face_;
   std::vector<Projected> projected_;
   std::vector<uint32_t> band_start_, band_triangles_;  // per band, its triangles (CSR)
 };

@@ -11,6 +11,7 @@
 #include <opencv2/core/mat.hpp>
 #include <vector>
 
+#include "base/large_buffer.h"
 #include "sweep/recursive_gaussian.h"
 
 namespace ms {
@@ -42,8 +43,8 @@ class WindowedNcc {
   double min_texture_variance_, min_window_weight_;
   const float* J_ = nullptr;
   const float* mask_ = nullptr;
-  std::vector<float> i_, ii_;  // I - 0.5 and its square
-  std::vector<float> causal_;  // pass 1: [row][col / 8][quantity][col % 8]
+  LargeBuffer<float> i_, ii_;  // I - 0.5 and its square
+  LargeBuffer<float> causal_;  // pass 1: [row][col / 8][quantity][col % 8]
   std::vector<float> state_;   // vertical recursions: [col / 8][quantity][4][col % 8]
   std::vector<float> zeros_;   // one row
   // The 8 rows of a block as pass 2 makes them ([quantity][lane][col], each quantity's rows 16

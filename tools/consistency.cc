@@ -66,7 +66,7 @@ ConsistencyReport MeasureConsistency(const Scene& scene, const Mesh& mesh,
     const PreparedSweep prep = PrepareSweep(job);
     CpuSweepSlab slab(job, prep);
     slab.Render(0);
-    const std::vector<int32_t>& faces = slab.faces();
+    const LargeBuffer<int32_t>& faces = slab.faces();
     const size_t pixels = faces.size();
     std::vector<float> best(pixels, -INFINITY), ncc(pixels);
     std::vector<uint8_t> defined(pixels, 0);
