@@ -164,83 +164,120 @@ void SpanRasterizer::Project(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   projected_.push_back(t);
 }
 
+namespace {
+
+// One edge of a set-up triangle, for finding where its test changes along a row. The exact test
+// is raster::Edge and raster::Covers with what does not change along the edge (which end comes
+// first, the fill rule) taken out of the loop: the same operations on the same values, so the
+// same pixels.
+class RowEdge {
+ public:
+  RowEdge(const Point2& s, const Point2& q)
+      : negate_(raster::Before(q, s)),
+        top_left_(raster::TopLeft(s, q)),
+        first_(negate_ ? q : s),
+        ex_((negate_ ? s : q).x - first_.x),
+        ey_((negate_ ? s : q).y - first_.y),
+        dy_(q.y - s.y),
+        x0_(s.x),
+        y0_(s.y),
+        dx_per_dy_(dy_ == 0 ? 0 : (q.x - s.x) / dy_) {}
+
+  // The interior lies where d(edge)/dx = -dy is positive: right of the crossing for dy < 0
+  // (the row's covered columns start here), left for dy > 0 (they end here), the whole row or
+  // none of it for dy = 0.
+  double dy() const { return dy_; }
+
+  // raster::Covers(raster::Edge(s, q, {col + 0.5, y})), with along = AlongRow(y).
+  double AlongRow(double y) const { return ex_ * (y - first_.y); }
+  bool Passes(double along, int col) const {
+    const double w = along - ey_ * ((col + 0.5) - first_.x);
+    const bool inside = negate_ ? w < 0 : w > 0;
+    return inside || (w == 0 && top_left_);
+  }
+
+  // The first column in [lo, hi] that passes (dy < 0), hi + 1 if none; or the last one that
+  // passes (dy > 0), lo - 1 if none. The guess is the column next to the crossing, which the
+  // test settles: its answer and both neighbours' are evaluated at once, without branches that
+  // depend on them, and a walk takes over where rounding put the boundary further away.
+  int Boundary(double y, int lo, int hi) const {
+    const double along = AlongRow(y);
+    // Centre x where the edge crosses y, as a column: x - 0.5. Clamped before the integer
+    // conversion rather than rounded with floor, a library call here.
+    const double x = std::clamp(x0_ + (y - y0_) * dx_per_dy_ - 0.5, lo - 1.0, hi + 1.0);
+    const int c = std::clamp(static_cast<int>(x) + (dy_ < 0 ? 1 : 0), lo, hi);
+    const bool before = c > lo && Passes(along, c - 1);
+    const bool at = Passes(along, c);
+    const bool after = c < hi && Passes(along, c + 1);
+    if (dy_ < 0) {  // passes: no ... no yes ... yes
+      if (!before && (at || after || c == hi)) return at ? c : (after ? c + 1 : hi + 1);
+      int b = c;
+      if (at) {
+        while (b > lo && Passes(along, b - 1)) --b;
+      } else {
+        while (b <= hi && !Passes(along, b)) ++b;
+      }
+      return b;
+    }
+    // passes: yes ... yes no ... no
+    if (!after && (at || before || c == lo)) return at ? c : (before ? c - 1 : lo - 1);
+    int b = c;
+    if (at) {
+      while (b < hi && Passes(along, b + 1)) ++b;
+    } else {
+      while (b >= lo && !Passes(along, b)) --b;
+    }
+    return b;
+  }
+
+ private:
+  bool negate_;                 // the edge runs from the lexicographically larger end: Edge negates
+  bool top_left_;               // raster::TopLeft of the directed edge
+  Point2 first_;                // the smaller end, which raster::Edge evaluates from
+  double ex_, ey_;              // the other end - first_
+  double dy_;                   // of the directed edge
+  double x0_, y0_, dx_per_dy_;  // where the edge crosses a row: x0 + (y - y0) * dx_per_dy
+};
+
+constexpr int kRowsAtOnce = 32;
+
+}  // namespace
+
 void SpanRasterizer::FillRows(const Projected& t, int row_begin, int row_end) {
-  const std::array<Point2, 3>& p = t.p;
   // A pixel is covered when it passes the test of each edge. Along a row each edge's test is
   // monotone in the column (every rounding step of Edge is), so the covered columns are the
-  // intersection of three half-lines: per edge, its boundary is guessed from where the edge
-  // crosses the row's centre line and settled with the exact test a column or two around it.
-  // The exact test is raster::Edge and raster::Covers with what does not change along the
-  // edge (which end comes first, the fill rule) and along the row (the y product) taken out of
-  // the loop: the same operations on the same values, so the same pixels.
-  struct RowEdge {
-    Point2 first;              // the lexicographically smaller end, as raster::Edge evaluates from
-    double ex, ey;             // second - first
-    bool negate;               // the edge runs from the larger end: Edge negates
-    bool top_left;             // raster::TopLeft of the directed edge
-    double dy;                 // of the directed edge (its sign says which side is inside)
-    double x0, y0, dx_per_dy;  // the crossing of a row: x0 + (y - y0) * dx_per_dy
-  };
-  std::array<RowEdge, 3> edges;
-  const std::array<std::array<int, 2>, 3> ends = {{{1, 2}, {2, 0}, {0, 1}}};
-  for (int e = 0; e < 3; ++e) {
-    const Point2& s = p[ends[e][0]];
-    const Point2& q = p[ends[e][1]];
-    const bool negate = raster::Before(q, s);
-    const Point2& first = negate ? q : s;
-    const Point2& second = negate ? s : q;
-    const double dy = q.y - s.y;
-    edges[e] = {first,
-                second.x - first.x,
-                second.y - first.y,
-                negate,
-                raster::TopLeft(s, q),
-                dy,
-                s.x,
-                s.y,
-                dy == 0 ? 0 : (q.x - s.x) / dy};
-  }
-  for (int row = row_begin; row <= row_end; ++row) {
-    const double y = row + 0.5;
-    int begin = t.col_lo, end = t.col_hi;  // inclusive
+  // intersection of three half-lines, each found within the triangle's columns on its own.
+  // An edge's boundaries are found for a batch of rows first: the rows do not depend on one
+  // another, so the processor overlaps their work.
+  const std::array<Point2, 3>& p = t.p;
+  const std::array<RowEdge, 3> edges = {RowEdge(p[1], p[2]), RowEdge(p[2], p[0]),
+                                        RowEdge(p[0], p[1])};
+  const int lo = t.col_lo, hi = t.col_hi;
+  for (int first = row_begin; first <= row_end; first += kRowsAtOnce) {
+    const int rows = std::min(kRowsAtOnce, row_end - first + 1);
+    std::array<int, kRowsAtOnce> begin, end;  // inclusive
+    std::fill_n(begin.begin(), rows, lo);
+    std::fill_n(end.begin(), rows, hi);
     for (const RowEdge& e : edges) {
-      const double along = e.ex * (y - e.first.y);
-      const auto passes = [&](int col) {
-        const double w = along - e.ey * ((col + 0.5) - e.first.x);
-        const bool inside = e.negate ? w < 0 : w > 0;
-        return inside || (w == 0 && e.top_left);
-      };
-      if (e.dy == 0) {  // the same for the whole row
-        if (!passes(begin)) end = begin - 1;
-      } else {
-        // Centre x where the edge crosses y, as a column: x - 0.5. The interior lies where
-        // d(edge)/dx = -dy is positive: right of the crossing for dy < 0, left for dy > 0.
-        // Only a guess (the walks below settle the column), so clamped before the integer
-        // conversion rather than rounded with floor/ceil, which are library calls here.
-        const double x = std::clamp(e.x0 + (y - e.y0) * e.dx_per_dy - 0.5, begin - 1.0, end + 1.0);
-        int c = std::clamp(static_cast<int>(x) + (e.dy < 0 ? 0 : 1), begin, end);
-        if (e.dy < 0) {  // the first column that passes
-          if (passes(c)) {
-            while (c > begin && passes(c - 1)) --c;
-          } else {
-            while (c <= end && !passes(c)) ++c;
-          }
-          begin = c;
-        } else {  // the last column that passes
-          if (passes(c)) {
-            while (c < end && passes(c + 1)) ++c;
-          } else {
-            while (c >= begin && !passes(c)) --c;
-          }
-          end = c;
+      if (e.dy() == 0) {
+        for (int r = 0; r < rows; ++r) {
+          if (!e.Passes(e.AlongRow(first + r + 0.5), lo)) end[r] = lo - 1;
         }
+      } else if (e.dy() < 0) {
+        for (int r = 0; r < rows; ++r)
+          begin[r] = std::max(begin[r], e.Boundary(first + r + 0.5, lo, hi));
+      } else {
+        for (int r = 0; r < rows; ++r)
+          end[r] = std::min(end[r], e.Boundary(first + r + 0.5, lo, hi));
       }
-      if (begin > end) break;
     }
-    if (begin > end) continue;
-    const size_t offset = static_cast<size_t>(row) * width_;
-    FillSpan(inv_z_.data() + offset, keep_face_ ? face_.data() + offset : nullptr, begin, end + 1,
-             t.g0 + t.gx * 0.5 + t.gy * y, t.gx, t.face);
+    for (int r = 0; r < rows; ++r) {
+      if (begin[r] > end[r]) continue;
+      const int row = first + r;
+      const size_t offset = static_cast<size_t>(row) * width_;
+      FillSpan(inv_z_.data() + offset, keep_face_ ? face_.data() + offset : nullptr, begin[r],
+               end[r] + 1, t.g0 + t.gx * 0.5 + t.gy * (row + 0.5), t.gx, t.face);
+    }
   }
 }
 
