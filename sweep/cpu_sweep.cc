@@ -1,6 +1,7 @@
 #include "sweep/cpu_sweep.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
@@ -232,11 +233,13 @@ struct ChunkResult {
   double raster_s = 0, reproject_s = 0, ncc_s = 0, reduce_s = 0;
 };
 
-ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep,
-                         const std::vector<int>& offsets) {
+// Sweeps offsets taken one at a time from `next` (shared by the threads) until none is left.
+// A thread's offsets ascend, so its winners keep UpdateTileWinners' ties.
+ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, std::atomic<int>* next) {
   const View& view = prep.camera.view;
   const size_t pixels = static_cast<size_t>(view.intrinsics.width) * view.intrinsics.height;
   const int num_neighbours = static_cast<int>(prep.neighbours.size());
+  const int num_offsets = static_cast<int>(prep.offsets.size());
   ChunkResult out;
   out.best.resize(prep.tiles.NumTiles());
   CpuSweepSlab slab(job, prep);
@@ -245,7 +248,8 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep,
   for (const auto& m : maps) map_pointers.push_back(m.data());
   const float threshold = static_cast<float>(job.options.ncc_threshold);
   Timer stage;
-  for (const int k : offsets) {
+  for (int i = next->fetch_add(1); i < num_offsets; i = next->fetch_add(1)) {
+    const int k = prep.offsets[i];
     stage.Restart();
     slab.Render(k);
     out.covered_pixels += slab.CoveredPixels();
@@ -316,28 +320,23 @@ SweepResult CpuSweepKernel::Run(const SweepJob& job) {
   result.stats = PreparedSweepStats(prep);
   SweepStats& stats = result.stats;
   const std::vector<Eigen::Vector3d> normals = FaceNormals(job.mesh);
-  // Contiguous shares of the offsets, one per thread.
+  // Each thread takes the next offset when it is done with one, so that the threads finish
+  // together whatever each offset costs; the merge below keeps one thread's winners.
   const int num_offsets = static_cast<int>(prep.offsets.size());
-  const int chunks = std::clamp(cv::getNumThreads(), 1, num_offsets);
-  std::vector<std::vector<int>> shares(chunks);
-  for (int i = 0; i < num_offsets; ++i) {
-    shares[static_cast<int64_t>(i) * chunks / num_offsets].push_back(prep.offsets[i]);
-  }
+  const int threads = std::clamp(cv::getNumThreads(), 1, num_offsets);
+  std::atomic<int> next{0};
   stats.prepare_s = total.Seconds();
-  std::vector<ChunkResult> found(chunks);
+  std::vector<ChunkResult> found(threads);
   cv::parallel_for_(
-      cv::Range(0, chunks),
+      cv::Range(0, threads),
       [&](const cv::Range& range) {
-        for (int c = range.start; c < range.end; ++c) {
-          found[c] = SweepOffsets(job, prep, shares[c]);
-        }
+        for (int c = range.start; c < range.end; ++c) found[c] = SweepOffsets(job, prep, &next);
       },
-      chunks);
-  // In offset order with strict comparison: the same winners as one thread would find.
+      threads);
   std::vector<TileWinner> best(prep.tiles.NumTiles());
   for (const ChunkResult& chunk : found) {
     for (size_t t = 0; t < best.size(); ++t) {
-      if (chunk.best[t].neighbour >= 0 && chunk.best[t].ncc > best[t].ncc) best[t] = chunk.best[t];
+      if (BeatsInSweepOrder(chunk.best[t], best[t])) best[t] = chunk.best[t];
     }
     stats.covered_pixels += chunk.covered_pixels;
     stats.valid_hypotheses += chunk.valid_hypotheses;

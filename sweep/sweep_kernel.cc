@@ -7,6 +7,7 @@
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <tuple>
 
 #include "base/error.h"
 #include "mesh/visible_mesh.h"
@@ -218,6 +219,14 @@ MS_VECTOR_CLONES float RowMaximum(const float* __restrict values, int n) {
 }
 
 }  // namespace
+
+bool BeatsInSweepOrder(const TileWinner& a, const TileWinner& b) {
+  if (a.neighbour < 0) return false;
+  if (b.neighbour < 0) return true;
+  if (a.ncc != b.ncc) return a.ncc > b.ncc;
+  return std::make_tuple(a.offset, a.neighbour, a.row, a.col) <
+         std::make_tuple(b.offset, b.neighbour, b.row, b.col);
+}
 
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
                        const int32_t* face, const Eigen::Vector3d* world, float threshold,

@@ -172,6 +172,12 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
                        const int32_t* face, const Eigen::Vector3d* world, float threshold,
                        std::vector<TileWinner>* best);
 
+// Whether tile winner a beats b as UpdateTileWinners would decide had it seen both: the higher
+// NCC, on ties the smaller k, then the earlier neighbour, then the earlier pixel. An empty
+// winner (neighbour < 0) beats nothing. For merging winners found by threads over disjoint
+// offsets.
+bool BeatsInSweepOrder(const TileWinner& a, const TileWinner& b);
+
 // The point of a tile winner: its pixel centre in C's full-resolution image, C's id, then the
 // winning neighbour's, then those of the other neighbours that matched (both kernels).
 SweepPoint MakeSweepPoint(const TileWinner& winner, const PreparedSweep& prep);

@@ -61,6 +61,39 @@ TEST(SweepKernel, MakeSweepPointGivesTheFullResolutionPixel) {
   EXPECT_EQ(MakeSweepPoint(winner, prep).pixel, Eigen::Vector2f(9, 10));
 }
 
+TEST(SweepKernel, WinnersMergeInSweepOrder) {
+  TileWinner empty, a;
+  a.ncc = 0.99f;
+  a.offset = 2;
+  a.neighbour = 1;
+  a.row = 5;
+  a.col = 7;
+  EXPECT_TRUE(BeatsInSweepOrder(a, empty));
+  EXPECT_FALSE(BeatsInSweepOrder(empty, a));
+  EXPECT_FALSE(BeatsInSweepOrder(a, a));
+  TileWinner b = a;
+  b.ncc = 0.995f;
+  EXPECT_TRUE(BeatsInSweepOrder(b, a));
+  // Equal NCCs: the smaller k, then the earlier neighbour, then the earlier pixel (row-major).
+  b = a;
+  b.offset = -3;
+  b.neighbour = 1;
+  b.row = 9;
+  EXPECT_TRUE(BeatsInSweepOrder(b, a));
+  EXPECT_FALSE(BeatsInSweepOrder(a, b));
+  b = a;
+  b.neighbour = 0;
+  b.row = 9;
+  EXPECT_TRUE(BeatsInSweepOrder(b, a));
+  b = a;
+  b.row = 4;
+  b.col = 90;
+  EXPECT_TRUE(BeatsInSweepOrder(b, a));
+  b = a;
+  b.col = 6;
+  EXPECT_TRUE(BeatsInSweepOrder(b, a));
+}
+
 TEST(SweepKernel, PreparedSweepStatsCountsTheHypotheses) {
   PreparedSweep prep = ThreeNeighbours();
   prep.camera.view.intrinsics.width = 320;
