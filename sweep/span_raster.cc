@@ -197,36 +197,38 @@ class RowEdge {
   }
 
   // The first column in [lo, hi] that passes (dy < 0), hi + 1 if none; or the last one that
-  // passes (dy > 0), lo - 1 if none. The guess is the column next to the crossing, which the
-  // test settles: its answer and both neighbours' are evaluated at once, without branches that
-  // depend on them, and a walk takes over where rounding put the boundary further away.
+  // passes (dy > 0), lo - 1 if none. The guess is the column next to the crossing: two tests
+  // (it and the column on the outer side) settle it, and a walk takes over where rounding put
+  // the boundary further away.
   int Boundary(double y, int lo, int hi) const {
     const double along = AlongRow(y);
     // Centre x where the edge crosses y, as a column: x - 0.5. Clamped before the integer
     // conversion rather than rounded with floor, a library call here.
     const double x = std::clamp(x0_ + (y - y0_) * dx_per_dy_ - 0.5, lo - 1.0, hi + 1.0);
     const int c = std::clamp(static_cast<int>(x) + (dy_ < 0 ? 1 : 0), lo, hi);
-    const bool before = c > lo && Passes(along, c - 1);
     const bool at = Passes(along, c);
-    const bool after = c < hi && Passes(along, c + 1);
     if (dy_ < 0) {  // passes: no ... no yes ... yes
-      if (!before && (at || after || c == hi)) return at ? c : (after ? c + 1 : hi + 1);
-      int b = c;
-      if (at) {
-        while (b > lo && Passes(along, b - 1)) --b;
-      } else {
+      const bool before = c > lo && Passes(along, c - 1);
+      if (!before) {
+        if (at || c == hi) return at ? c : hi + 1;
+        int b = c + 1;
         while (b <= hi && !Passes(along, b)) ++b;
+        return b;
       }
+      int b = c - 1;
+      while (b > lo && Passes(along, b - 1)) --b;
       return b;
     }
     // passes: yes ... yes no ... no
-    if (!after && (at || before || c == lo)) return at ? c : (before ? c - 1 : lo - 1);
-    int b = c;
-    if (at) {
-      while (b < hi && Passes(along, b + 1)) ++b;
-    } else {
+    const bool after = c < hi && Passes(along, c + 1);
+    if (!after) {
+      if (at || c == lo) return at ? c : lo - 1;
+      int b = c - 1;
       while (b >= lo && !Passes(along, b)) --b;
+      return b;
     }
+    int b = c + 1;
+    while (b < hi && Passes(along, b + 1)) ++b;
     return b;
   }
 
