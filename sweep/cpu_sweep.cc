@@ -242,13 +242,15 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, std::at
   const int num_offsets = static_cast<int>(prep.offsets.size());
   ChunkResult out;
   out.best.resize(prep.tiles.NumTiles());
+  int i = next->fetch_add(1);
+  if (i >= num_offsets) return out;  // a thread that started late: no buffers to set up
   CpuSweepSlab slab(job, prep);
   std::vector<LargeBuffer<float>> maps(num_neighbours, LargeBuffer<float>(pixels));
   std::vector<const float*> map_pointers;
   for (const auto& m : maps) map_pointers.push_back(m.data());
   const float threshold = static_cast<float>(job.options.ncc_threshold);
   Timer stage;
-  for (int i = next->fetch_add(1); i < num_offsets; i = next->fetch_add(1)) {
+  for (; i < num_offsets; i = next->fetch_add(1)) {
     const int k = prep.offsets[i];
     stage.Restart();
     slab.Render(k);
