@@ -597,7 +597,8 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras() {
     bool flipped = false;
     for (const int32_t camera : CamerasInMatter()) {
       for (const Cell_handle& start : walker_.StartCandidates(walker_.StartOf(camera))) {
-        const std::vector<Cell_handle> pocket = grow_shrink_.Pocket(start, kMaxPocketCells);
+        const std::vector<Cell_handle> pocket =
+            grow_shrink_.Pocket(start, kMaxPocketCells, walker_.NextStamp());
         flipped = grow_shrink_.FlipAllIfRegular(pocket);
         for (size_t k = 0; !flipped && k < pocket.size(); ++k) {
           for (int i = 0; !flipped && i < 4; ++i) {

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <iterator>
 #include <queue>
-#include <set>
 
 namespace ms::manifold_detail {
 namespace {
@@ -157,18 +156,23 @@ bool GrowShrink::CompleteFreeStar(const Vertex_handle& v) {
   return FlipAllIfRegular(std::vector<Cell_handle>(around_.begin(), around_.end()));
 }
 
-std::vector<Cell_handle> GrowShrink::Pocket(const Cell_handle& start, size_t max_cells) const {
-  const auto in_pocket = [&](const Cell_handle& c) {
-    return !dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c);
+std::vector<Cell_handle> GrowShrink::Pocket(const Cell_handle& start, size_t max_cells,
+                                            uint32_t stamp) {
+  // Not yet found (stamp), and free space not in O.
+  const auto joins = [&](const Cell_handle& c) {
+    return c->info().stamp != stamp && !dt_.is_infinite(c) && !c->info().outside &&
+           labels_.IsFree(c);
   };
   std::vector<Cell_handle> pocket;
-  if (!in_pocket(start)) return pocket;
+  if (!joins(start)) return pocket;
+  start->info().stamp = stamp;
   pocket.push_back(start);
-  std::set<Cell_handle> seen{start};  // a rare repair: an ordered set will do
   for (size_t k = 0; k < pocket.size() && pocket.size() < max_cells; ++k) {
     for (int i = 0; i < 4; ++i) {
       const Cell_handle n = pocket[k]->neighbor(i);
-      if (in_pocket(n) && seen.insert(n).second) pocket.push_back(n);
+      if (!joins(n)) continue;
+      n->info().stamp = stamp;
+      pocket.push_back(n);
     }
   }
   return pocket;

@@ -47,8 +47,9 @@ class GrowShrink {
   bool CompleteFreeStar(const Vertex_handle& v);
 
   // The free cells not in O reachable from `start` through shared faces (at most max_cells),
-  // in the order found; empty if start is not one.
-  std::vector<Cell_handle> Pocket(const Cell_handle& start, size_t max_cells) const;
+  // in the order found; empty if start is not one. `stamp` (RayWalker::NextStamp) marks the
+  // cells found.
+  std::vector<Cell_handle> Pocket(const Cell_handle& start, size_t max_cells, uint32_t stamp);
 
   // Shrinks O around a new point's conflict region D (`conflicts`): removes cells of E (D,
   // then its neighbourhood, options.shrink_neighbourhood) from O where the surface stays
