@@ -245,9 +245,12 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, std::at
   int i = next->fetch_add(1);
   if (i >= num_offsets) return out;  // a thread that started late: no buffers to set up
   CpuSweepSlab slab(job, prep);
-  std::vector<LargeBuffer<float>> maps(num_neighbours, LargeBuffer<float>(pixels));
+  std::vector<LargeBuffer<float>> maps(num_neighbours);
   std::vector<const float*> map_pointers;
-  for (const auto& m : maps) map_pointers.push_back(m.data());
+  for (LargeBuffer<float>& m : maps) {
+    m.resize(pixels);
+    map_pointers.push_back(m.data());
+  }
   const float threshold = static_cast<float>(job.options.ncc_threshold);
   Timer stage;
   for (; i < num_offsets; i = next->fetch_add(1)) {
