@@ -33,11 +33,24 @@ TEST(LargeBuffer, ReusesFreedBlocksOfTheSameSizeAndStartsZeroed) {
   EXPECT_EQ(std::count(b.begin(), b.end(), 0.0f), static_cast<std::ptrdiff_t>(n));
   EXPECT_EQ(large_buffer::CachedBytes(), 0u);
   // A block the cache has no size for comes from the system; small ones never enter the cache.
-  LargeBuffer<float> c(2 * n);
-  EXPECT_NE(c.data(), first);
-  { LargeBuffer<int> small(100, 1); }
-  EXPECT_EQ(large_buffer::CachedBytes(), 0u);
+  {
+    LargeBuffer<float> c(2 * n);
+    EXPECT_NE(c.data(), first);
+    { LargeBuffer<int> small(100, 1); }
+    EXPECT_EQ(large_buffer::CachedBytes(), 0u);
+  }
+  // Freed, c is kept (b and c were both alive: the peak holds them), and what the cache holds
+  // with what is in use never passes that peak: b's block, freed too, fits beside c's.
+  EXPECT_GE(large_buffer::CachedBytes(), 2 * n * sizeof(float));
+  b = LargeBuffer<float>();
+  const size_t both = large_buffer::CachedBytes();
+  EXPECT_GE(both, 3 * n * sizeof(float));
+  // A block freed past the peak goes back to the system: the cache already holds b and c, so
+  // one larger than both is not kept beside them.
+  { LargeBuffer<float> larger(8 * n); }
+  EXPECT_EQ(large_buffer::CachedBytes(), both);
   large_buffer::ReleaseCache();
+  EXPECT_EQ(large_buffer::CachedBytes(), 0u);
 }
 
 TEST(ParallelFor, RunsEveryIndexOnce) {

@@ -97,6 +97,7 @@ void ReleaseCache() {
     std::lock_guard<std::mutex> lock(cache.mutex);
     blocks.swap(cache.blocks);
     cache.cached_bytes = 0;
+    cache.peak_live_bytes = cache.live_bytes;  // the cap starts again from what is in use
   }
   for (const auto& [size, p] : blocks) std::free(p);
 }

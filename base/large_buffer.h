@@ -20,7 +20,7 @@ constexpr size_t kMinHugeBytes = size_t{4} << 20;
 void* Allocate(size_t bytes);
 void Free(void* p, size_t bytes);
 // Freed blocks kept for reuse, and giving them back to the system (base/memory.h's
-// ReleaseFreeMemory does).
+// ReleaseFreeMemory does), after which the cache's cap starts again from what is in use.
 size_t CachedBytes();
 void ReleaseCache();
 }  // namespace large_buffer
