@@ -78,6 +78,16 @@ __attribute__((target("avx2,fma"))) inline void GatherPairs(const float* image, 
   *second = _mm256_castpd_ps(_mm256_permute4x64_pd(_mm256_castps_pd(b), _MM_SHUFFLE(3, 1, 2, 0)));
 }
 
+// Asks for the cache lines one row below the first and last lanes' pixels of a map.
+__attribute__((target("avx2"))) inline void PrefetchRowBelow(const float* map, __m256i index,
+                                                             int width, int last) {
+  const __m256i below = _mm256_add_epi32(index, _mm256_set1_epi32(width));
+  const int first_lane = std::min(_mm256_cvtsi256_si32(below), last);
+  const int last_lane = std::min(_mm256_extract_epi32(below, 7), last);
+  _mm_prefetch(reinterpret_cast<const char*>(map + first_lane), _MM_HINT_T0);
+  _mm_prefetch(reinterpret_cast<const char*>(map + last_lane), _MM_HINT_T0);
+}
+
 // The same with AVX2 gathers, 8 pixels at a time; the remainder by ReprojectRow.
 __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
     const ReprojectionRow& p, const float* __restrict inv_z, const float* __restrict shadow,
@@ -90,6 +100,7 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
   const __m256i stride = _mm256_set1_epi32(p.width), one_i = _mm256_set1_epi32(1);
   const __m256 ratio = _mm256_set1_ps(p.max_depth_ratio);
   const __m256 iota = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
+  const int last_image = p.width * p.height - 1;
   int col = 0;
   for (; col + 8 <= n; col += 8) {
     const __m256 c = _mm256_add_ps(_mm256_set1_ps(static_cast<float>(col)), iota);
@@ -115,10 +126,15 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
     ok = _mm256_and_ps(
         ok, _mm256_and_ps(_mm256_cmp_ps(v, half, _CMP_GE_OQ), _mm256_cmp_ps(v, v_max, _CMP_LE_OQ)));
     const __m256 uc = _mm256_blendv_ps(half, u, ok), vc = _mm256_blendv_ps(half, v, ok);
+    if (_mm256_testz_ps(ok, ok)) {  // no lane reads anything
+      _mm256_storeu_ps(J + col, zero);
+      _mm256_storeu_ps(mask + col, zero);
+      continue;
+    }
     const __m256i tu = _mm256_min_epi32(_mm256_cvttps_epi32(uc), last_col);
     const __m256i tv = _mm256_min_epi32(_mm256_cvttps_epi32(vc), last_row);
-    const __m256 depth_ratio = _mm256_mul_ps(
-        d, _mm256_i32gather_ps(shadow, _mm256_add_epi32(_mm256_mullo_epi32(tv, stride), tu), 4));
+    const __m256i shadow_index = _mm256_add_epi32(_mm256_mullo_epi32(tv, stride), tu);
+    const __m256 depth_ratio = _mm256_mul_ps(d, _mm256_i32gather_ps(shadow, shadow_index, 4));
     ok = _mm256_and_ps(ok, _mm256_cmp_ps(depth_ratio, ratio, _CMP_LE_OQ));
     const __m256 sx = _mm256_sub_ps(uc, half), sy = _mm256_sub_ps(vc, half);
     const __m256i x0 = _mm256_min_epi32(_mm256_cvttps_epi32(sx), last_col);
@@ -132,8 +148,14 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
     const __m256 at_last = _mm256_castsi256_ps(_mm256_cmpgt_epi32(x0, xl));
     const __m256i row0 = _mm256_mullo_epi32(y0, stride), row1 = _mm256_mullo_epi32(y1, stride);
     __m256 a, b, e, f;
+    const __m256i pair_index = _mm256_add_epi32(row1, xl);
     GatherPairs(image, _mm256_add_epi32(row0, xl), &a, &b);
-    GatherPairs(image, _mm256_add_epi32(row1, xl), &e, &f);
+    GatherPairs(image, pair_index, &e, &f);
+    // C's next row reads the neighbour's rows just below these (where the cameras are upright):
+    // ask for them now. Without this the gathers wait on memory: the hardware prefetchers do not
+    // foresee a path that crosses the neighbour's rows at a slant (measured: docs/sweep.md).
+    PrefetchRowBelow(image, pair_index, p.width, last_image);
+    PrefetchRowBelow(shadow, shadow_index, p.width, last_image);
     a = _mm256_blendv_ps(a, b, at_last);
     e = _mm256_blendv_ps(e, f, at_last);
     const __m256 top = _mm256_fmadd_ps(fx, _mm256_sub_ps(b, a), a);
