@@ -249,43 +249,101 @@ MS_VECTOR_CLONES void HorizontalBlock(const FloatGaussian& g, const float* __res
   }
 }
 
+// An 8 x 8 tile transposed in registers: r[l][k] -> r[k][l] (unpack, shuffle, swap halves: three
+// stages of shuffles).
+MS_ALWAYS_INLINE void Transpose8x8(Lanes r[kLanes]) {
+  typedef int32_t Mask __attribute__((vector_size(32)));
+  const Mask lo = {0, 8, 1, 9, 4, 12, 5, 13}, hi = {2, 10, 3, 11, 6, 14, 7, 15};
+  const Mask lo2 = {0, 1, 8, 9, 4, 5, 12, 13}, hi2 = {2, 3, 10, 11, 6, 7, 14, 15};
+  const Mask lo4 = {0, 1, 2, 3, 8, 9, 10, 11}, hi4 = {4, 5, 6, 7, 12, 13, 14, 15};
+  Lanes u[kLanes], v[kLanes];
+  for (int p = 0; p < kLanes; p += 2) {
+    u[p] = __builtin_shuffle(r[p], r[p + 1], lo);
+    u[p + 1] = __builtin_shuffle(r[p], r[p + 1], hi);
+  }
+  for (int p = 0; p < kLanes; p += 4) {
+    v[p] = __builtin_shuffle(u[p], u[p + 2], lo2);
+    v[p + 1] = __builtin_shuffle(u[p], u[p + 2], hi2);
+    v[p + 2] = __builtin_shuffle(u[p + 1], u[p + 3], lo2);
+    v[p + 3] = __builtin_shuffle(u[p + 1], u[p + 3], hi2);
+  }
+  for (int k = 0; k < 4; ++k) {  // v[k]: columns k and k + 4 of rows 0-3, v[k + 4] of rows 4-7
+    r[k] = __builtin_shuffle(v[k], v[k + 4], lo4);
+    r[k + 4] = __builtin_shuffle(v[k], v[k + 4], hi4);
+  }
+}
+
+typedef int32_t LaneMask __attribute__((vector_size(32)));
+
+// WeightedNcc's formula for the 8 rows of one column of a block, from the six sums at `s`
+// ([quantity][col][lane], `plane` apart): the NCC, and where it is defined (all bits set) unless
+// the pixel is masked out.
+struct ColumnNcc {
+  Lanes value;
+  LaneMask ok;
+};
+
+MS_ALWAYS_INLINE ColumnNcc NccOfColumn(const float* __restrict s, size_t plane, float min_variance,
+                                       float min_weight) {
+  const float floor = static_cast<float>(kVarianceFloor);
+  const Lanes w = LoadLanes(s);
+  const Lanes inv_w = 1.0f / w;
+  const Lanes mean_i = LoadLanes(s + plane) * inv_w;
+  const Lanes mean_j = LoadLanes(s + 2 * plane) * inv_w;
+  const Lanes ii = LoadLanes(s + 3 * plane) * inv_w;
+  const Lanes jj = LoadLanes(s + 4 * plane) * inv_w;
+  Lanes ij = LoadLanes(s + 5 * plane) * inv_w;
+  // Rounded before ij - mean_i mean_j, as the kernel has always done: which product a fused
+  // multiply-add takes moves NCCs by an ulp, and with them tile winners and whole runs.
+  __asm__("" : "+m"(ij));
+  const Lanes var_i = ii - mean_i * mean_i, var_j = jj - mean_j * mean_j;
+  const LaneMask ok = (w >= min_weight) & (var_i > min_variance) & (var_i > floor * ii) &
+                      (var_j > min_variance) & (var_j > floor * jj);
+  Lanes product = var_i * var_j;
+  product = product > 0 ? product : Lanes{};
+  Lanes root;  // one vector square root (this file is compiled without errno from sqrt)
+  for (int l = 0; l < kLanes; ++l) root[l] = __builtin_sqrtf(product[l]);
+  Lanes value = (ij - mean_i * mean_j) / root;
+  value = value > 1.0f ? Lanes{} + 1.0f : value;
+  value = value < -1.0f ? Lanes{} - 1.0f : value;
+  return {value, ok};
+}
+
 // NCC of up to 8 rows of a block from their six sums ([quantity][col][lane]): WeightedNcc's
-// formula, 8 rows at a time. Returns the number of defined pixels.
+// formula, 8 rows at a time; 8 columns at a time are turned back into rows ([lane][col]) to be
+// masked and stored. Returns the number of defined pixels.
 MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
                                   const float* __restrict mask, float* __restrict ncc, int width,
                                   int rows, double min_texture_variance, double min_window_weight) {
-  typedef int32_t LaneMask __attribute__((vector_size(32)));
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float min_variance = static_cast<float>(min_texture_variance);
   const float min_weight = static_cast<float>(min_window_weight);
-  const float floor = static_cast<float>(kVarianceFloor);
   int64_t defined = 0;
-  for (int col = 0; col < width; ++col) {
-    const size_t s = static_cast<size_t>(col) * kLanes;
-    const Lanes w = LoadLanes(sums + s);
-    const Lanes inv_w = 1.0f / w;
-    const Lanes mean_i = LoadLanes(sums + plane + s) * inv_w;
-    const Lanes mean_j = LoadLanes(sums + 2 * plane + s) * inv_w;
-    const Lanes ii = LoadLanes(sums + 3 * plane + s) * inv_w;
-    const Lanes jj = LoadLanes(sums + 4 * plane + s) * inv_w;
-    Lanes ij = LoadLanes(sums + 5 * plane + s) * inv_w;
-    // Rounded before ij - mean_i mean_j, as the kernel has always done: which product a fused
-    // multiply-add takes moves NCCs by an ulp, and with them tile winners and whole runs.
-    __asm__("" : "+m"(ij));
-    const Lanes var_i = ii - mean_i * mean_i, var_j = jj - mean_j * mean_j;
-    const LaneMask ok = (w >= min_weight) & (var_i > min_variance) & (var_i > floor * ii) &
-                        (var_j > min_variance) & (var_j > floor * jj);
-    Lanes product = var_i * var_j;
-    product = product > 0 ? product : Lanes{};
-    Lanes root;  // one vector square root (this file is compiled without errno from sqrt)
-    for (int l = 0; l < kLanes; ++l) root[l] = __builtin_sqrtf(product[l]);
-    Lanes value = (ij - mean_i * mean_j) / root;
-    value = value > 1.0f ? Lanes{} + 1.0f : value;
-    value = value < -1.0f ? Lanes{} - 1.0f : value;
+  int col = 0;
+  for (; col + kLanes <= width; col += kLanes) {
+    Lanes value[kLanes], ok[kLanes];  // [column][row], then [row][column]
+    for (int k = 0; k < kLanes; ++k) {
+      const ColumnNcc c = NccOfColumn(sums + static_cast<size_t>(col + k) * kLanes, plane,
+                                      min_variance, min_weight);
+      value[k] = c.value;
+      ok[k] = __builtin_bit_cast(Lanes, c.ok);
+    }
+    Transpose8x8(value);
+    Transpose8x8(ok);
     for (int lane = 0; lane < rows; ++lane) {
       const size_t index = static_cast<size_t>(lane) * width + col;
-      const bool valid = mask[index] > 0 && ok[lane];
-      ncc[index] = valid ? value[lane] : nan;
+      const LaneMask valid = (LoadLanes(mask + index) > 0) & __builtin_bit_cast(LaneMask, ok[lane]);
+      StoreLanes(ncc + index, valid ? value[lane] : Lanes{} + nan);
+      for (int k = 0; k < kLanes; ++k) defined += valid[k] != 0;
+    }
+  }
+  for (; col < width; ++col) {
+    const ColumnNcc c =
+        NccOfColumn(sums + static_cast<size_t>(col) * kLanes, plane, min_variance, min_weight);
+    for (int lane = 0; lane < rows; ++lane) {
+      const size_t index = static_cast<size_t>(lane) * width + col;
+      const bool valid = mask[index] > 0 && c.ok[lane];
+      ncc[index] = valid ? c.value[lane] : nan;
       defined += valid;
     }
   }
@@ -293,32 +351,15 @@ MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
 }
 
 // Eight rows of one quantity ([lane][col], `stride` apart) into a block ([col][lane]), 8 x 8
-// tiles transposed in registers (unpack, shuffle, swap halves: three stages of shuffles).
+// tiles at a time.
 MS_VECTOR_CLONES void RowsToBlock(const float* __restrict rows, size_t stride,
                                   float* __restrict block, int n) {
-  typedef int32_t Mask __attribute__((vector_size(32)));
   int c = 0;
   for (; c + kLanes <= n; c += kLanes) {
     Lanes r[kLanes];
     for (int l = 0; l < kLanes; ++l) r[l] = LoadLanes(rows + l * stride + c);
-    const Mask lo = {0, 8, 1, 9, 4, 12, 5, 13}, hi = {2, 10, 3, 11, 6, 14, 7, 15};
-    const Mask lo2 = {0, 1, 8, 9, 4, 5, 12, 13}, hi2 = {2, 3, 10, 11, 6, 7, 14, 15};
-    const Mask lo4 = {0, 1, 2, 3, 8, 9, 10, 11}, hi4 = {4, 5, 6, 7, 12, 13, 14, 15};
-    Lanes u[kLanes], v[kLanes];
-    for (int p = 0; p < kLanes; p += 2) {
-      u[p] = __builtin_shuffle(r[p], r[p + 1], lo);
-      u[p + 1] = __builtin_shuffle(r[p], r[p + 1], hi);
-    }
-    for (int p = 0; p < kLanes; p += 4) {
-      v[p] = __builtin_shuffle(u[p], u[p + 2], lo2);
-      v[p + 1] = __builtin_shuffle(u[p], u[p + 2], hi2);
-      v[p + 2] = __builtin_shuffle(u[p + 1], u[p + 3], lo2);
-      v[p + 3] = __builtin_shuffle(u[p + 1], u[p + 3], hi2);
-    }
-    for (int k = 0; k < 4; ++k) {  // v[k]: columns k and k + 4 of rows 0-3, v[k + 4] of rows 4-7
-      StoreLanes(block + (c + k) * kLanes, __builtin_shuffle(v[k], v[k + 4], lo4));
-      StoreLanes(block + (c + k + 4) * kLanes, __builtin_shuffle(v[k], v[k + 4], hi4));
-    }
+    Transpose8x8(r);
+    for (int k = 0; k < kLanes; ++k) StoreLanes(block + (c + k) * kLanes, r[k]);
   }
   for (; c < n; ++c) {
     for (int l = 0; l < kLanes; ++l) block[c * kLanes + l] = rows[l * stride + c];
