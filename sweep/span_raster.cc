@@ -8,6 +8,10 @@
 #include "sweep/raster_rules.h"
 #include "sweep/vector_clones.h"
 
+#if MS_HAVE_AVX2_DISPATCH
+#include <immintrin.h>
+#endif
+
 namespace ms {
 using raster::Covers;
 using raster::Edge;
@@ -232,7 +236,67 @@ class RowEdge {
     return b;
   }
 
+#if MS_HAVE_AVX2_DISPATCH
+  // out[r] = Boundary(first + r + 0.5, lo, hi) for r < rows, 4 rows at a time: the common case
+  // (the guess and its outer neighbour settle it) in AVX2 lanes, with the same operations on the
+  // same doubles (no fused multiply-adds: the target has none), the rest by Boundary.
+  __attribute__((target("avx2"))) void Boundaries(int first, int rows, int lo, int hi,
+                                                  int* out) const {
+    const __m256d ex = _mm256_set1_pd(ex_), first_y = _mm256_set1_pd(first_.y);
+    const __m256d x0 = _mm256_set1_pd(x0_), y0 = _mm256_set1_pd(y0_);
+    const __m256d slope = _mm256_set1_pd(dx_per_dy_), half = _mm256_set1_pd(0.5);
+    const __m256d low = _mm256_set1_pd(lo - 1.0), high = _mm256_set1_pd(hi + 1.0);
+    const __m128i lo4 = _mm_set1_epi32(lo), hi4 = _mm_set1_epi32(hi);
+    const bool starts = dy_ < 0;  // the edge starts the covered columns; else it ends them
+    const __m128i outer = _mm_set1_epi32(starts ? -1 : 1);  // the guess's outer neighbour
+    const __m128i limit = starts ? lo4 : hi4;               // where that neighbour runs out
+    const __m128i last = starts ? hi4 : lo4;                // the guess's other end
+    const int none = starts ? hi + 1 : lo - 1;
+    for (int r = 0; r < rows; r += 4) {
+      const __m128i row = _mm_add_epi32(_mm_set1_epi32(first + r), _mm_setr_epi32(0, 1, 2, 3));
+      const __m256d y = _mm256_add_pd(_mm256_cvtepi32_pd(row), half);
+      const __m256d along = _mm256_mul_pd(ex, _mm256_sub_pd(y, first_y));
+      __m256d x =
+          _mm256_sub_pd(_mm256_add_pd(x0, _mm256_mul_pd(_mm256_sub_pd(y, y0), slope)), half);
+      const int ordered = _mm256_movemask_pd(_mm256_cmp_pd(x, x, _CMP_ORD_Q));
+      x = _mm256_blendv_pd(x, low, _mm256_cmp_pd(x, low, _CMP_LT_OQ));  // std::clamp
+      x = _mm256_blendv_pd(x, high, _mm256_cmp_pd(high, x, _CMP_LT_OQ));
+      __m128i c = _mm256_cvttpd_epi32(x);
+      if (starts) c = _mm_add_epi32(c, _mm_set1_epi32(1));
+      c = _mm_min_epi32(_mm_max_epi32(c, lo4), hi4);
+      const int at = PassesAvx2(along, c);
+      const int beyond =
+          PassesAvx2(along, _mm_add_epi32(c, outer)) & ~Bits(_mm_cmpeq_epi32(c, limit));
+      const int settled = ordered & ~beyond & (at | Bits(_mm_cmpeq_epi32(c, last)));
+      alignas(16) int guess[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(guess), c);
+      for (int k = 0; k < 4 && r + k < rows; ++k) {
+        out[r + k] = (settled >> k & 1) ? ((at >> k & 1) ? guess[k] : none)
+                                        : Boundary(first + r + k + 0.5, lo, hi);
+      }
+    }
+  }
+#endif
+
  private:
+#if MS_HAVE_AVX2_DISPATCH
+  // Passes(along, c) for 4 rows: one bit per row.
+  __attribute__((target("avx2"))) int PassesAvx2(__m256d along, __m128i c) const {
+    const __m256d ey = _mm256_set1_pd(ey_), zero = _mm256_setzero_pd();
+    const __m256d centre = _mm256_add_pd(_mm256_cvtepi32_pd(c), _mm256_set1_pd(0.5));
+    const __m256d w =
+        _mm256_sub_pd(along, _mm256_mul_pd(ey, _mm256_sub_pd(centre, _mm256_set1_pd(first_.x))));
+    const __m256d inside =
+        negate_ ? _mm256_cmp_pd(w, zero, _CMP_LT_OQ) : _mm256_cmp_pd(w, zero, _CMP_GT_OQ);
+    const int on_edge = top_left_ ? _mm256_movemask_pd(_mm256_cmp_pd(w, zero, _CMP_EQ_OQ)) : 0;
+    return _mm256_movemask_pd(inside) | on_edge;
+  }
+  // One bit per lane of a comparison's result.
+  __attribute__((target("avx2"))) static int Bits(__m128i m) {
+    return _mm_movemask_ps(_mm_castsi128_ps(m));
+  }
+#endif
+
   bool negate_;                 // the edge runs from the lexicographically larger end: Edge negates
   bool top_left_;               // raster::TopLeft of the directed edge
   Point2 first_;                // the smaller end, which raster::Edge evaluates from
@@ -255,6 +319,9 @@ void SpanRasterizer::FillRows(const Projected& t, int row_begin, int row_end) {
   const std::array<RowEdge, 3> edges = {RowEdge(p[1], p[2]), RowEdge(p[2], p[0]),
                                         RowEdge(p[0], p[1])};
   const int lo = t.col_lo, hi = t.col_hi;
+#if MS_HAVE_AVX2_DISPATCH
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+#endif
   for (int first = row_begin; first <= row_end; first += kRowsAtOnce) {
     const int rows = std::min(kRowsAtOnce, row_end - first + 1);
     std::array<int, kRowsAtOnce> begin, end;  // inclusive
@@ -265,12 +332,22 @@ void SpanRasterizer::FillRows(const Projected& t, int row_begin, int row_end) {
         for (int r = 0; r < rows; ++r) {
           if (!e.Passes(e.AlongRow(first + r + 0.5), lo)) end[r] = lo - 1;
         }
-      } else if (e.dy() < 0) {
-        for (int r = 0; r < rows; ++r)
-          begin[r] = std::max(begin[r], e.Boundary(first + r + 0.5, lo, hi));
+        continue;
+      }
+      std::array<int, kRowsAtOnce> ends;
+#if MS_HAVE_AVX2_DISPATCH
+      if (avx2) {
+        e.Boundaries(first, rows, lo, hi, ends.data());
       } else {
-        for (int r = 0; r < rows; ++r)
-          end[r] = std::min(end[r], e.Boundary(first + r + 0.5, lo, hi));
+        for (int r = 0; r < rows; ++r) ends[r] = e.Boundary(first + r + 0.5, lo, hi);
+      }
+#else
+      for (int r = 0; r < rows; ++r) ends[r] = e.Boundary(first + r + 0.5, lo, hi);
+#endif
+      if (e.dy() < 0) {
+        for (int r = 0; r < rows; ++r) begin[r] = std::max(begin[r], ends[r]);
+      } else {
+        for (int r = 0; r < rows; ++r) end[r] = std::min(end[r], ends[r]);
       }
     }
     for (int r = 0; r < rows; ++r) {
