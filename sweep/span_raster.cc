@@ -236,12 +236,22 @@ class RowEdge {
     return b;
   }
 
+  // out[r] = Boundary(first + r + 0.5, lo, hi) for r < rows.
+  void Boundaries(int first, int rows, int lo, int hi, int* out) const {
 #if MS_HAVE_AVX2_DISPATCH
-  // out[r] = Boundary(first + r + 0.5, lo, hi) for r < rows, 4 rows at a time: the common case
-  // (the guess and its outer neighbour settle it) in AVX2 lanes, with the same operations on the
-  // same doubles (no fused multiply-adds: the target has none), the rest by Boundary.
-  __attribute__((target("avx2"))) void Boundaries(int first, int rows, int lo, int hi,
-                                                  int* out) const {
+    static const bool avx2 = __builtin_cpu_supports("avx2");
+    if (avx2) return BoundariesAvx2(first, rows, lo, hi, out);
+#endif
+    for (int r = 0; r < rows; ++r) out[r] = Boundary(first + r + 0.5, lo, hi);
+  }
+
+ private:
+#if MS_HAVE_AVX2_DISPATCH
+  // Boundaries, 4 rows at a time: the common case (the guess and its outer neighbour settle it)
+  // in AVX2 lanes, with the same operations on the same doubles (no fused multiply-adds: the
+  // target has none), the rest (and any row whose crossing is NaN) by Boundary.
+  __attribute__((target("avx2"))) void BoundariesAvx2(int first, int rows, int lo, int hi,
+                                                      int* out) const {
     const __m256d ex = _mm256_set1_pd(ex_), first_y = _mm256_set1_pd(first_.y);
     const __m256d x0 = _mm256_set1_pd(x0_), y0 = _mm256_set1_pd(y0_);
     const __m256d slope = _mm256_set1_pd(dx_per_dy_), half = _mm256_set1_pd(0.5);
@@ -276,10 +286,7 @@ class RowEdge {
       }
     }
   }
-#endif
 
- private:
-#if MS_HAVE_AVX2_DISPATCH
   // Passes(along, c) for 4 rows: one bit per row.
   __attribute__((target("avx2"))) int PassesAvx2(__m256d along, __m128i c) const {
     const __m256d ey = _mm256_set1_pd(ey_), zero = _mm256_setzero_pd();
@@ -319,9 +326,6 @@ void SpanRasterizer::FillRows(const Projected& t, int row_begin, int row_end) {
   const std::array<RowEdge, 3> edges = {RowEdge(p[1], p[2]), RowEdge(p[2], p[0]),
                                         RowEdge(p[0], p[1])};
   const int lo = t.col_lo, hi = t.col_hi;
-#if MS_HAVE_AVX2_DISPATCH
-  static const bool avx2 = __builtin_cpu_supports("avx2");
-#endif
   for (int first = row_begin; first <= row_end; first += kRowsAtOnce) {
     const int rows = std::min(kRowsAtOnce, row_end - first + 1);
     std::array<int, kRowsAtOnce> begin, end;  // inclusive
@@ -335,15 +339,7 @@ void SpanRasterizer::FillRows(const Projected& t, int row_begin, int row_end) {
         continue;
       }
       std::array<int, kRowsAtOnce> ends;
-#if MS_HAVE_AVX2_DISPATCH
-      if (avx2) {
-        e.Boundaries(first, rows, lo, hi, ends.data());
-      } else {
-        for (int r = 0; r < rows; ++r) ends[r] = e.Boundary(first + r + 0.5, lo, hi);
-      }
-#else
-      for (int r = 0; r < rows; ++r) ends[r] = e.Boundary(first + r + 0.5, lo, hi);
-#endif
+      e.Boundaries(first, rows, lo, hi, ends.data());
       if (e.dy() < 0) {
         for (int r = 0; r < rows; ++r) begin[r] = std::max(begin[r], ends[r]);
       } else {
