@@ -462,6 +462,12 @@ class Coordinator::Impl {
 
   void OnError(const std::string& peer, const std::string& sender, const wire::Error& error,
                double now) {
+    if (error.code() == wire::Error::BUSY) {
+      spdlog::info("worker {} did not take job {}: {}", sender, JobName(error.job_id()),
+                   error.message());
+      scheduler_.OnBusy(peer, sender, error.job_id(), BusyJob(error, session_), now);
+      return;
+    }
     const bool ours = error.session_id() == session_ && error.job_id() != 0;
     if (!ours) {
       scheduler_.Touch(peer, sender, now);

@@ -131,6 +131,30 @@ void JobScheduler::OnWorkerFailure(const std::string& peer, const std::string& n
   }
 }
 
+void JobScheduler::OnBusy(const std::string& peer, const std::string& name, uint64_t refused,
+                          uint64_t busy_with, double now) {
+  Worker& worker = Register(peer, name, now);
+  auto it = jobs_.find(refused);
+  if (it != jobs_.end() && it->second.state != State::kDone) {
+    Job& job = it->second;
+    if (worker.job == refused && job.attempts > 0) --job.attempts;  // it never started there
+    if (busy_with != refused) {
+      job.holders.erase(peer);
+      if (job.state == State::kRunning && job.holders.empty()) job.state = State::kPending;
+    }
+  }
+  worker.job = busy_with;
+  auto busy = jobs_.find(busy_with);
+  if (busy != jobs_.end() && busy->second.state != State::kDone) {
+    Job& job = busy->second;
+    job.holders.insert(peer);
+    if (job.state == State::kPending) {
+      job.state = State::kRunning;
+      job.lease_deadline = now + options_.lease_s;
+    }
+  }
+}
+
 void JobScheduler::Withdraw(const std::string& peer, uint64_t job_id) {
   auto worker = workers_.find(peer);
   // Its idle time stands: it never started, so it stays first in line for the next job.

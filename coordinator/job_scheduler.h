@@ -72,6 +72,12 @@ class JobScheduler {
   // the queue; the worker is idle.
   void OnWorkerFailure(const std::string& peer, const std::string& name, uint64_t job_id,
                        double now);
+  // The worker did not take `refused`: it is still on `busy_with` (a job of this iteration, or
+  // kForeignJob from coordinator/peer_talk.h: another session's, or unknown), e.g. one it got
+  // before a reconnection under another peer. The hand-out counts as no attempt; the worker stays
+  // out of the idle pool until it reports, and a job of ours it is on is running with it.
+  void OnBusy(const std::string& peer, const std::string& name, uint64_t refused,
+              uint64_t busy_with, double now);
   // The job handed to `peer` turned out to have nothing to do before it was sent (its camera
   // sees no face): it is done, counted for no worker, and the peer is idle as before.
   void Withdraw(const std::string& peer, uint64_t job_id);

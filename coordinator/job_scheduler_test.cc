@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "base/error.h"
 
 namespace ms {
@@ -220,6 +222,59 @@ TEST(JobScheduler, HeartbeatsReconcileTheWorkersView) {
   // READY from a worker we thought busy (it restarted): its job is requeued.
   s.OnReady("px", "x", clock.now);
   EXPECT_EQ(s.num_pending(), 1u);
+}
+
+// A worker that reconnected (a new peer) while still sweeping a job it got before answers a job
+// with BUSY. Taken as a failure, that made the worker idle, the job went straight back to it, and
+// the run stopped on "handed out 5 times" within a millisecond.
+TEST(JobScheduler, BusyIsNoAttemptAndKeepsTheWorkerBusy) {
+  FakeClock clock;
+  JobScheduler s(TestOptions());  // max_attempts 3
+  s.StartIteration(1, {1, 2, 3});
+  s.OnReady("pa", "a", clock.now);
+  // a is in fact sweeping job 1, received under an earlier peer: each hand-out of job 1 to it
+  // is refused, and job 1 stays with it.
+  for (int i = 0; i < 5; ++i) {
+    const auto assigned = s.Assign(clock.now);
+    if (assigned.empty()) break;
+    ASSERT_EQ(assigned[0].peer, "pa");
+    ASSERT_EQ(assigned[0].job_id, 1u);
+    s.OnBusy("pa", "a", 1, 1, clock.now);
+  }
+  EXPECT_FALSE(s.exhausted_job().has_value());
+  EXPECT_EQ(s.num_running(), 1u);
+  EXPECT_TRUE(s.Assign(clock.now).empty());  // a is busy
+  // Another worker gets job 2; a reports job 1 and is idle again.
+  s.OnReady("pb", "b", clock.now);
+  auto assigned = s.Assign(clock.now);
+  ASSERT_EQ(assigned.size(), 1u);
+  EXPECT_EQ(assigned[0].job_id, 2u);
+  EXPECT_EQ(s.OnResult("pa", "a", 1, clock.now), Outcome::kAccepted);
+  assigned = s.Assign(clock.now);
+  ASSERT_EQ(assigned.size(), 1u);
+  EXPECT_EQ(assigned[0].peer, "pa");
+  EXPECT_EQ(assigned[0].job_id, 3u);
+  EXPECT_EQ(assigned[0].attempt, 1);
+  // Busy with a job of ours that was requeued: the refused job goes elsewhere, and the job it is
+  // on is not handed out again.
+  s.OnBusy("pa", "a", 3, 2, clock.now);
+  EXPECT_EQ(s.num_pending(), 1u);              // 3
+  s.OnWorkerFailure("pb", "b", 2, clock.now);  // b gives up on 2: a still has it
+  EXPECT_EQ(s.num_pending(), 1u);
+  assigned = s.Assign(clock.now);
+  ASSERT_EQ(assigned.size(), 1u);
+  EXPECT_EQ(assigned[0].peer, "pb");
+  EXPECT_EQ(assigned[0].job_id, 3u);
+  EXPECT_EQ(assigned[0].attempt, 1);  // a's refusal was no attempt
+  // Busy with another session's job (kForeignJob): no job until it reports.
+  s.StartIteration(2, {4});
+  s.OnBusy("pb", "b", 4, std::numeric_limits<uint64_t>::max(), clock.now);
+  EXPECT_EQ(s.num_pending(), 1u);
+  EXPECT_TRUE(s.Assign(clock.now).empty());  // a is on 2 (late now), b on a foreign job
+  EXPECT_EQ(s.OnResult("pb", "b", std::numeric_limits<uint64_t>::max(), clock.now), Outcome::kLate);
+  assigned = s.Assign(clock.now);
+  ASSERT_EQ(assigned.size(), 1u);
+  EXPECT_EQ(assigned[0].peer, "pb");
 }
 
 TEST(JobScheduler, HeartbeatsAreDueOncePerInterval) {

@@ -77,6 +77,13 @@ inline uint64_t HeartbeatJob(const wire::Heartbeat& heartbeat, uint64_t session)
   return kForeignJob;
 }
 
+// The job a BUSY error says its worker is on, for the scheduler: the job, or kForeignJob when
+// it is another session's or not named (the worker is busy all the same).
+inline uint64_t BusyJob(const wire::Error& error, uint64_t session) {
+  if (error.busy_job_id() != 0 && error.busy_session_id() == session) return error.busy_job_id();
+  return kForeignJob;
+}
+
 // Answers an ImageRequest from `catalog` (null: the coordinator is still starting) and logs
 // a refusal, or the start of a file's transfer.
 void ServeImageRequest(const ImageCatalog* catalog, const wire::ImageRequest& request,

@@ -317,6 +317,12 @@ class RefineDispatcher::Impl {
 
   void OnError(const std::string& peer, const std::string& sender, const wire::Error& error,
                double now) {
+    if (error.code() == wire::Error::BUSY) {
+      spdlog::info("worker {} did not take refinement job {}: {}", sender, PairName(error.job_id()),
+                   error.message());
+      scheduler_.OnBusy(peer, sender, error.job_id(), BusyJob(error, session_), now);
+      return;
+    }
     const bool ours = error.session_id() == session_ && OfThisRound(error.job_id());
     if (!ours) {
       scheduler_.Touch(peer, sender, now);

@@ -260,8 +260,18 @@ class Worker::Impl {
 
   void OnJob(wire::Job&& job) {
     if (phase_ != Phase::kIdle) {
-      SendError(wire::Error::WORKER_FAILURE, job.job_id(), job.session_id(),
-                fmt::format("busy with job {}", current_ ? current_->job.job_id() : 0));
+      wire::Envelope envelope = stamper_.New();
+      wire::Error* error = envelope.mutable_error();
+      error->set_code(wire::Error::BUSY);
+      error->set_job_id(job.job_id());
+      error->set_session_id(job.session_id());
+      if (current_) {
+        error->set_busy_job_id(current_->job.job_id());
+        error->set_busy_session_id(current_->job.session_id());
+      }
+      error->set_message(
+          fmt::format("busy with job {}", current_ ? JobName(current_->job.job_id()) : "?"));
+      Send(envelope);
       return;
     }
     last_job_id_ = job.job_id();

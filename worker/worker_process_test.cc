@@ -280,6 +280,24 @@ TEST_F(WorkerProcessTest, HeartbeatsNameTheJobWhileSweeping) {
   SendShutdown();
 }
 
+TEST_F(WorkerProcessTest, AJobWhileSweepingIsRefusedAsBusyNamingTheCurrentJob) {
+  StartWorker(0.4);
+  wire::Envelope envelope;
+  ASSERT_TRUE(Next(&envelope));
+  SendJob(MakeJob(9));
+  SendJob(MakeJob(10));
+  ASSERT_TRUE(Next(&envelope));
+  ASSERT_TRUE(envelope.has_error()) << BodyName(envelope);
+  EXPECT_EQ(envelope.error().code(), wire::Error::BUSY);
+  EXPECT_EQ(envelope.error().job_id(), 10u);
+  EXPECT_EQ(envelope.error().busy_job_id(), 9u);
+  EXPECT_EQ(envelope.error().busy_session_id(), 77u);
+  ASSERT_TRUE(Next(&envelope));
+  ASSERT_TRUE(envelope.has_result()) << BodyName(envelope);
+  EXPECT_EQ(envelope.result().job_id(), 9u);
+  SendShutdown();
+}
+
 TEST_F(WorkerProcessTest, FetchesImagesByHashWhenThePathIsNotReadableAndCachesThem) {
   options_.limits.image_chunk_bytes = 1024;  // several pieces for a PNG of a few hundred bytes+
   StartWorker();
