@@ -218,8 +218,14 @@ TEST_F(MultiProcessTest, AKilledCoordinatorResumesToTheIdenticalMesh) {
   std::vector<std::string> args = CoordinatorArgs(out, port);
   args.push_back("--resume");
   ChildProcess second(kBinary, args, out + "/coordinator2.log");
-  ASSERT_TRUE(second.Wait(90)) << second.Log();
-  EXPECT_EQ(second.exit_code(), 0) << second.Log();
+  // On a failure, the workers' side of it too (their logs go with the test's directory).
+  const auto logs = [&] {
+    std::string all = second.Log();
+    for (auto& worker : pool) all += "\n--- worker ---\n" + worker->Log();
+    return all;
+  };
+  ASSERT_TRUE(second.Wait(90)) << logs();
+  EXPECT_EQ(second.exit_code(), 0) << logs();
   EXPECT_NE(second.Log().find("replayed iteration 1"), std::string::npos) << second.Log();
   for (auto& worker : pool) {
     EXPECT_TRUE(worker->Wait(10)) << worker->Log();
