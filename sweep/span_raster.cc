@@ -13,7 +13,6 @@
 #endif
 
 namespace ms {
-using raster::Covers;
 using raster::Edge;
 using raster::Point2;
 

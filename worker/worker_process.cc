@@ -201,14 +201,20 @@ class Worker::Impl {
     Send(envelope);
   }
 
-  void SendError(wire::Error::Code code, uint64_t job_id, uint64_t session,
-                 const std::string& message) {
+  wire::Envelope ErrorEnvelope(wire::Error::Code code, uint64_t job_id, uint64_t session,
+                               const std::string& message) {
     wire::Envelope envelope = stamper_.New();
     wire::Error* error = envelope.mutable_error();
     error->set_code(code);
     error->set_job_id(job_id);
     error->set_session_id(session);
     error->set_message(message);
+    return envelope;
+  }
+
+  void SendError(wire::Error::Code code, uint64_t job_id, uint64_t session,
+                 const std::string& message) {
+    wire::Envelope envelope = ErrorEnvelope(code, job_id, session, message);
     Send(envelope);
   }
 
@@ -260,17 +266,13 @@ class Worker::Impl {
 
   void OnJob(wire::Job&& job) {
     if (phase_ != Phase::kIdle) {
-      wire::Envelope envelope = stamper_.New();
-      wire::Error* error = envelope.mutable_error();
-      error->set_code(wire::Error::BUSY);
-      error->set_job_id(job.job_id());
-      error->set_session_id(job.session_id());
-      if (current_) {
-        error->set_busy_job_id(current_->job.job_id());
-        error->set_busy_session_id(current_->job.session_id());
-      }
-      error->set_message(
+      wire::Envelope envelope = ErrorEnvelope(
+          wire::Error::BUSY, job.job_id(), job.session_id(),
           fmt::format("busy with job {}", current_ ? JobName(current_->job.job_id()) : "?"));
+      if (current_) {
+        envelope.mutable_error()->set_busy_job_id(current_->job.job_id());
+        envelope.mutable_error()->set_busy_session_id(current_->job.session_id());
+      }
       Send(envelope);
       return;
     }
