@@ -12,6 +12,7 @@
 #include "base/error.h"
 #include "mesh/visible_mesh.h"
 #include "scene/camera.h"
+#include "sweep/image_noise.h"
 #include "sweep/vector_clones.h"
 
 namespace ms {
@@ -58,13 +59,13 @@ void CheckCamera(const SweepCamera& camera, const std::string& job, const char* 
 
 std::string SweepStats::Summary() const {
   return fmt::format(
-      "{}x{} (level {}), alpha {:.4g}, {} offsets x {} neighbours, {} tiles, {:.3g} hypotheses "
-      "({:.3g} valid) in {:.3f} s ({:.3g}/s; prepare {:.3f}, raster {:.3f}, reproject {:.3f}, "
-      "ncc {:.3f}, reduce {:.3f})",
-      image_width, image_height, pyramid_level, alpha, num_offsets, num_neighbours,
-      tiles_x * tiles_y, static_cast<double>(hypotheses), static_cast<double>(valid_hypotheses),
-      total_s, total_s > 0 ? hypotheses / total_s : 0.0, prepare_s, raster_s, reproject_s, ncc_s,
-      reduce_s);
+      "{}x{} (level {}), noise {:.2f} grey levels (smoothed: sigma {:.2f} px), alpha {:.4g}, {} "
+      "offsets x {} neighbours, {} tiles, {:.3g} hypotheses ({:.3g} valid) in {:.3f} s ({:.3g}/s; "
+      "prepare {:.3f}, raster {:.3f}, reproject {:.3f}, ncc {:.3f}, reduce {:.3f})",
+      image_width, image_height, pyramid_level, image_noise, smoothing_px, alpha, num_offsets,
+      num_neighbours, tiles_x * tiles_y, static_cast<double>(hypotheses),
+      static_cast<double>(valid_hypotheses), total_s, total_s > 0 ? hypotheses / total_s : 0.0,
+      prepare_s, raster_s, reproject_s, ncc_s, reduce_s);
 }
 
 void CheckSweepJob(const SweepJob& job) {
@@ -187,6 +188,8 @@ SweepStats PreparedSweepStats(const PreparedSweep& prep) {
   stats.image_width = prep.camera.view.intrinsics.width;
   stats.image_height = prep.camera.view.intrinsics.height;
   stats.pyramid_level = prep.pyramid_level;
+  stats.image_noise = prep.image_noise;
+  stats.smoothing_px = prep.smoothing_px;
   stats.alpha = prep.alpha;
   stats.median_depth = prep.median_depth;
   stats.num_offsets = static_cast<int>(prep.offsets.size());
@@ -318,6 +321,24 @@ cv::Size SweptImageSize(int width, int height, int level) {
           std::max(1, static_cast<int>(std::lround(height * factor)))};
 }
 
+void SmoothNoisyImages(const SweepOptions& options, PreparedSweep* prep) {
+  std::vector<cv::Mat*> images = {&prep->camera.image};
+  for (SweepCamera& n : prep->neighbours) images.push_back(&n.image);
+  double noise = 0;  // in the images' units, gray in [0, 1]
+  for (const cv::Mat* image : images) noise = std::max(noise, EstimateNoiseSigma(*image));
+  prep->image_noise = 255 * noise;
+  prep->smoothing_px =
+      SmoothingSigmaPx(prep->image_noise, options.image_noise_target, options.gaussian_sigma_px);
+  if (prep->smoothing_px == 0) return;
+  for (cv::Mat* image : images) {
+    if (image->empty()) continue;
+    cv::Mat smoothed;  // never in place: level 0 shares the job's pixels
+    cv::GaussianBlur(*image, smoothed, cv::Size(), prep->smoothing_px, prep->smoothing_px,
+                     cv::BORDER_REFLECT_101);
+    *image = smoothed;
+  }
+}
+
 PreparedSweep PrepareSweep(const SweepJob& job) {
   CheckSweepJob(job);
   const SweepOptions& options = job.options;
@@ -334,6 +355,7 @@ PreparedSweep PrepareSweep(const SweepJob& job) {
   for (const SweepCamera& n : job.neighbours) {
     prep.neighbours.push_back(CameraAtPyramidLevel(n, level));
   }
+  SmoothNoisyImages(options, &prep);
   prep.scale_x =
       static_cast<double>(prep.camera.view.intrinsics.width) / job.camera.view.intrinsics.width;
   prep.scale_y =

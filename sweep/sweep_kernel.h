@@ -52,6 +52,8 @@ struct SweepPoint {
 struct SweepStats {
   int image_width = 0, image_height = 0;  // swept resolution
   int pyramid_level = 0;
+  double image_noise = 0;   // grey levels (of 255), the job's noisiest image at that level
+  double smoothing_px = 0;  // sigma of the Gaussian its images were smoothed with (0: none)
   double alpha = 0;         // scene units, as used
   double median_depth = 0;  // of the visible mesh's vertices in C
   int num_offsets = 0;      // swept meshes (2*floor((N-1)/2)+1)
@@ -118,6 +120,8 @@ struct PreparedSweep {
   double scale_x = 1, scale_y = 1;  // swept / full-resolution pixel coordinates
   SweepCamera camera;               // at the swept resolution (id and pose as in the job)
   std::vector<SweepCamera> neighbours;
+  double image_noise = 0;   // grey levels (of 255), the noisiest image at the swept resolution
+  double smoothing_px = 0;  // sigma every image was smoothed with (0: none; SmoothNoisyImages)
   std::vector<int> offsets;
   double alpha = 0;
   double median_depth = 0;
@@ -140,9 +144,15 @@ cv::Size SweptImageSize(int width, int height, int level);
 // geometry only) stays without one.
 SweepCamera CameraAtPyramidLevel(const SweepCamera& camera, int level);
 
+// Estimates the noise of the prepared images (the noisiest one's) and, if it is above
+// options.image_noise_target, smooths them all with the same Gaussian (sweep/image_noise.h): one
+// filter for all, so that a perfect match stays one.
+void SmoothNoisyImages(const SweepOptions& options, PreparedSweep* prep);
+
 // Checks the job (CheckSweepJob), picks the pyramid level, resizes images (cv::INTER_AREA) and
 // scales intrinsics (fx, cx by the width ratio, fy, cy by the height ratio: exact with the
-// corner-origin convention), and derives alpha (docs/sweep.md).
+// corner-origin convention), smooths noisy images (SmoothNoisyImages), and derives alpha
+// (docs/sweep.md).
 PreparedSweep PrepareSweep(const SweepJob& job);
 
 // The stats every kernel knows before sweeping: the swept resolution, level, alpha, median

@@ -33,6 +33,13 @@ MS_OPTION(double, min_window_weight, 0.5, "min-window-weight",
 // A point is visible in a neighbour if its depth is at most the shadow map's times (1 + this).
 MS_OPTION(double, occlusion_tolerance, 0.01, "occlusion-tolerance",
           "relative depth tolerance of the neighbours' shadow maps", AtLeast(0))
+// Noisy images are smoothed (one Gaussian for the job's images) until Immerkaer's estimate of
+// their noise is about this; at 0.5 photographs as the real sets' stay as they are
+// (sweep/image_noise.h, docs/sweep.md "Noisy images").
+MS_OPTION(double, image_noise_target, 0.5, "image-noise-target",
+          "smooth noisier images to about this noise before matching (grey levels of 255; 0 = "
+          "never smooth)",
+          AtLeast(0))
 // Images larger than this (longest side) are swept at a pyramid level, halving until they fit
 // (3072x2048 -> 1536x1024).
 MS_OPTION(int, max_image_dimension, 1600, "max-image-dimension",

@@ -21,6 +21,8 @@ void SweepResultToWire(const SweepResult& result, wire::Result* out) {
   k->set_image_width(s.image_width);
   k->set_image_height(s.image_height);
   k->set_pyramid_level(s.pyramid_level);
+  k->set_image_noise(s.image_noise);
+  k->set_smoothing_px(s.smoothing_px);
   k->set_alpha(s.alpha);
   k->set_median_depth(s.median_depth);
   k->set_num_offsets(s.num_offsets);
