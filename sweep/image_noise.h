@@ -14,6 +14,7 @@ namespace ms {
 inline constexpr int kNoiseBlockPx = 16;
 inline constexpr double kNoiseQuantile = 0.1;
 inline constexpr double kMaxSmoothingOfWindow = 0.25;
+inline constexpr double kSmoothingStepPx = 0.05;
 
 // The standard deviation of additive white noise in a gray image (same units as its pixels).
 // Immerkaer's estimator (J. Immerkaer, "Fast noise variance estimation", CVIU 64(2), 1996):
@@ -25,7 +26,8 @@ inline constexpr double kMaxSmoothingOfWindow = 0.25;
 double EstimateNoiseSigma(const cv::Mat& gray);
 
 // The Gaussian's sigma (pixels) that brings white noise of `noise_sigma` down to about
-// `target_sigma`: noise_sigma / (2 sqrt(pi) target_sigma), at most a quarter of the NCC window's
+// `target_sigma`: noise_sigma / (2 sqrt(pi) target_sigma) rounded to kSmoothingStepPx, at most a
+// quarter of the NCC window's
 // `window_sigma_px` (texture at the pixel scale also reads as noise, and smoothing it away
 // would leave the window nothing to match); 0 (no smoothing) when that is under half a pixel,
 // where a discrete Gaussian barely filters, or when target_sigma is 0.

@@ -75,7 +75,7 @@ TEST(ImageNoise, FlatAndTinyImagesReadAsNoiseFree) {
 
 TEST(ImageNoise, TheSmoothingBringsWhiteNoiseDownToTheTarget) {
   const double sigma_px = SmoothingSigmaPx(5, 1, 8);
-  EXPECT_NEAR(sigma_px, 5 / (2 * std::sqrt(M_PI)), 1e-12);
+  EXPECT_DOUBLE_EQ(sigma_px, 1.40);  // 5 / (2 sqrt(pi)) = 1.41, in steps of 0.05 px
   cv::Mat noise = WithNoise(cv::Mat(480, 640, CV_32F, cv::Scalar(0.5)), 5 * kGrey, 13);
   cv::Mat smoothed;
   cv::GaussianBlur(noise, smoothed, cv::Size(), sigma_px, sigma_px, cv::BORDER_REFLECT_101);
@@ -88,7 +88,7 @@ TEST(ImageNoise, NoSmoothingUnderHalfAPixelOrAtTargetZeroAndAtMostAQuarterWindow
   EXPECT_EQ(SmoothingSigmaPx(0.5, 0.5, 8), 0);  // 0.28 px: photographs as the real sets'
   EXPECT_EQ(SmoothingSigmaPx(5, 0, 8), 0);
   EXPECT_EQ(SmoothingSigmaPx(0, 0.5, 8), 0);
-  EXPECT_GT(SmoothingSigmaPx(0.9, 0.5, 8), 0.5);
+  EXPECT_DOUBLE_EQ(SmoothingSigmaPx(0.9, 0.5, 8), 0.5);  // 0.508 px
   EXPECT_DOUBLE_EQ(SmoothingSigmaPx(50, 0.5, 8), 2);
   EXPECT_DOUBLE_EQ(SmoothingSigmaPx(50, 0.5, 1), 0);  // a quarter of 1 px is under half a pixel
 }

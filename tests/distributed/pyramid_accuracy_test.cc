@@ -170,24 +170,24 @@ TEST(PyramidAccuracy, UpwardPyramidReproducesTable1) {
 // inputs"), which the sweep smooths away before matching (docs/sweep.md, "Noisy images"), and
 // with 5 grey levels plus sparse points moved by 1% of the viewing distance (0.03). Before the
 // smoothing the upward pyramid with 5 grey levels found no point at all (closed MAE 0.1139).
-// Measured, closed / surface proper (coverage): 0.0130 / 0.0123 (97.2%).
+// Measured, closed / surface proper (coverage): 0.0135 / 0.0133 (98.0%).
 TEST(PyramidAccuracy, DownwardPyramidWithImageNoise) {
-  ExpectTable1Row({"pyramid-down", 2, 0, 0.07, 0.0137, 0.0130, 0.965});
+  ExpectTable1Row({"pyramid-down", 2, 0, 0.07, 0.0142, 0.0140, 0.975});
 }
 
-// Measured: 0.0102 / 0.0040 (90.8%).
+// Measured: 0.0122 / 0.0044 (88.8%).
 TEST(PyramidAccuracy, UpwardPyramidWithImageNoise) {
-  ExpectTable1Row({"pyramid-up", 2, 0, 0.09, 0.0108, 0.0042, 0.90});
+  ExpectTable1Row({"pyramid-up", 2, 0, 0.09, 0.0128, 0.0047, 0.88});
 }
 
-// Measured: 0.0146 / 0.0129 (94.8%).
+// Measured: 0.0157 / 0.0142 (94.8%).
 TEST(PyramidAccuracy, DownwardPyramidWithStrongImageNoiseAndNoisyPoints) {
-  ExpectTable1Row({"pyramid-down", 5, 0.03, 0.07, 0.0153, 0.0136, 0.94});
+  ExpectTable1Row({"pyramid-down", 5, 0.03, 0.07, 0.0165, 0.0149, 0.94});
 }
 
-// Measured: 0.0111 / 0.0062 (92.8%).
+// Measured: 0.0099 / 0.0073 (93.0%).
 TEST(PyramidAccuracy, UpwardPyramidWithStrongImageNoiseAndNoisyPoints) {
-  ExpectTable1Row({"pyramid-up", 5, 0.03, 0.09, 0.0117, 0.0066, 0.92});
+  ExpectTable1Row({"pyramid-up", 5, 0.03, 0.09, 0.0104, 0.0077, 0.925});
 }
 
 }  // namespace
