@@ -13,6 +13,7 @@ namespace ms {
 // figure and noise is everywhere, so the smoothest blocks measure the noise.
 inline constexpr int kNoiseBlockPx = 16;
 inline constexpr double kNoiseQuantile = 0.1;
+// The smoothing's sigma: at most this fraction of the NCC window's, in steps of this many pixels.
 inline constexpr double kMaxSmoothingOfWindow = 0.25;
 inline constexpr double kSmoothingStepPx = 0.05;
 
@@ -26,11 +27,11 @@ inline constexpr double kSmoothingStepPx = 0.05;
 double EstimateNoiseSigma(const cv::Mat& gray);
 
 // The Gaussian's sigma (pixels) that brings white noise of `noise_sigma` down to about
-// `target_sigma`: noise_sigma / (2 sqrt(pi) target_sigma) rounded to kSmoothingStepPx, at most a
-// quarter of the NCC window's
-// `window_sigma_px` (texture at the pixel scale also reads as noise, and smoothing it away
-// would leave the window nothing to match); 0 (no smoothing) when that is under half a pixel,
-// where a discrete Gaussian barely filters, or when target_sigma is 0.
+// `target_sigma`: noise_sigma / (2 sqrt(pi) target_sigma), at most kMaxSmoothingOfWindow times
+// the NCC window's `window_sigma_px` (texture at the pixel scale also reads as noise, and
+// smoothing it away would leave the window nothing to match), rounded to kSmoothingStepPx (so
+// the estimate's last bits do not change the images); 0 (no smoothing) when that is under half
+// a pixel, where a discrete Gaussian barely filters, or when target_sigma is 0.
 double SmoothingSigmaPx(double noise_sigma, double target_sigma, double window_sigma_px);
 
 }  // namespace ms
