@@ -17,7 +17,8 @@ inline constexpr double kNoiseQuantile = 0.1;
 inline constexpr double kMaxSmoothingOfWindow = 0.25;
 inline constexpr double kSmoothingStepPx = 0.05;
 
-// The standard deviation of additive white noise in a gray image (same units as its pixels).
+// The standard deviation of additive white noise in a gray CV_32FC1 image (as sweep jobs hold
+// them; same units as its pixels).
 // Immerkaer's estimator (J. Immerkaer, "Fast noise variance estimation", CVIU 64(2), 1996):
 // sqrt(pi/2) / 6 times the mean absolute response to the Laplacian difference mask
 // [1 -2 1; -2 4 -2; 1 -2 1], here over each block of kNoiseBlockPx^2 interior pixels, and the

@@ -249,10 +249,13 @@ MS_VECTOR_CLONES void HorizontalBlock(const FloatGaussian& g, const float* __res
   }
 }
 
+// Lane-wise comparison results (all bits set where true), and shuffle indices.
+typedef int32_t LaneMask __attribute__((vector_size(32)));
+
 // An 8 x 8 tile transposed in registers: r[l][k] -> r[k][l] (unpack, shuffle, swap halves: three
 // stages of shuffles).
 MS_ALWAYS_INLINE void Transpose8x8(Lanes r[kLanes]) {
-  typedef int32_t Mask __attribute__((vector_size(32)));
+  using Mask = LaneMask;
   const Mask lo = {0, 8, 1, 9, 4, 12, 5, 13}, hi = {2, 10, 3, 11, 6, 14, 7, 15};
   const Mask lo2 = {0, 1, 8, 9, 4, 5, 12, 13}, hi2 = {2, 3, 10, 11, 6, 7, 14, 15};
   const Mask lo4 = {0, 1, 2, 3, 8, 9, 10, 11}, hi4 = {4, 5, 6, 7, 12, 13, 14, 15};
@@ -272,8 +275,6 @@ MS_ALWAYS_INLINE void Transpose8x8(Lanes r[kLanes]) {
     r[k + 4] = __builtin_shuffle(v[k], v[k + 4], hi4);
   }
 }
-
-typedef int32_t LaneMask __attribute__((vector_size(32)));
 
 // WeightedNcc's formula for the 8 rows of one column of a block, from the six sums at `s`
 // ([quantity][col][lane], `plane` apart): the NCC, and where it is defined (all bits set) unless
