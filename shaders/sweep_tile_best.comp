@@ -3,7 +3,8 @@
 // tile finds the pixel with the highest NCC over the batch's offsets and all neighbours, ties to
 // the smaller k, then the earlier neighbour, then the earlier pixel in row-major order, and
 // replaces the tile's running best if strictly higher (running bests start at t_NCC; batches run
-// in increasing k, so ties keep the earlier batch). Also counts defined NCC values and covered
+// in increasing k, so ties keep the earlier batch). A pixel competes only where at least
+// u_required neighbours are above t_NCC at its offset. Also counts defined NCC values and covered
 // pixels of the batch for the statistics.
 layout(local_size_x = REDUCE_THREADS) in;
 
@@ -29,12 +30,22 @@ uniform int u_first_offset;   // k of layer 0
 uniform int u_width;          // C's image width
 uniform int u_batch;          // index of this batch (counter slot)
 uniform float u_threshold;    // t_NCC (float, as the reference compares)
+uniform int u_required;       // neighbours above t_NCC a winner needs (RequiredMatches)
 
 shared float s_ncc[REDUCE_THREADS];
 shared int s_layer[REDUCE_THREADS];  // b * neighbours + j
 shared int s_index[REDUCE_THREADS];  // pixel index inside the tile (row-major)
 shared uint s_defined[REDUCE_THREADS];
 shared uint s_covered[REDUCE_THREADS];
+
+// How many neighbours are above t_NCC at pixel p of layer group b.
+int MatchesAt(ivec2 p, int b) {
+  int matches = 0;
+  for (int j = 0; j < u_neighbours; ++j) {
+    if (imageLoad(u_ncc, ivec3(p, b * u_neighbours + j)).r > u_threshold) ++matches;
+  }
+  return matches;
+}
 
 // a beats b: higher NCC, or equal and earlier (layer, then pixel).
 bool Beats(float ncc_a, int layer_a, int index_a, float ncc_b, int layer_b, int index_b) {
@@ -72,7 +83,8 @@ void main() {
         for (int x = x0 + lid; x < x1; x += REDUCE_THREADS) {
           float value = imageLoad(u_ncc, ivec3(x, y, layer)).r;
           if (value >= -1.0) ++defined;
-          if (value > ncc) {
+          if (value > ncc && (u_required <= 1 ||
+                              (value > u_threshold && MatchesAt(ivec2(x, y), b) >= u_required))) {
             ncc = value;
             best_layer = layer;
             best_index = (y - y0) * tile_width + (x - x0);

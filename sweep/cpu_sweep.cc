@@ -274,6 +274,7 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, std::at
     map_pointers.push_back(m.data());
   }
   const float threshold = static_cast<float>(job.options.ncc_threshold);
+  const int required_matches = RequiredMatches(job.options, num_neighbours);
   Timer stage;
   for (; i < num_offsets; i = next->fetch_add(1)) {
     const int k = prep.offsets[i];
@@ -291,7 +292,7 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, std::at
     }
     stage.Restart();
     UpdateTileWinners(prep.tiles, k, map_pointers, slab.faces().data(), nullptr, threshold,
-                      &out.best);
+                      required_matches, &out.best);
     out.reduce_s += stage.Seconds();
   }
   return out;

@@ -12,6 +12,7 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <string>
 
 #include "base/error.h"
 #include "base/testing.h"
@@ -256,9 +257,15 @@ TEST(CpuSweep, TrueMeshWithOcclusionAndDefaultWindow) {
   job.options.num_offsets = 5;
   job.options.alpha = 0.03;
   job.options.gaussian_sigma_px = 8;
-  const SweepResult ref = ReferenceSweepKernel().Run(job);
-  ASSERT_GT(ref.points.size(), 30u);
-  ExpectSameWinners(ref, CpuSweepKernel().Run(job), ref.stats.median_depth, "cpu, occluder");
+  // The default rule (two matching neighbours) and the paper's (any one).
+  for (int required : {2, 1}) {
+    job.options.min_matching_neighbours = required;
+    const SweepResult ref = ReferenceSweepKernel().Run(job);
+    ASSERT_GT(ref.points.size(), 30u);
+    ExpectSameWinners(ref, CpuSweepKernel().Run(job), ref.stats.median_depth,
+                      "cpu, occluder, " + std::to_string(required) + " matching");
+    for (const SweepPoint& p : ref.points) EXPECT_GE(p.cameras.size(), 1u + required);
+  }
 }
 
 TEST(CpuSweep, ThreadsDoNotChangeTheResult) {

@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <string>
 #include <thread>
 
 #include "base/error.h"
@@ -269,11 +270,15 @@ TEST_F(GlslSweepTest, TrueMeshWithOcclusionAndDefaultWindow) {
   job.options.num_offsets = 5;
   job.options.alpha = 0.03;
   job.options.gaussian_sigma_px = 8;  // the default window (radius 24)
-  const SweepResult ref = ReferenceSweepKernel().Run(job);
-  ASSERT_GT(ref.points.size(), 30u);
-  for (GlslSweepKernel* kernel : Kernels()) {
-    SCOPED_TRACE(Label(kernel));
-    ExpectSameWinners(ref, kernel->Run(job), ref.stats.median_depth, Label(kernel));
+  // The default rule (two matching neighbours) and the paper's (any one).
+  for (int required : {2, 1}) {
+    job.options.min_matching_neighbours = required;
+    const SweepResult ref = ReferenceSweepKernel().Run(job);
+    ASSERT_GT(ref.points.size(), 30u);
+    for (GlslSweepKernel* kernel : Kernels()) {
+      SCOPED_TRACE(Label(kernel) + ", " + std::to_string(required) + " matching");
+      ExpectSameWinners(ref, kernel->Run(job), ref.stats.median_depth, Label(kernel));
+    }
   }
 }
 

@@ -151,6 +151,7 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
   }
   std::vector<TileWinner> best(prep.tiles.NumTiles());
   const float threshold = static_cast<float>(options.ncc_threshold);
+  const int required_matches = RequiredMatches(options, num_neighbours);
   stats.prepare_s = stage.Seconds();
 
   std::vector<cv::Mat> ncc(num_neighbours);
@@ -180,7 +181,7 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
     std::vector<const float*> maps;
     for (const cv::Mat& m : ncc) maps.push_back(m.ptr<float>());
     UpdateTileWinners(prep.tiles, k, maps, camera_raster.face().data(),
-                      camera_raster.world().data(), threshold, &best);
+                      camera_raster.world().data(), threshold, required_matches, &best);
     stats.reduce_s += stage.Seconds();
   }
 

@@ -231,10 +231,19 @@ bool BeatsInSweepOrder(const TileWinner& a, const TileWinner& b) {
          std::make_tuple(b.offset, b.neighbour, b.row, b.col);
 }
 
+int RequiredMatches(const SweepOptions& options, int num_neighbours) {
+  return std::clamp(options.min_matching_neighbours, 1, std::max(1, num_neighbours));
+}
+
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
                        const int32_t* face, const Eigen::Vector3d* world, float threshold,
-                       std::vector<TileWinner>* best) {
+                       int required_matches, std::vector<TileWinner>* best) {
   const int num_neighbours = static_cast<int>(ncc.size());
+  const auto matches_at = [&](size_t index) {
+    int matches = 0;
+    for (int other = 0; other < num_neighbours; ++other) matches += ncc[other][index] > threshold;
+    return matches;
+  };
   for (int ty = 0; ty < tiles.tiles_y; ++ty) {
     for (int tx = 0; tx < tiles.tiles_x; ++tx) {
       TileWinner& tile = (*best)[ty * tiles.tiles_x + tx];
@@ -252,6 +261,7 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
             const float value = values[col];
             if (!(value > threshold) || !(value > tile.ncc)) continue;  // NaN never wins
             const size_t index = row_offset + col;
+            if (required_matches > 1 && matches_at(index) < required_matches) continue;
             tile.ncc = value;
             tile.offset = offset;
             tile.neighbour = j;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <vector>
 
 namespace ms {
@@ -92,6 +93,48 @@ TEST(SweepKernel, WinnersMergeInSweepOrder) {
   b = a;
   b.col = 6;
   EXPECT_TRUE(BeatsInSweepOrder(b, a));
+}
+
+// One 4x1 tile, two neighbours: pixel 0 is the best match of neighbour 0 alone, pixel 2 a
+// lower one of both.
+TEST(SweepKernel, WinnersNeedTheRequiredMatches) {
+  const TileGrid tiles = TileGrid::Make(4, 1, 100);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<float> first = {0.999f, 0.5f, 0.985f, 0.99f};
+  const std::vector<float> second = {0.97f, 0.995f, 0.99f, nan};
+  const std::vector<const float*> ncc = {first.data(), second.data()};
+  const std::vector<int32_t> face = {10, 11, 12, 13};
+  for (int required : {1, 2}) {
+    std::vector<TileWinner> best(1);
+    UpdateTileWinners(tiles, /*offset=*/-1, ncc, face.data(), nullptr, 0.98f, required, &best);
+    if (required == 1) {  // the paper's rule: the highest NCC of any neighbour
+      EXPECT_EQ(best[0].ncc, 0.999f);
+      EXPECT_EQ(best[0].col, 0);
+      EXPECT_TRUE(best[0].matched.empty());
+    } else {  // pixel 2, through neighbour 1's NCC, with neighbour 0 listed as matched
+      EXPECT_EQ(best[0].ncc, 0.99f);
+      EXPECT_EQ(best[0].col, 2);
+      EXPECT_EQ(best[0].neighbour, 1);
+      EXPECT_EQ(best[0].face, 12);
+      EXPECT_EQ(best[0].matched, std::vector<int>{0});
+    }
+  }
+  // No pixel above the threshold in both: no winner.
+  const std::vector<float> low = {0.97f, 0.97f, 0.97f, 0.97f};
+  std::vector<TileWinner> best(1);
+  UpdateTileWinners(tiles, 0, {first.data(), low.data()}, face.data(), nullptr, 0.98f, 2, &best);
+  EXPECT_LT(best[0].neighbour, 0);
+}
+
+TEST(SweepKernel, RequiredMatchesAreAtMostTheNeighbours) {
+  SweepOptions options;
+  EXPECT_EQ(options.min_matching_neighbours, 2);
+  EXPECT_EQ(RequiredMatches(options, 2), 2);
+  EXPECT_EQ(RequiredMatches(options, 1), 1);
+  options.min_matching_neighbours = 0;  // what an older coordinator's message holds
+  EXPECT_EQ(RequiredMatches(options, 2), 1);
+  options.min_matching_neighbours = 3;
+  EXPECT_EQ(RequiredMatches(options, 34), 3);
 }
 
 TEST(SweepKernel, PreparedSweepStatsCountsTheHypotheses) {

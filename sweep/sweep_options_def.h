@@ -19,6 +19,13 @@ MS_OPTION(double, alpha_parallax_px, 1.0, "alpha-parallax-px",
 // t_NCC: a tile's best pixel becomes a point only if its NCC is strictly above this.
 MS_OPTION(double, ncc_threshold, 0.98, "ncc-threshold", "t_NCC: keep tile winners above this",
           InRange(-1, 1))
+// A pixel matched by one neighbour alone is an outlier 5-50 times as often as one matched by
+// two (docs/sweep.md "Matching neighbours"). 0 and 1 both mean any one neighbour (the paper);
+// jobs with fewer neighbours need all of theirs.
+MS_OPTION(int, min_matching_neighbours, 2, "min-matching-neighbours",
+          "a tile's winning pixel must be above t_NCC in this many neighbours at the same offset "
+          "(fewer if the job has fewer; 1 = the paper's rule)",
+          InRange(0, 64))
 MS_OPTION(double, gaussian_sigma_px, 8, "gaussian-sigma-px",
           "sigma of the NCC's Gaussian window (swept-resolution pixels)", InRange(0.5, 100))
 // The image is split into round(W/size) x round(H/size) tiles (at least 1 x 1).
