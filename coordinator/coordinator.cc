@@ -451,6 +451,8 @@ class Coordinator::Impl {
                     points.size(), sender, result.sweep_seconds());
       round_.kernel_seconds_by_worker[sender] += result.sweep_seconds();
       round_.points_by_worker[sender] += static_cast<int64_t>(points.size());
+      round_.jobs_smoothed += result.stats().smoothing_px() > 0;
+      round_.image_noise_max = std::max(round_.image_noise_max, result.stats().image_noise());
       batch_.Add(result.job_id(), std::move(points));
       NoteKernel(sender, result.kernel());
     } else {

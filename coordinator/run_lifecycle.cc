@@ -209,6 +209,8 @@ StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const Swe
   row.seconds_jobs = round.seconds_jobs;
   row.job_bytes = round.job_bytes;
   row.job_max_bytes = round.job_max_bytes;
+  row.jobs_smoothed = round.jobs_smoothed;
+  row.image_noise_max = round.image_noise_max;
   row.seconds_sweep = round.seconds_sweep;
   row.seconds_insert = insert_s;
   row.seconds_insert_early = early_s;
@@ -238,6 +240,12 @@ StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const Swe
       done.discarded_conflict + done.discarded_duplicate + done.discarded_outside, done.vertices,
       done.faces, done.seconds_jobs, done.seconds_sweep, done.seconds_insert_early,
       done.seconds_insert, done.seconds_extract);
+  if (done.jobs_smoothed > 0) {
+    spdlog::info(
+        "iteration {}: the images of {} of {} jobs were smoothed before matching (noise up to "
+        "{:.2f} grey levels; --sweep.image-noise-target, docs/sweep.md \"Noisy images\")",
+        iteration, done.jobs_smoothed, done.jobs, done.image_noise_max);
+  }
   CheckpointInBackground();
   return NextOrStop();
 }

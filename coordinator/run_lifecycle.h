@@ -33,6 +33,8 @@ struct SweepRound {
   double seconds_jobs = 0;                   // building the jobs (while the sweep runs)
   int64_t job_bytes = 0, job_max_bytes = 0;  // job messages: all, the largest
   double seconds_sweep = 0;                  // first job out -> last result in
+  int32_t jobs_smoothed = 0;                 // jobs whose images the kernel smoothed (noise)
+  double image_noise_max = 0;                // the noisiest job's estimate, grey levels
   std::map<std::string, int64_t> jobs_by_worker;
   std::map<std::string, int64_t> points_by_worker;
   std::map<std::string, double> kernel_seconds_by_worker;

@@ -59,6 +59,8 @@ std::vector<Column<IterationStats>> IterationColumns() {
           Field("cameras_in_matter", &S::cameras_in_matter),
           Field("job_bytes", &S::job_bytes),
           Field("job_max_bytes", &S::job_max_bytes),
+          Field("jobs_smoothed", &S::jobs_smoothed),
+          Field("image_noise_max", &S::image_noise_max),
           Field("cleanup_collapses", &S::cleanup_collapses),
           Field("cleanup_splits", &S::cleanup_splits),
           Field("float_problems_left", &S::float_problems_left),
@@ -267,6 +269,8 @@ RunRecord ReadRunFile(const std::string& path) {
     read_if_there("job_max_bytes", &S::job_max_bytes);
     read_if_there("seconds_insert_early", &S::seconds_insert_early);
     read_if_there("cameras_in_matter", &S::cameras_in_matter);
+    read_if_there("jobs_smoothed", &S::jobs_smoothed);
+    read_if_there("image_noise_max", &S::image_noise_max);
     ReadColumnInto(file, t, "cleanup_collapses", &S::cleanup_collapses, &rows);
     ReadColumnInto(file, t, "cleanup_splits", &S::cleanup_splits, &rows);
     ReadColumnInto(file, t, "float_problems_left", &S::float_problems_left, &rows);
@@ -326,6 +330,8 @@ void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
          {"cameras_in_matter", s.cameras_in_matter},
          {"job_bytes", s.job_bytes},
          {"job_max_bytes", s.job_max_bytes},
+         {"jobs_smoothed", s.jobs_smoothed},
+         {"image_noise_max", s.image_noise_max},
          {"cleanup_collapses", s.cleanup_collapses},
          {"cleanup_splits", s.cleanup_splits},
          {"float_problems_left", s.float_problems_left},

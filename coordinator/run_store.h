@@ -47,6 +47,10 @@ struct IterationStats {
   int64_t cameras_in_matter = 0;
   int64_t job_bytes = 0;      // this iteration's job messages (visible meshes), all of them
   int64_t job_max_bytes = 0;  // the largest one
+  // The kernels' noise estimates (sweep/image_noise.h): jobs whose images were smoothed, and
+  // the noisiest job's estimate in grey levels of 255.
+  int32_t jobs_smoothed = 0;
+  double image_noise_max = 0;
   // The float cleanup of the mesh written after this iteration (manifold/output_meshes.h): 0
   // when none was written; float_problems_left > 0 when it could not clean everything.
   int64_t cleanup_collapses = 0;

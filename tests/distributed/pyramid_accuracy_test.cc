@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "coordinator/run_store.h"
 #include "gl/context.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
@@ -39,6 +40,7 @@ std::vector<std::string> Split(const std::string& text) {
 struct Outcome {
   DepthErrorStats initial, surface, closed;
   MeshReport check;
+  int64_t jobs_smoothed = 0;  // over all iterations (run.h5, /stats/iterations)
 };
 
 // Open3D's verdict on `files` (tests/tools/open3d_verdict.py): watertight, or with `open` edge-
@@ -112,6 +114,9 @@ Outcome Reconstruct(const std::string& scene_name, const gl::GlContext& gl, doub
   const Mesh closed = ReadMesh(out + "/final.ply");
   outcome.check = CheckMesh(closed, MeshCheckOptions{});
   ExpectCleanForUsers(out);
+  for (const IterationStats& s : ReadRunFile(out + "/run.h5").iterations) {
+    outcome.jobs_smoothed += s.jobs_smoothed;
+  }
   const Mesh initial = ReadMesh(out + "/initial_surface.ply");
   const Mesh surface = ReadMesh(out + "/final_surface.ply");
   const Scene scene = ReadScene((root / "data" / "scene.h5").string());
@@ -152,6 +157,13 @@ void ExpectTable1Row(const Table1Row& row) {
   EXPECT_DOUBLE_EQ(o.closed.coverage, 1.0);
   EXPECT_LE(o.surface.mae, row.surface_mae_at_most);
   EXPECT_GE(o.surface.coverage, row.surface_coverage_at_least);
+  // The workers' noise estimates reach the coordinator's statistics: 1.27 and 3.03 grey levels
+  // with noise 2 and 5 (smoothed), 0 without.
+  if (row.image_noise > 0) {
+    EXPECT_GT(o.jobs_smoothed, 0);
+  } else {
+    EXPECT_EQ(o.jobs_smoothed, 0);
+  }
 }
 
 // Measured, closed / surface proper (coverage): 0.0140 / 0.0118 (92.2%) on the machine of an
