@@ -62,9 +62,9 @@ void RunManifold(const ManifoldCommandOptions& options) {
               static_cast<long long>(stats.rays),
               stats.rays ? static_cast<double>(stats.ray_cell_steps) / stats.rays : 0.0,
               stats.seconds_ray_tracing);
-  std::printf("  growing           %lld of %lld free cells outside, %.3f s\n",
+  std::printf("  growing           %lld of %lld free cells outside (%lld pockets joined), %.3f s\n",
               static_cast<long long>(stats.outside_cells), static_cast<long long>(stats.free_cells),
-              stats.seconds_growing);
+              static_cast<long long>(stats.pockets_joined), stats.seconds_growing);
   const std::vector<int32_t> enclosed = manifold.CamerasInMatter();
   std::printf(
       "  cameras           %zu in the matter%s (%lld vertex stars completed to free cameras)\n",

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <iterator>
+#include <unordered_set>
 #include <utility>
 
 #include "base/check.h"
@@ -83,8 +84,8 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   timer.Restart();
   GrowInitial(&stats);
   stats.seconds_growing = timer.Seconds();
-  spdlog::info("manifold: grew O to {} of {} free cells in {:.2f} s", stats.outside_cells,
-               stats.free_cells, stats.seconds_growing);
+  spdlog::info("manifold: grew O to {} of {} free cells ({} pockets joined) in {:.2f} s",
+               stats.outside_cells, stats.free_cells, stats.pockets_joined, stats.seconds_growing);
   LogCameraStars(stats.camera_stars_completed);
   if (options_.validate_each_step) {
     const std::string problem = Validate(true);
@@ -229,6 +230,7 @@ void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
   }
   grow_shrink_.GrowFromHeaviest();
   stats->camera_stars_completed = FreeEnclosedCameras();
+  stats->pockets_joined = JoinFreePockets(RegrowSeeds::kBoundary, 0);
   stats->outside_cells = labels_.outside_count();
   stats->free_cells_left_inside = CountFreeCellsInside();
   const manifold_detail::Regularity::Counts& counts = regularity_.counts();
@@ -290,17 +292,19 @@ InsertionStats DelaunayManifold::Impl::FinishInsert() {
   stats.seconds_insertion += timer.Seconds();
 
   timer.Restart();
-  stats.camera_stars_completed = Regrow(batch, stats);
+  stats.camera_stars_completed = Regrow(batch, &stats);
   LogCameraStars(stats.camera_stars_completed);
   stats.outside_cells = labels_.outside_count();
   stats.seconds_growing = timer.Seconds();
   spdlog::info(
       "manifold: {} new points: {} inserted, {} discarded (conflict {}, duplicate {}, outside "
-      "{}), {} cells shrunk, {} rays re-walked; {:.2f} s inserting, {:.2f} s regrowing",
+      "{}), {} cells shrunk, {} rays re-walked, {} pockets joined; {:.2f} s inserting, {:.2f} s "
+      "regrowing",
       stats.requested, stats.inserted,
       stats.discarded_conflict + stats.discarded_duplicate + stats.discarded_outside,
       stats.discarded_conflict, stats.discarded_duplicate, stats.discarded_outside,
-      stats.shrunk_cells, stats.rewalked_rays, stats.seconds_insertion, stats.seconds_growing);
+      stats.shrunk_cells, stats.rewalked_rays, stats.pockets_joined, stats.seconds_insertion,
+      stats.seconds_growing);
   if (options_.validate_each_step) {
     const std::string problem = Validate(true);
     if (!problem.empty()) throw InternalError("manifold invalid after insertion: " + problem);
@@ -571,11 +575,13 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
 // From the cells on the boundary of O that the batch may have changed: a cell none of whose
 // vertices touches a new or shrunk cell has the weight and neighbourhood it had when the last
 // growing refused it.
-int64_t DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, const InsertionStats& stats) {
-  if (stats.inserted == 0 && stats.shrunk_cells == 0 && stats.gained_rays == 0) return 0;
+int64_t DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, InsertionStats* stats) {
+  if (stats->inserted == 0 && stats->shrunk_cells == 0 && stats->gained_rays == 0) return 0;
   grow_shrink_.Grow(grow_shrink_.BoundarySeeds(options_.regrow_seeds, batch.number));
   if (labels_.outside_count() == 0) grow_shrink_.GrowFromHeaviest();
-  return FreeEnclosedCameras();
+  const int64_t stars = FreeEnclosedCameras();
+  stats->pockets_joined = JoinFreePockets(options_.regrow_seeds, batch.number);
+  return stars;
 }
 
 void DelaunayManifold::Impl::LogCameraStars(int64_t completed) const {
@@ -612,6 +618,40 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras() {
     }
     if (!flipped) return completed;
     grow_shrink_.Grow(grow_shrink_.BoundarySeeds(RegrowSeeds::kBoundary, 0));
+  }
+}
+
+// Growing adds one cell at a time, so a pocket of free space that touches O only where each
+// single cell would pinch the surface stays out of O, and with it what lies behind it: on open
+// scenes such pockets stand in front of the cameras as fins of matter (docs/manifold.md,
+// "Pockets of free space"). Each pocket next to O joins whole if every vertex stays regular,
+// else the free cells around one of its surface vertices at a time (each vertex tried once a
+// round); growing goes on from what joined, until a round joins nothing.
+int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t changed_in) {
+  if (!options_.join_pockets) return 0;
+  constexpr size_t kMaxPocketCells = 1 << 16;
+  int64_t joined = 0;
+  for (;;) {
+    const uint32_t stamp = walker_.NextStamp();
+    std::unordered_set<const void*> tried;
+    int64_t joined_now = 0;
+    for (const Cell_handle& seed : grow_shrink_.BoundarySeeds(which, changed_in)) {
+      const std::vector<Cell_handle> pocket = grow_shrink_.Pocket(seed, kMaxPocketCells, stamp);
+      if (pocket.empty()) continue;  // joined, or found from an earlier seed
+      bool flipped = grow_shrink_.FlipAllIfRegular(pocket);
+      for (size_t k = 0; !flipped && k < pocket.size(); ++k) {
+        for (int i = 0; !flipped && i < 4; ++i) {
+          const Vertex_handle v = pocket[k]->vertex(i);
+          if (v->info().outside_cells > 0 && tried.insert(&*v).second) {
+            flipped = grow_shrink_.CompleteFreeStar(v);
+          }
+        }
+      }
+      joined_now += flipped;
+    }
+    if (joined_now == 0) return joined;
+    joined += joined_now;
+    grow_shrink_.Grow(grow_shrink_.BoundarySeeds(which, changed_in));
   }
 }
 

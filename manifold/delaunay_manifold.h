@@ -47,6 +47,7 @@ struct BuildStats {
   int64_t free_cells = 0, outside_cells = 0;
   int64_t free_cells_left_inside = 0;  // free but not in O: refused by the manifold test
   int64_t camera_stars_completed = 0;  // as InsertionStats's, after growing
+  int64_t pockets_joined = 0;          // as InsertionStats's
   // Manifold tests while growing: all, those the fast (V,E,F) test could not decide, and the
   // surface edges walked by the full test.
   int64_t manifold_tests = 0, full_manifold_tests = 0, link_steps = 0;
@@ -69,6 +70,9 @@ struct InsertionStats {
   int64_t outside_cells = 0;  // |O| after regrowing
   // Vertex stars completed to bring a camera left in the matter back into O (regrowing).
   int64_t camera_stars_completed = 0;
+  // Joins of free pockets that growing could not enter one cell at a time (whole pockets or a
+  // vertex's free cells; --manifold.join-pockets).
+  int64_t pockets_joined = 0;
   double seconds_insertion = 0, seconds_growing = 0;
 };
 

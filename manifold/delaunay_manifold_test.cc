@@ -241,17 +241,56 @@ TEST(DelaunayManifold, CamerasInTheMatterAreReported) {
   ManifoldCamera inside = scene.cameras.front();
   inside.center = Eigen::Vector3d(0.01, -0.02, 0.03);
   scene.cameras.push_back(inside);
-  DelaunayManifold manifold(scene.cameras, ManifoldOptions{});
-  manifold.Build(scene.points);
-  EXPECT_EQ(manifold.CamerasInMatter(), std::vector<int32_t>{8});
-  // This batch re-triangulates the space in front of camera 3: greedy regrowing alone leaves
-  // it in a pocket of free cells that touches O only where any one cell would pinch the
-  // surface; completing a vertex star frees it (and the start cells are located again).
-  const InsertionStats stats = manifold.Insert(SphereScene(60, 8, 9, 1.02).points);
-  EXPECT_GE(stats.camera_stars_completed, 1);
-  EXPECT_EQ(manifold.CamerasInMatter(), std::vector<int32_t>{8});
-  EXPECT_EQ(manifold.Validate(true), "");
-  EXPECT_EQ(SurfaceProblems(manifold.ExtractSurface()), "");
+  for (bool join_pockets : {false, true}) {
+    SCOPED_TRACE(join_pockets ? "pockets joined" : "pockets not joined");
+    ManifoldOptions options;
+    options.join_pockets = join_pockets;
+    DelaunayManifold manifold(scene.cameras, options);
+    manifold.Build(scene.points);
+    EXPECT_EQ(manifold.CamerasInMatter(), std::vector<int32_t>{8});
+    // This batch re-triangulates the space in front of camera 3: greedy regrowing alone leaves
+    // it in a pocket of free cells that touches O only where any one cell would pinch the
+    // surface; completing a vertex star frees it (and the start cells are located again).
+    // Joining pockets after the build changes the triangulation the batch meets, and camera 3
+    // is not enclosed then.
+    const InsertionStats stats = manifold.Insert(SphereScene(60, 8, 9, 1.02).points);
+    if (!join_pockets) EXPECT_GE(stats.camera_stars_completed, 1);
+    EXPECT_EQ(manifold.CamerasInMatter(), std::vector<int32_t>{8});
+    EXPECT_EQ(manifold.Validate(true), "");
+    EXPECT_EQ(SurfaceProblems(manifold.ExtractSurface()), "");
+  }
+}
+
+// Growing adds one cell at a time and leaves pockets of free space it cannot enter that way;
+// joining them (whole, or a surface vertex's free cells at a time) leaves fewer free cells out
+// of O, O still maximal for single cells and the surface a closed 2-manifold.
+TEST(DelaunayManifold, JoiningPocketsLeavesLessFreeSpaceInside) {
+  int64_t joined = 0;
+  for (uint32_t seed = 1; seed <= 3; ++seed) {
+    const RandomScene scene = SphereScene(150, 10, seed, 1.0);
+    ManifoldOptions off_options;
+    off_options.join_pockets = false;
+    DelaunayManifold on(scene.cameras, ManifoldOptions{});
+    DelaunayManifold off(scene.cameras, off_options);
+    const BuildStats on_stats = on.Build(scene.points);
+    off.Build(scene.points);
+    joined += on_stats.pockets_joined;
+    if (on_stats.pockets_joined > 0) {
+      EXPECT_LT(on.num_free_cells_inside(), off.num_free_cells_inside()) << "seed " << seed;
+      EXPECT_GT(on.num_outside_cells(), off.num_outside_cells()) << "seed " << seed;
+    } else {
+      EXPECT_EQ(on.num_outside_cells(), off.num_outside_cells()) << "seed " << seed;
+    }
+    for (int batch = 0; batch < 3; ++batch) {
+      const InsertionStats stats =
+          on.Insert(SphereScene(60, 10, seed * 1000 + batch, 0.98 + 0.02 * batch).points);
+      joined += stats.pockets_joined;
+      EXPECT_EQ(on.num_joinable_cells(), 0) << "seed " << seed << " batch " << batch;
+      ASSERT_EQ(on.Validate(true), "") << "seed " << seed << " batch " << batch;
+      ASSERT_EQ(SurfaceProblems(on.ExtractSurface()), "") << "seed " << seed;
+    }
+  }
+  EXPECT_GT(joined, 0);  // so the comparisons above are made
 }
 
 TEST(DelaunayManifold, IsDeterministic) {
@@ -329,7 +368,7 @@ TEST(DelaunayManifold, RandomInsertionsKeepTheSurfaceManifold) {
       ASSERT_EQ(manifold.Validate(true), "") << "seed " << seed << " batch " << batch;
       ASSERT_EQ(SurfaceProblems(manifold.ExtractSurface()), "") << "seed " << seed;
     }
-    EXPECT_GT(inserted, 100) << "seed " << seed;
+    EXPECT_GT(inserted, 75) << "seed " << seed;
     EXPECT_EQ(manifold.num_points(), 150 + inserted);
   }
 }
@@ -434,9 +473,11 @@ TEST(DelaunayManifold, RegrowingFromTheWholeBoundaryLeavesOMaximal) {
   int64_t missed_by_changed = 0;
   for (uint32_t seed = 1; seed <= 3; ++seed) {
     const RandomScene scene = SphereScene(150, 10, seed, 1.0);
+    // Without joining pockets, which would retry the cells seeding from touched cells misses.
     ManifoldOptions boundary_options, changed_options;
     boundary_options.regrow_seeds = RegrowSeeds::kBoundary;
     changed_options.regrow_seeds = RegrowSeeds::kChanged;
+    boundary_options.join_pockets = changed_options.join_pockets = false;
     DelaunayManifold boundary(scene.cameras, boundary_options);
     DelaunayManifold changed(scene.cameras, changed_options);
     boundary.Build(scene.points);

@@ -70,6 +70,9 @@ class DelaunayManifold::Impl {
   // Completes vertex stars until no camera with a free start cell is left in the matter;
   // returns how many.
   int64_t FreeEnclosedCameras();
+  // Joins the pockets of free space next to O (from the cells BoundarySeeds(which, changed_in)
+  // gives) that growing could not enter, and grows on from them; returns the joins.
+  int64_t JoinFreePockets(RegrowSeeds which, uint32_t changed_in);
   void LogCameraStars(int64_t completed) const;
   // Cameras none of whose start cells is in O (manifold.h).
   std::vector<int32_t> CamerasInMatter() {
@@ -173,9 +176,9 @@ class DelaunayManifold::Impl {
   void TraceNewRays(InsertionBatch* batch, InsertionStats* stats);
   void GainCameras(const Vertex_handle& vertex, const std::vector<int32_t>& cameras,
                    InsertionBatch* batch);
-  // Regrows O from its boundary where the batch changed something.
-  // Returns the vertex stars FreeEnclosedCameras completed.
-  int64_t Regrow(const InsertionBatch& batch, const InsertionStats& stats);
+  // Regrows O from its boundary where the batch changed something, then joins pockets
+  // (stats->pockets_joined). Returns the vertex stars FreeEnclosedCameras completed.
+  int64_t Regrow(const InsertionBatch& batch, InsertionStats* stats);
 
   // --- Validate layers (manifold_validate.cc), each run only when the one before passed ---
   std::string ValidateTriangulation() const;  // CGAL's own check

@@ -77,6 +77,12 @@ MS_OPTION(RegrowSeeds, regrow_seeds, RegrowSeeds::kBoundary, "regrow-seeds",
           "where regrowing starts after an insertion batch: boundary (every free cell on the "
           "boundary of O, the paper) or changed (only cells with a vertex the batch touched)",
           AnyValue())
+// Growing adds one cell at a time; a pocket of free space that touches O only where any single
+// cell would pinch the surface joins whole, or a surface vertex's free cells at a time
+// (docs/manifold.md, "Pockets of free space").
+MS_OPTION(bool, join_pockets, true, "join-pockets",
+          "after growing, join pockets of free space that growing cannot enter one cell at a time",
+          AnyValue())
 MS_OPTION(bool, grow_all_components, false, "grow-all-components",
           "grow every free-space component, not only the heaviest cell's", AnyValue())
 // Debugging: the full validity check after every step (slow).
