@@ -1,7 +1,7 @@
 // Throughput of the manifold reconstruction steps (docs/performance.md):
 //   manifold_bench [points ...] [--insert=N] [--export=DIR] [--graded-steiner=on|off]
 //                  [--steiner-grid=N] [--steiner-min-spacing=X] [--steiner-clearance=X]
-//                  [--regrow-seeds=boundary|changed]
+//                  [--regrow-seeds=boundary|changed] [--join-pockets=on|off]
 //   default Steiner mode: the library's (auto: graded from 5*10^4 points)
 //   default sizes: 10^4 10^5 10^6
 // For each size: Delaunay insertion, ray tracing (rays/s), growing (cells/s), peak memory per
@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
   const char* usage =
       "usage: manifold_bench [points ...] [--insert=N] [--export=DIR] "
       "[--graded-steiner=on|off] [--steiner-grid=N] [--steiner-min-spacing=X] "
-      "[--steiner-clearance=X] [--regrow-seeds=boundary|changed]\n";
+      "[--steiner-clearance=X] [--regrow-seeds=boundary|changed] [--join-pockets=on|off]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
@@ -61,6 +61,8 @@ int main(int argc, char** argv) {
         options.regrow_seeds = ms::RegrowSeeds::kBoundary;
       } else if (arg == "--regrow-seeds=changed") {
         options.regrow_seeds = ms::RegrowSeeds::kChanged;
+      } else if (arg == "--join-pockets=on" || arg == "--join-pockets=off") {
+        options.join_pockets = arg == "--join-pockets=on";
       } else if (arg == "--graded-steiner=off") {
         options.steiner_graded = ms::GradedSteiner::kOff;
       } else {

@@ -621,38 +621,115 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras() {
   }
 }
 
+namespace {
+
+// Whether a cell around a vertex of `cells` has flipped since labels_.relabels() was `relabels`.
+bool FlippedAroundSince(const std::vector<manifold_detail::Cell_handle>& cells, uint32_t relabels) {
+  for (const auto& c : cells) {
+    for (int i = 0; i < 4; ++i) {
+      if (c->vertex(i)->info().relabelled > relabels) return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
 // Growing adds one cell at a time, so a pocket of free space that touches O only where each
 // single cell would pinch the surface stays out of O, and with it what lies behind it: on open
 // scenes such pockets stand in front of the cameras as fins of matter (docs/manifold.md,
 // "Pockets of free space"). Each pocket next to O joins whole if every vertex stays regular,
 // else the free cells around one of its surface vertices at a time (each vertex tried once a
-// round); growing goes on from what joined, until a round joins nothing.
+// round); growing goes on from what joined. Later rounds look only at the pockets around what
+// entered O and at refused ones around which a cell has flipped since (a refusal depends on
+// the labels around the pocket's vertices), so that a round costs what changed, not a scan.
 int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t changed_in) {
   if (!options_.join_pockets) return 0;
   constexpr size_t kMaxPocketCells = 1 << 16;
-  int64_t joined = 0;
-  for (;;) {
-    const uint32_t stamp = walker_.NextStamp();
-    std::unordered_set<const void*> tried;
-    int64_t joined_now = 0;
-    for (const Cell_handle& seed : grow_shrink_.BoundarySeeds(which, changed_in)) {
-      const std::vector<Cell_handle> pocket = grow_shrink_.Pocket(seed, kMaxPocketCells, stamp);
-      if (pocket.empty()) continue;  // joined, or found from an earlier seed
-      bool flipped = grow_shrink_.FlipAllIfRegular(pocket);
-      for (size_t k = 0; !flipped && k < pocket.size(); ++k) {
-        for (int i = 0; !flipped && i < 4; ++i) {
-          const Vertex_handle v = pocket[k]->vertex(i);
-          if (v->info().outside_cells > 0 && tried.insert(&*v).second) {
-            flipped = grow_shrink_.CompleteFreeStar(v);
+  struct Refused {
+    std::vector<Cell_handle> pocket;
+    uint32_t relabels = 0;  // labels_.relabels() when it was refused
+  };
+  const auto free_outside_o = [&](const Cell_handle& c) {
+    return !dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c);
+  };
+  // The free cells not in O but next to it (sharing a face) around the vertices of `cells`,
+  // each once: where growing or a pocket may have become possible when `cells` joined O.
+  std::vector<Cell_handle> incident;
+  const auto around = [&](const std::vector<Cell_handle>& cells) {
+    const uint32_t found = walker_.NextStamp();
+    std::vector<Cell_handle> out;
+    for (const Cell_handle& c : cells) {
+      for (int i = 0; i < 4; ++i) {
+        incident.clear();
+        dt_.incident_cells(c->vertex(i), std::back_inserter(incident));
+        for (const Cell_handle& n : incident) {
+          if (n->info().stamp == found || !free_outside_o(n)) continue;
+          n->info().stamp = found;
+          for (int f = 0; f < 4; ++f) {
+            if (labels_.InO(n->neighbor(f))) {
+              out.push_back(n);
+              break;
+            }
           }
         }
       }
-      joined_now += flipped;
     }
-    if (joined_now == 0) return joined;
-    joined += joined_now;
-    grow_shrink_.Grow(grow_shrink_.BoundarySeeds(which, changed_in));
+    return out;
+  };
+  int64_t joined = 0;
+  std::vector<Cell_handle> seeds = grow_shrink_.BoundarySeeds(which, changed_in);
+  std::vector<Refused> refused;
+  while (!seeds.empty()) {
+    const uint32_t stamp = walker_.NextStamp();
+    std::unordered_set<const void*> tried;
+    std::vector<Cell_handle> entered;
+    std::vector<Refused> refused_now;
+    for (const Cell_handle& seed : seeds) {
+      std::vector<Cell_handle> pocket = grow_shrink_.Pocket(seed, kMaxPocketCells, stamp);
+      if (pocket.empty()) continue;  // joined, or found from an earlier seed
+      std::vector<Cell_handle> flipped_cells;
+      if (grow_shrink_.FlipAllIfRegular(pocket)) flipped_cells = pocket;
+      for (size_t k = 0; flipped_cells.empty() && k < pocket.size(); ++k) {
+        for (int i = 0; flipped_cells.empty() && i < 4; ++i) {
+          const Vertex_handle v = pocket[k]->vertex(i);
+          if (v->info().outside_cells > 0 && tried.insert(&*v).second &&
+              grow_shrink_.CompleteFreeStar(v)) {
+            dt_.incident_cells(v, std::back_inserter(flipped_cells));
+          }
+        }
+      }
+      if (flipped_cells.empty()) {
+        refused_now.push_back({std::move(pocket), labels_.relabels()});
+        continue;
+      }
+      ++joined;
+      for (const Cell_handle& c : flipped_cells) {
+        if (c->info().outside) entered.push_back(c);
+      }
+    }
+    if (entered.empty()) break;
+    // Grow from around what joined; then look at the pockets next to everything that entered
+    // O, and again at the refused pockets around whose vertices a cell has flipped.
+    grow_shrink_.Grow(around(entered), &entered);
+    seeds = around(entered);
+    std::vector<Refused> still_refused;
+    for (std::vector<Refused>* list : {&refused, &refused_now}) {
+      for (Refused& r : *list) {
+        if (!free_outside_o(r.pocket.front())) continue;  // next to what entered O, if anything
+        if (FlippedAroundSince(r.pocket, r.relabels)) {
+          seeds.push_back(r.pocket.front());
+        } else {
+          still_refused.push_back(std::move(r));
+        }
+      }
+    }
+    refused = std::move(still_refused);
   }
+  // Growing from the local seeds above retries only cells near what joined: one growing from
+  // the whole boundary keeps O maximal for single cells.
+  if (joined > 0) grow_shrink_.Grow(grow_shrink_.BoundarySeeds(which, changed_in));
+  return joined;
 }
 
 // ---------------------------------------------------------------------------------------------

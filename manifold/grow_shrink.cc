@@ -23,7 +23,8 @@ struct QueueEntry {
 
 }  // namespace
 
-void GrowShrink::Grow(const std::vector<Cell_handle>& seeds) {
+void GrowShrink::Grow(const std::vector<Cell_handle>& seeds,
+                      std::vector<Cell_handle>* added_cells) {
   std::priority_queue<QueueEntry> queue;
   const auto push = [&](const Cell_handle& c, uint32_t refused_after) {
     if (dt_.is_infinite(c) || c->info().outside || c->info().queued || !labels_.IsFree(c)) {
@@ -57,6 +58,7 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds) {
       if (!refused_again && regularity_.FlipKeepsManifold(c)) {
         labels_.SetOutside(c, true);
         ++added;
+        if (added_cells != nullptr) added_cells->push_back(c);
         for (int i = 0; i < 4; ++i) push(c->neighbor(i), 0);
       } else {
         refused.push_back({c, refused_again ? entry.refused_after : labels_.relabels() + 1});

@@ -23,7 +23,8 @@ class GrowShrink {
 
   // Grows O from `seeds` through free cells, heaviest first (ties: smaller CellKey), retrying
   // refused cells until a round adds nothing.
-  void Grow(const std::vector<Cell_handle>& seeds);
+  // The cells added are appended to `added` when it is not null.
+  void Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_handle>* added = nullptr);
 
   // Grows O from the heaviest free cell (with options.grow_all_components, then from the
   // heaviest free cell of every further component). Returns the cells added.
