@@ -3,9 +3,10 @@
 // tile finds the pixel with the highest NCC over the batch's offsets and all neighbours, ties to
 // the smaller k, then the earlier neighbour, then the earlier pixel in row-major order, and
 // replaces the tile's running best if strictly higher (running bests start at t_NCC; batches run
-// in increasing k, so ties keep the earlier batch). A pixel competes only where at least
-// u_required neighbours are above t_NCC at its offset. Also counts defined NCC values and covered
-// pixels of the batch for the statistics.
+// in increasing k, so ties keep the earlier batch). A pixel competes only where u_required
+// neighbours support it at its offset (its own NCC above t_NCC, the others' above u_support), or
+// all that see it if fewer. Also counts defined NCC values and covered pixels of the batch for
+// the statistics.
 layout(local_size_x = REDUCE_THREADS) in;
 
 // imageLoad rather than texelFetch: cheaper on llvmpipe, the same on GPUs.
@@ -30,7 +31,8 @@ uniform int u_first_offset;   // k of layer 0
 uniform int u_width;          // C's image width
 uniform int u_batch;          // index of this batch (counter slot)
 uniform float u_threshold;    // t_NCC (float, as the reference compares)
-uniform int u_required;       // neighbours above t_NCC a winner needs (RequiredMatches)
+uniform int u_required;       // neighbours supporting a winner it needs (RequiredMatches)
+uniform float u_support;      // NCC above which another neighbour supports it
 
 shared float s_ncc[REDUCE_THREADS];
 shared int s_layer[REDUCE_THREADS];  // b * neighbours + j
@@ -38,13 +40,19 @@ shared int s_index[REDUCE_THREADS];  // pixel index inside the tile (row-major)
 shared uint s_defined[REDUCE_THREADS];
 shared uint s_covered[REDUCE_THREADS];
 
-// How many neighbours are above t_NCC at pixel p of layer group b.
-int MatchesAt(ivec2 p, int b) {
-  int matches = 0;
-  for (int j = 0; j < u_neighbours; ++j) {
-    if (imageLoad(u_ncc, ivec3(p, b * u_neighbours + j)).r > u_threshold) ++matches;
+// Whether neighbour j's match at pixel p of layer group b has enough support: u_required
+// neighbours (j, and the others above u_support), or every one whose NCC is defined there
+// (undefined is -2).
+bool Supported(ivec2 p, int b, int j) {
+  int supporters = 1;
+  int defined = 1;
+  for (int other = 0; other < u_neighbours; ++other) {
+    if (other == j) continue;
+    float value = imageLoad(u_ncc, ivec3(p, b * u_neighbours + other)).r;
+    if (value > u_support) ++supporters;
+    if (value >= -1.0) ++defined;
   }
-  return matches;
+  return supporters >= min(u_required, defined);
 }
 
 // a beats b: higher NCC, or equal and earlier (layer, then pixel).
@@ -84,7 +92,7 @@ void main() {
           float value = imageLoad(u_ncc, ivec3(x, y, layer)).r;
           if (value >= -1.0) ++defined;
           if (value > ncc && (u_required <= 1 ||
-                              (value > u_threshold && MatchesAt(ivec2(x, y), b) >= u_required))) {
+                              (value > u_threshold && Supported(ivec2(x, y), b, j)))) {
             ncc = value;
             best_layer = layer;
             best_index = (y - y0) * tile_width + (x - x0);

@@ -275,6 +275,7 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, std::at
   }
   const float threshold = static_cast<float>(job.options.ncc_threshold);
   const int required_matches = RequiredMatches(job.options, num_neighbours);
+  const float support = static_cast<float>(job.options.support_ncc);
   Timer stage;
   for (; i < num_offsets; i = next->fetch_add(1)) {
     const int k = prep.offsets[i];
@@ -292,7 +293,7 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, std::at
     }
     stage.Restart();
     UpdateTileWinners(prep.tiles, k, map_pointers, slab.faces().data(), nullptr, threshold,
-                      required_matches, &out.best);
+                      required_matches, support, &out.best);
     out.reduce_s += stage.Seconds();
   }
   return out;

@@ -257,14 +257,17 @@ TEST(CpuSweep, TrueMeshWithOcclusionAndDefaultWindow) {
   job.options.num_offsets = 5;
   job.options.alpha = 0.03;
   job.options.gaussian_sigma_px = 8;
-  // The default rule (two matching neighbours) and the paper's (any one).
+  // The default rule (two matching neighbours) and the paper's (any one). The first's
+  // candidates are a subset of the second's, so it finds a point in fewer tiles or as many.
+  size_t points_with_two = 0;
   for (int required : {2, 1}) {
     job.options.min_matching_neighbours = required;
     const SweepResult ref = ReferenceSweepKernel().Run(job);
     ASSERT_GT(ref.points.size(), 30u);
     ExpectSameWinners(ref, CpuSweepKernel().Run(job), ref.stats.median_depth,
                       "cpu, occluder, " + std::to_string(required) + " matching");
-    for (const SweepPoint& p : ref.points) EXPECT_GE(p.cameras.size(), 1u + required);
+    if (required == 2) points_with_two = ref.points.size();
+    if (required == 1) EXPECT_LE(points_with_two, ref.points.size());
   }
 }
 

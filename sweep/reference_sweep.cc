@@ -152,6 +152,7 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
   std::vector<TileWinner> best(prep.tiles.NumTiles());
   const float threshold = static_cast<float>(options.ncc_threshold);
   const int required_matches = RequiredMatches(options, num_neighbours);
+  const float support = static_cast<float>(options.support_ncc);
   stats.prepare_s = stage.Seconds();
 
   std::vector<cv::Mat> ncc(num_neighbours);
@@ -181,7 +182,7 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
     std::vector<const float*> maps;
     for (const cv::Mat& m : ncc) maps.push_back(m.ptr<float>());
     UpdateTileWinners(prep.tiles, k, maps, camera_raster.face().data(),
-                      camera_raster.world().data(), threshold, required_matches, &best);
+                      camera_raster.world().data(), threshold, required_matches, support, &best);
     stats.reduce_s += stage.Seconds();
   }
 

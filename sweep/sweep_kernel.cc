@@ -237,12 +237,20 @@ int RequiredMatches(const SweepOptions& options, int num_neighbours) {
 
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
                        const int32_t* face, const Eigen::Vector3d* world, float threshold,
-                       int required_matches, std::vector<TileWinner>* best) {
+                       int required_matches, float support, std::vector<TileWinner>* best) {
   const int num_neighbours = static_cast<int>(ncc.size());
-  const auto matches_at = [&](size_t index) {
-    int matches = 0;
-    for (int other = 0; other < num_neighbours; ++other) matches += ncc[other][index] > threshold;
-    return matches;
+  // Enough support for neighbour j's match at a pixel: required_matches neighbours (j and
+  // those above `support`), or every one whose NCC is defined there (a neighbour that does not
+  // see the pixel cannot support it).
+  const auto supported_at = [&](int j, size_t index) {
+    int supporters = 1, defined = 1;
+    for (int other = 0; other < num_neighbours; ++other) {
+      if (other == j) continue;
+      const float value = ncc[other][index];
+      supporters += value > support;
+      defined += !std::isnan(value);
+    }
+    return supporters >= std::min(required_matches, defined);
   };
   for (int ty = 0; ty < tiles.tiles_y; ++ty) {
     for (int tx = 0; tx < tiles.tiles_x; ++tx) {
@@ -261,7 +269,7 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
             const float value = values[col];
             if (!(value > threshold) || !(value > tile.ncc)) continue;  // NaN never wins
             const size_t index = row_offset + col;
-            if (required_matches > 1 && matches_at(index) < required_matches) continue;
+            if (required_matches > 1 && !supported_at(j, index)) continue;
             tile.ncc = value;
             tile.offset = offset;
             tile.neighbour = j;

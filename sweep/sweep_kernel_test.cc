@@ -95,35 +95,44 @@ TEST(SweepKernel, WinnersMergeInSweepOrder) {
   EXPECT_TRUE(BeatsInSweepOrder(b, a));
 }
 
-// One 4x1 tile, two neighbours: pixel 0 is the best match of neighbour 0 alone, pixel 2 a
-// lower one of both.
+// One 4x1 tile, two neighbours: pixel 0 is the best match of neighbour 0 alone (neighbour 1
+// sees it and does not match), pixel 2 a lower one of both, pixel 3 one of neighbour 0 that
+// neighbour 1 does not see (NaN).
 TEST(SweepKernel, WinnersNeedTheRequiredMatches) {
   const TileGrid tiles = TileGrid::Make(4, 1, 100);
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  const std::vector<float> first = {0.999f, 0.5f, 0.985f, 0.99f};
+  const std::vector<float> first = {0.999f, 0.5f, 0.985f, 0.992f};
   const std::vector<float> second = {0.97f, 0.995f, 0.99f, nan};
-  const std::vector<const float*> ncc = {first.data(), second.data()};
   const std::vector<int32_t> face = {10, 11, 12, 13};
-  for (int required : {1, 2}) {
+  const auto winner = [&](const std::vector<float>& a, const std::vector<float>& b, int required) {
     std::vector<TileWinner> best(1);
-    UpdateTileWinners(tiles, /*offset=*/-1, ncc, face.data(), nullptr, 0.98f, required, &best);
-    if (required == 1) {  // the paper's rule: the highest NCC of any neighbour
-      EXPECT_EQ(best[0].ncc, 0.999f);
-      EXPECT_EQ(best[0].col, 0);
-      EXPECT_TRUE(best[0].matched.empty());
-    } else {  // pixel 2, through neighbour 1's NCC, with neighbour 0 listed as matched
-      EXPECT_EQ(best[0].ncc, 0.99f);
-      EXPECT_EQ(best[0].col, 2);
-      EXPECT_EQ(best[0].neighbour, 1);
-      EXPECT_EQ(best[0].face, 12);
-      EXPECT_EQ(best[0].matched, std::vector<int>{0});
-    }
-  }
-  // No pixel above the threshold in both: no winner.
+    UpdateTileWinners(tiles, /*offset=*/-1, {a.data(), b.data()}, face.data(), nullptr, 0.98f,
+                      required, /*support=*/0.98f, &best);
+    return best[0];
+  };
+  // The paper's rule: the highest NCC of any neighbour.
+  TileWinner w = winner(first, second, 1);
+  EXPECT_EQ(w.ncc, 0.999f);
+  EXPECT_EQ(w.col, 0);
+  EXPECT_TRUE(w.matched.empty());
+  // Two: pixel 3, which only neighbour 0 sees, beats pixel 2.
+  w = winner(first, second, 2);
+  EXPECT_EQ(w.ncc, 0.992f);
+  EXPECT_EQ(w.col, 3);
+  EXPECT_EQ(w.neighbour, 0);
+  EXPECT_TRUE(w.matched.empty());
+  // Without pixel 3: pixel 2, through neighbour 1's NCC, with neighbour 0 listed as matched.
+  std::vector<float> first_without_3 = first;
+  first_without_3[3] = nan;
+  w = winner(first_without_3, second, 2);
+  EXPECT_EQ(w.ncc, 0.99f);
+  EXPECT_EQ(w.col, 2);
+  EXPECT_EQ(w.neighbour, 1);
+  EXPECT_EQ(w.face, 12);
+  EXPECT_EQ(w.matched, std::vector<int>{0});
+  // No pixel above the threshold in both neighbours that see it: no winner.
   const std::vector<float> low = {0.97f, 0.97f, 0.97f, 0.97f};
-  std::vector<TileWinner> best(1);
-  UpdateTileWinners(tiles, 0, {first.data(), low.data()}, face.data(), nullptr, 0.98f, 2, &best);
-  EXPECT_LT(best[0].neighbour, 0);
+  EXPECT_LT(winner(first, low, 2).neighbour, 0);
 }
 
 TEST(SweepKernel, RequiredMatchesAreAtMostTheNeighbours) {

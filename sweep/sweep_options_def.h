@@ -21,11 +21,18 @@ MS_OPTION(double, ncc_threshold, 0.98, "ncc-threshold", "t_NCC: keep tile winner
           InRange(-1, 1))
 // A pixel matched by one neighbour alone is an outlier 5-50 times as often as one matched by
 // two (docs/sweep.md "Matching neighbours"). 0 and 1 both mean any one neighbour (the paper);
-// jobs with fewer neighbours need all of theirs.
+// jobs with fewer neighbours, or pixels fewer neighbours see, need all of theirs.
 MS_OPTION(int, min_matching_neighbours, 2, "min-matching-neighbours",
-          "a tile's winning pixel must be above t_NCC in this many neighbours at the same offset "
-          "(fewer if the job has fewer; 1 = the paper's rule)",
+          "a tile's winning pixel needs this many neighbours to support it at its offset: its own "
+          "above t_NCC, the others above --sweep.support-ncc (fewer where fewer see the pixel; "
+          "1 = the paper's rule)",
           InRange(0, 64))
+// Another neighbour supports a winning pixel when its NCC there is above this: a false match
+// in repeated texture is at the wrong depth for the other neighbour, a true one only
+// foreshortened.
+MS_OPTION(double, support_ncc, 0.8, "support-ncc",
+          "NCC above which another neighbour supports a winning pixel (min-matching-neighbours)",
+          InRange(-1, 1))
 MS_OPTION(double, gaussian_sigma_px, 8, "gaussian-sigma-px",
           "sigma of the NCC's Gaussian window (swept-resolution pixels)", InRange(0.5, 100))
 // The image is split into round(W/size) x round(H/size) tiles (at least 1 x 1).
