@@ -640,12 +640,17 @@ bool FlippedAroundSince(const std::vector<manifold_detail::Cell_handle>& cells, 
 // scenes such pockets stand in front of the cameras as fins of matter (docs/manifold.md,
 // "Pockets of free space"). Each pocket next to O joins whole if every vertex stays regular,
 // else the free cells around one of its surface vertices at a time (each vertex tried once a
-// round); growing goes on from what joined. Later rounds look only at the pockets around what
-// entered O and at refused ones around which a cell has flipped since (a refusal depends on
-// the labels around the pocket's vertices), so that a round costs what changed, not a scan.
+// round, and only if those cells are well crossed); growing goes on from what joined. Later rounds
+// look only at the pockets around what entered O and at refused ones around which a cell has
+// flipped since (a refusal depends on the labels around the pocket's vertices), so that a round
+// costs what changed, not a scan.
 int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t changed_in) {
   if (!options_.join_pockets) return 0;
   constexpr size_t kMaxPocketCells = 1 << 16;
+  // A vertex's free cells join only if each weighs twice the free threshold (two crossing
+  // rays): on castle-P30, whose sparse points are noisy, joining singly-crossed cells too cost
+  // 1.6 points of photo-consistency; the street keeps its gain without them (docs/manifold.md).
+  const double star_min_weight = 2 * options_.free_threshold;
   struct Refused {
     std::vector<Cell_handle> pocket;
     uint32_t relabels = 0;  // labels_.relabels() when it was refused
@@ -694,7 +699,7 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
         for (int i = 0; flipped_cells.empty() && i < 4; ++i) {
           const Vertex_handle v = pocket[k]->vertex(i);
           if (v->info().outside_cells > 0 && tried.insert(&*v).second &&
-              grow_shrink_.CompleteFreeStar(v)) {
+              grow_shrink_.CompleteFreeStar(v, star_min_weight)) {
             dt_.incident_cells(v, std::back_inserter(flipped_cells));
           }
         }

@@ -152,9 +152,15 @@ bool GrowShrink::FlipAllIfRegular(const std::vector<Cell_handle>& cells) {
   return regular;
 }
 
-bool GrowShrink::CompleteFreeStar(const Vertex_handle& v) {
+bool GrowShrink::CompleteFreeStar(const Vertex_handle& v, double min_weight) {
   around_.clear();
   dt_.incident_cells(v, std::back_inserter(around_));
+  for (const Cell_handle& c : around_) {
+    if (!dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c) &&
+        labels_.Weight(c) < min_weight) {
+      return false;
+    }
+  }
   return FlipAllIfRegular(std::vector<Cell_handle>(around_.begin(), around_.end()));
 }
 

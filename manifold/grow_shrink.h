@@ -44,8 +44,9 @@ class GrowShrink {
   // leave: a pocket of free space that touches O only where adding any one of its cells would
   // pinch the surface. Returns whether it flipped.
   bool FlipAllIfRegular(const std::vector<Cell_handle>& cells);
-  // FlipAllIfRegular on the cells around v.
-  bool CompleteFreeStar(const Vertex_handle& v);
+  // FlipAllIfRegular on the cells around v, unless a free cell among them not in O weighs less
+  // than `min_weight` (then nothing changes and it returns false).
+  bool CompleteFreeStar(const Vertex_handle& v, double min_weight = 0);
 
   // The free cells not in O reachable from `start` through shared faces (at most max_cells),
   // in the order found; empty if start is not one. `stamp` (RayWalker::NextStamp) marks the
