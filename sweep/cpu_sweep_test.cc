@@ -267,7 +267,9 @@ TEST(CpuSweep, TrueMeshWithOcclusionAndDefaultWindow) {
     ExpectSameWinners(ref, CpuSweepKernel().Run(job), ref.stats.median_depth,
                       "cpu, occluder, " + std::to_string(required) + " matching");
     if (required == 2) points_with_two = ref.points.size();
-    if (required == 1) EXPECT_LE(points_with_two, ref.points.size());
+    if (required == 1) {
+      EXPECT_LE(points_with_two, ref.points.size());
+    }
   }
 }
 
