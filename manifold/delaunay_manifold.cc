@@ -292,7 +292,7 @@ InsertionStats DelaunayManifold::Impl::FinishInsert() {
   stats.seconds_insertion += timer.Seconds();
 
   timer.Restart();
-  stats.camera_stars_completed = Regrow(batch, &stats);
+  Regrow(batch, &stats);
   LogCameraStars(stats.camera_stars_completed);
   stats.outside_cells = labels_.outside_count();
   stats.seconds_growing = timer.Seconds();
@@ -575,13 +575,12 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
 // From the cells on the boundary of O that the batch may have changed: a cell none of whose
 // vertices touches a new or shrunk cell has the weight and neighbourhood it had when the last
 // growing refused it.
-int64_t DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, InsertionStats* stats) {
-  if (stats->inserted == 0 && stats->shrunk_cells == 0 && stats->gained_rays == 0) return 0;
+void DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, InsertionStats* stats) {
+  if (stats->inserted == 0 && stats->shrunk_cells == 0 && stats->gained_rays == 0) return;
   grow_shrink_.Grow(grow_shrink_.BoundarySeeds(options_.regrow_seeds, batch.number));
   if (labels_.outside_count() == 0) grow_shrink_.GrowFromHeaviest();
-  const int64_t stars = FreeEnclosedCameras();
+  stats->camera_stars_completed = FreeEnclosedCameras();
   stats->pockets_joined = JoinFreePockets(options_.regrow_seeds, batch.number);
-  return stars;
 }
 
 void DelaunayManifold::Impl::LogCameraStars(int64_t completed) const {
@@ -605,13 +604,8 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras() {
       for (const Cell_handle& start : walker_.StartCandidates(walker_.StartOf(camera))) {
         const std::vector<Cell_handle> pocket =
             grow_shrink_.Pocket(start, kMaxPocketCells, walker_.NextStamp());
-        flipped = grow_shrink_.FlipAllIfRegular(pocket);
-        for (size_t k = 0; !flipped && k < pocket.size(); ++k) {
-          for (int i = 0; !flipped && i < 4; ++i) {
-            const Vertex_handle v = pocket[k]->vertex(i);
-            if (v->info().outside_cells > 0) flipped = grow_shrink_.CompleteFreeStar(v);
-          }
-        }
+        std::unordered_set<const void*> tried;
+        flipped = !grow_shrink_.JoinPocket(pocket, /*star_min_weight=*/0, &tried).empty();
         if (flipped) break;
       }
       if (flipped) break;
@@ -658,8 +652,8 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
   const auto free_outside_o = [&](const Cell_handle& c) {
     return !dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c);
   };
-  // The free cells not in O but next to it (sharing a face) around the vertices of `cells`,
-  // each once: where growing or a pocket may have become possible when `cells` joined O.
+  // The cells next to O (GrowShrink::NextToO) around the vertices of `cells`, each once: where
+  // growing or a pocket may have become possible when `cells` joined O.
   std::vector<Cell_handle> incident;
   const auto around = [&](const std::vector<Cell_handle>& cells) {
     const uint32_t found = walker_.NextStamp();
@@ -671,12 +665,7 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
         for (const Cell_handle& n : incident) {
           if (n->info().stamp == found || !free_outside_o(n)) continue;
           n->info().stamp = found;
-          for (int f = 0; f < 4; ++f) {
-            if (labels_.InO(n->neighbor(f))) {
-              out.push_back(n);
-              break;
-            }
-          }
+          if (grow_shrink_.NextToO(n)) out.push_back(n);
         }
       }
     }
@@ -693,17 +682,8 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
     for (const Cell_handle& seed : seeds) {
       std::vector<Cell_handle> pocket = grow_shrink_.Pocket(seed, kMaxPocketCells, stamp);
       if (pocket.empty()) continue;  // joined, or found from an earlier seed
-      std::vector<Cell_handle> flipped_cells;
-      if (grow_shrink_.FlipAllIfRegular(pocket)) flipped_cells = pocket;
-      for (size_t k = 0; flipped_cells.empty() && k < pocket.size(); ++k) {
-        for (int i = 0; flipped_cells.empty() && i < 4; ++i) {
-          const Vertex_handle v = pocket[k]->vertex(i);
-          if (v->info().outside_cells > 0 && tried.insert(&*v).second &&
-              grow_shrink_.CompleteFreeStar(v, star_min_weight)) {
-            dt_.incident_cells(v, std::back_inserter(flipped_cells));
-          }
-        }
-      }
+      const std::vector<Cell_handle> flipped_cells =
+          grow_shrink_.JoinPocket(pocket, star_min_weight, &tried);
       if (flipped_cells.empty()) {
         refused_now.push_back({std::move(pocket), labels_.relabels()});
         continue;

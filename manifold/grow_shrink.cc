@@ -109,14 +109,17 @@ std::vector<Cell_handle> GrowShrink::BoundarySeeds(RegrowSeeds which, uint32_t c
       for (int i = 0; i < 4; ++i) changed |= c->vertex(i)->info().changed == changed_in;
       if (!changed) continue;
     }
-    for (int i = 0; i < 4; ++i) {
-      if (labels_.InO(c->neighbor(i))) {
-        seeds.push_back(c);
-        break;
-      }
-    }
+    if (NextToO(c)) seeds.push_back(c);
   }
   return seeds;
+}
+
+bool GrowShrink::NextToO(const Cell_handle& c) const {
+  if (dt_.is_infinite(c) || c->info().outside || !labels_.IsFree(c)) return false;
+  for (int i = 0; i < 4; ++i) {
+    if (labels_.InO(c->neighbor(i))) return true;
+  }
+  return false;
 }
 
 int64_t GrowShrink::CountJoinableCells(std::vector<Cell_handle>* first, size_t max_kept) {
@@ -162,6 +165,24 @@ bool GrowShrink::CompleteFreeStar(const Vertex_handle& v, double min_weight) {
     }
   }
   return FlipAllIfRegular(std::vector<Cell_handle>(around_.begin(), around_.end()));
+}
+
+std::vector<Cell_handle> GrowShrink::JoinPocket(const std::vector<Cell_handle>& pocket,
+                                                double star_min_weight,
+                                                std::unordered_set<const void*>* tried) {
+  if (FlipAllIfRegular(pocket)) return pocket;
+  for (const Cell_handle& cell : pocket) {
+    for (int i = 0; i < 4; ++i) {
+      const Vertex_handle v = cell->vertex(i);
+      if (v->info().outside_cells == 0 || !tried->insert(&*v).second) continue;
+      if (CompleteFreeStar(v, star_min_weight)) {
+        std::vector<Cell_handle> star;
+        dt_.incident_cells(v, std::back_inserter(star));
+        return star;
+      }
+    }
+  }
+  return {};
 }
 
 std::vector<Cell_handle> GrowShrink::Pocket(const Cell_handle& start, size_t max_cells,

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -47,6 +48,15 @@ class GrowShrink {
   // FlipAllIfRegular on the cells around v, unless a free cell among them not in O weighs less
   // than `min_weight` (then nothing changes and it returns false).
   bool CompleteFreeStar(const Vertex_handle& v, double min_weight = 0);
+  // Joins a pocket (from Pocket) into O: whole if FlipAllIfRegular allows it, else the free
+  // cells around the first of its surface vertices whose CompleteFreeStar(v, star_min_weight)
+  // succeeds. Vertices in `tried` are skipped, and those tried are added to it. Returns the
+  // cells flipped (for a vertex: all the cells around it); empty when nothing changed.
+  std::vector<Cell_handle> JoinPocket(const std::vector<Cell_handle>& pocket,
+                                      double star_min_weight,
+                                      std::unordered_set<const void*>* tried);
+  // Free, not in O, and sharing a face with O: a cell growing can start from.
+  bool NextToO(const Cell_handle& c) const;
 
   // The free cells not in O reachable from `start` through shared faces (at most max_cells),
   // in the order found; empty if start is not one. `stamp` (RayWalker::NextStamp) marks the

@@ -176,9 +176,9 @@ class DelaunayManifold::Impl {
   void TraceNewRays(InsertionBatch* batch, InsertionStats* stats);
   void GainCameras(const Vertex_handle& vertex, const std::vector<int32_t>& cameras,
                    InsertionBatch* batch);
-  // Regrows O from its boundary where the batch changed something, then joins pockets
-  // (stats->pockets_joined). Returns the vertex stars FreeEnclosedCameras completed.
-  int64_t Regrow(const InsertionBatch& batch, InsertionStats* stats);
+  // Regrows O from its boundary where the batch changed something, frees cameras left in the
+  // matter and joins pockets (stats->camera_stars_completed, stats->pockets_joined).
+  void Regrow(const InsertionBatch& batch, InsertionStats* stats);
 
   // --- Validate layers (manifold_validate.cc), each run only when the one before passed ---
   std::string ValidateTriangulation() const;  // CGAL's own check
