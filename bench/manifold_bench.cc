@@ -1,5 +1,5 @@
 // Throughput of the manifold reconstruction steps (docs/performance.md):
-//   manifold_bench [points ...] [--insert=N] [--export=DIR] [--graded-steiner=on|off]
+//   manifold_bench [points ...] [--insert=N] [--export=DIR] [--graded-steiner=auto|on|off|hidden]
 //                  [--steiner-grid=N] [--steiner-min-spacing=X] [--steiner-clearance=X]
 //                  [--regrow-seeds=boundary|changed] [--join-pockets=on|off]
 //   default Steiner mode: the library's (auto: graded from 5*10^4 points)
@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
   ms::ManifoldOptions options;
   const char* usage =
       "usage: manifold_bench [points ...] [--insert=N] [--export=DIR] "
-      "[--graded-steiner=on|off] [--steiner-grid=N] [--steiner-min-spacing=X] "
+      "[--graded-steiner=auto|on|off|hidden] [--steiner-grid=N] [--steiner-min-spacing=X] "
       "[--steiner-clearance=X] [--regrow-seeds=boundary|changed] [--join-pockets=on|off]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -55,16 +55,26 @@ int main(int argc, char** argv) {
         options.steiner_clearance = std::stod(arg.substr(20));
       } else if (arg.rfind("--steiner-grid=", 0) == 0) {
         options.steiner_grid = std::stoi(arg.substr(15));
-      } else if (arg == "--graded-steiner=on") {
-        options.steiner_graded = ms::GradedSteiner::kOn;
+      } else if (arg.rfind("--graded-steiner=", 0) == 0) {
+        const std::string scheme = arg.substr(17);
+        bool known = false;
+        for (const auto& [name, value] : ms::OptionChoices(ms::GradedSteiner{})) {
+          if (scheme == name) {
+            options.steiner_graded = value;
+            known = true;
+          }
+        }
+        if (!known) {
+          std::fprintf(stderr, "manifold_bench: unknown --graded-steiner=%s\n%s", scheme.c_str(),
+                       usage);
+          return 2;
+        }
       } else if (arg == "--regrow-seeds=boundary") {
         options.regrow_seeds = ms::RegrowSeeds::kBoundary;
       } else if (arg == "--regrow-seeds=changed") {
         options.regrow_seeds = ms::RegrowSeeds::kChanged;
       } else if (arg == "--join-pockets=on" || arg == "--join-pockets=off") {
         options.join_pockets = arg == "--join-pockets=on";
-      } else if (arg == "--graded-steiner=off") {
-        options.steiner_graded = ms::GradedSteiner::kOff;
       } else {
         char* end = nullptr;
         const long long n = std::strtoll(arg.c_str(), &end, 10);

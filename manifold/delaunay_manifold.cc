@@ -14,6 +14,7 @@
 #include "base/log.h"
 #include "manifold/cell_predicates.h"
 #include "manifold/manifold_impl.h"
+#include "manifold/steiner_sight.h"
 
 namespace ms {
 
@@ -119,6 +120,26 @@ void DelaunayManifold::Impl::CheckAndBound(const std::vector<RayPoint>& points, 
   if (!(lo->array() <= hi->array()).all()) throw InputError("no points and no cameras");
 }
 
+namespace {
+
+// Keeps the box grid and, of the graded points, those hidden in every view that holds them
+// (steiner_sight.h).
+void KeepHiddenGradedPoints(const std::vector<RayPoint>& points,
+                            const std::vector<ManifoldCamera>& cameras, SteinerPoints* made) {
+  const size_t box = made->points.size() - static_cast<size_t>(made->graded);
+  const std::vector<Eigen::Vector3d> graded(made->points.begin() + box, made->points.end());
+  const std::vector<uint8_t> hidden = HiddenInEveryView(graded, points, cameras);
+  made->points.resize(box);
+  for (size_t k = 0; k < graded.size(); ++k) {
+    if (hidden[k]) made->points.push_back(graded[k]);
+  }
+  made->graded = static_cast<int64_t>(made->points.size() - box);
+  spdlog::info("manifold: {} of {} graded Steiner points hidden in every view, kept", made->graded,
+               graded.size());
+}
+
+}  // namespace
+
 SteinerPoints DelaunayManifold::Impl::PlaceSteinerPoints(const std::vector<RayPoint>& points,
                                                          const Eigen::Vector3d& lo,
                                                          const Eigen::Vector3d& hi,
@@ -128,14 +149,18 @@ SteinerPoints DelaunayManifold::Impl::PlaceSteinerPoints(const std::vector<RayPo
   SteinerOptions steiner_options;
   steiner_options.margin = options_.steiner_margin;
   steiner_options.grid = options_.steiner_grid;
-  const bool graded = options_.steiner_graded == GradedSteiner::kOn ||
-                      (options_.steiner_graded == GradedSteiner::kAuto &&
-                       static_cast<int64_t>(points.size()) >= options_.graded_steiner_min_points);
-  labels_.set_graded(graded);
-  steiner_options.graded = graded;
+  GradedSteiner scheme = options_.steiner_graded;
+  if (scheme == GradedSteiner::kAuto) {
+    scheme = static_cast<int64_t>(points.size()) >= options_.graded_steiner_min_points
+                 ? GradedSteiner::kOn
+                 : GradedSteiner::kHidden;
+  }
+  labels_.set_graded(scheme == GradedSteiner::kOn);
+  steiner_options.graded = scheme != GradedSteiner::kOff;
   steiner_options.clearance = options_.steiner_clearance;
   steiner_options.min_spacing_factor = options_.steiner_min_spacing;
   SteinerPoints made = MakeSteinerPoints(lo, hi, data, steiner_options);
+  if (scheme == GradedSteiner::kHidden) KeepHiddenGradedPoints(points, cameras_, &made);
   stats->steiner_points = static_cast<int64_t>(made.points.size());
   stats->graded_steiner_points = made.graded;
   box_min_ = Eigen::Vector3d::Constant(INFINITY);

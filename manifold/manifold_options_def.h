@@ -22,17 +22,20 @@ MS_OPTION(double, steiner_margin, 0.5, "steiner-margin",
 MS_OPTION(int, steiner_grid, 3, "steiner-grid",
           "Steiner points per edge of the box (2 = corners only)", InRange(2, 64))
 // Graded Steiner points in the empty space (an octree whose cells grow with the distance to the
-// points); a cell of Steiner points only is then free space. Viewing rays cross 3x fewer cells
-// at 10^6 points and dense closed scenes come out right where box-only growing fails; sparse
-// open scenes come out worse (docs/manifold.md), hence auto: graded from
-// graded_steiner_min_points input points, the paper's box-only grid below.
+// points). on: all of them, a cell of Steiner points only being free space (viewing rays cross
+// 3x fewer cells at 10^6 points); hidden: only those behind what every view holding them sees
+// (inside objects, under the ground: they keep long cells from joining a facade to the far box
+// points, which rays then carve through); off: the paper's box grid only. auto: hidden below
+// graded_steiner_min_points input points, on from there (docs/manifold.md).
 MS_OPTION(GradedSteiner, steiner_graded, GradedSteiner::kAuto, "graded-steiner",
-          "graded Steiner points in the empty space, cells of Steiner points only being free: on, "
-          "off (the paper's box grid only) or auto (on from --manifold.graded-steiner-min-points "
-          "points; docs/manifold.md)",
+          "graded Steiner points in the empty space: on (all, cells of Steiner points only being "
+          "free), hidden (only those behind what every camera sees), off (the paper's box grid "
+          "only) or auto (hidden below --manifold.graded-steiner-min-points points, on from "
+          "there; docs/manifold.md)",
           AnyValue())
 MS_OPTION(int64_t, graded_steiner_min_points, 50000, "graded-steiner-min-points",
-          "auto mode: input points from which graded Steiner points are used", AtLeast(0))
+          "auto mode: input points from which all graded Steiner points are used (hidden below)",
+          AtLeast(0))
 MS_OPTION(double, steiner_clearance, 1.5, "steiner-clearance",
           "graded Steiner points keep this x their size away from every point", AtLeast(1))
 MS_OPTION(double, steiner_min_spacing, 6.0, "steiner-min-spacing",
