@@ -18,17 +18,27 @@ namespace {
 constexpr char kRunFormat[] = "manisweep-run";
 constexpr int64_t kRunFormatVersion = 1;
 
-// A column of a statistics table and how it maps to the struct.
+// A column of a statistics table and how it maps to the struct: the one list of a table's
+// columns writes run.h5, reads it back and writes summary.json's rows.
 template <typename Row>
 struct Column {
   H5Column column;
+  // Added after run.h5's format was fixed: runs written before it have no such column, and
+  // the field stays 0 when they are read.
+  bool added_later = false;
   std::function<H5Value(const Row&)> get;
+  // Reads the column into rows (resized to its length).
+  std::function<void(const H5File&, const std::string& table, std::vector<Row>*)> read;
+  std::function<void(const Row&, nlohmann::json*)> to_json;
 };
 
+enum class Since { kFirstFormat, kAddedLater };
+
 template <typename Row, typename T>
-Column<Row> Field(const char* name, T Row::*member) {
+Column<Row> Field(const char* name, T Row::*member, Since since = Since::kFirstFormat) {
   Column<Row> c;
   c.column.name = name;
+  c.added_later = since == Since::kAddedLater;
   if constexpr (std::is_same_v<T, double>) c.column.type = H5Type::kFloat64;
   if constexpr (std::is_same_v<T, int32_t>) c.column.type = H5Type::kInt32;
   if constexpr (std::is_same_v<T, int64_t>) c.column.type = H5Type::kInt64;
@@ -37,6 +47,12 @@ Column<Row> Field(const char* name, T Row::*member) {
     c.column.string_width = 256;
   }
   c.get = [member](const Row& row) { return H5Value(row.*member); };
+  c.read = [member, name](const H5File& file, const std::string& table, std::vector<Row>* rows) {
+    const std::vector<T> values = file.ReadColumn<T>(table, name);
+    rows->resize(values.size());
+    for (size_t i = 0; i < values.size(); ++i) (*rows)[i].*member = values[i];
+  };
+  c.to_json = [member, name](const Row& row, nlohmann::json* out) { (*out)[name] = row.*member; };
   return c;
 }
 
@@ -56,11 +72,11 @@ std::vector<Column<IterationStats>> IterationColumns() {
           Field("vertices", &S::vertices),
           Field("faces", &S::faces),
           Field("outside_cells", &S::outside_cells),
-          Field("cameras_in_matter", &S::cameras_in_matter),
-          Field("job_bytes", &S::job_bytes),
-          Field("job_max_bytes", &S::job_max_bytes),
-          Field("jobs_smoothed", &S::jobs_smoothed),
-          Field("image_noise_max", &S::image_noise_max),
+          Field("cameras_in_matter", &S::cameras_in_matter, Since::kAddedLater),
+          Field("job_bytes", &S::job_bytes, Since::kAddedLater),
+          Field("job_max_bytes", &S::job_max_bytes, Since::kAddedLater),
+          Field("jobs_smoothed", &S::jobs_smoothed, Since::kAddedLater),
+          Field("image_noise_max", &S::image_noise_max, Since::kAddedLater),
           Field("cleanup_collapses", &S::cleanup_collapses),
           Field("cleanup_splits", &S::cleanup_splits),
           Field("float_problems_left", &S::float_problems_left),
@@ -68,7 +84,7 @@ std::vector<Column<IterationStats>> IterationColumns() {
           Field("seconds_sweep", &S::seconds_sweep),
           Field("seconds_kernel", &S::seconds_kernel),
           Field("seconds_insert", &S::seconds_insert),
-          Field("seconds_insert_early", &S::seconds_insert_early),
+          Field("seconds_insert_early", &S::seconds_insert_early, Since::kAddedLater),
           Field("seconds_extract", &S::seconds_extract),
           Field("seconds_checkpoint", &S::seconds_checkpoint),
           Field("seconds_total", &S::seconds_total)};
@@ -93,12 +109,22 @@ void WriteTable(H5File& file, const std::string& table, const std::vector<Column
   }
 }
 
-template <typename Row, typename T>
-void ReadColumnInto(const H5File& file, const std::string& table, const char* name, T Row::*member,
-                    std::vector<Row>* rows) {
-  const std::vector<T> values = file.ReadColumn<T>(table, name);
-  rows->resize(values.size());
-  for (size_t i = 0; i < values.size(); ++i) (*rows)[i].*member = values[i];
+template <typename Row>
+std::vector<Row> ReadTable(const H5File& file, const std::string& table,
+                           const std::vector<Column<Row>>& columns) {
+  std::vector<Row> rows;
+  for (const Column<Row>& c : columns) {
+    if (c.added_later && !file.Exists(table + "/" + c.column.name)) continue;
+    c.read(file, table, &rows);
+  }
+  return rows;
+}
+
+template <typename Row>
+nlohmann::json RowJson(const Row& row, const std::vector<Column<Row>>& columns) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const Column<Row>& c : columns) c.to_json(row, &out);
+  return out;
 }
 
 void HashValue(Xxh64& h, double v) { h.Update(&v, sizeof(v)); }
@@ -243,59 +269,14 @@ RunRecord ReadRunFile(const std::string& path) {
     }
     record.batches.push_back(std::move(batch));
   }
-  {
-    using S = IterationStats;
-    const std::string t = "/stats/iterations";
-    std::vector<S>& rows = record.iterations;
-    ReadColumnInto(file, t, "iteration", &S::iteration, &rows);
-    ReadColumnInto(file, t, "jobs", &S::jobs, &rows);
-    ReadColumnInto(file, t, "jobs_bad", &S::jobs_bad, &rows);
-    ReadColumnInto(file, t, "jobs_requeued", &S::jobs_requeued, &rows);
-    ReadColumnInto(file, t, "cameras_skipped", &S::cameras_skipped, &rows);
-    ReadColumnInto(file, t, "workers", &S::workers, &rows);
-    ReadColumnInto(file, t, "points_found", &S::points_found, &rows);
-    ReadColumnInto(file, t, "points_inserted", &S::points_inserted, &rows);
-    ReadColumnInto(file, t, "discarded_conflict", &S::discarded_conflict, &rows);
-    ReadColumnInto(file, t, "discarded_duplicate", &S::discarded_duplicate, &rows);
-    ReadColumnInto(file, t, "discarded_outside", &S::discarded_outside, &rows);
-    ReadColumnInto(file, t, "vertices", &S::vertices, &rows);
-    ReadColumnInto(file, t, "faces", &S::faces, &rows);
-    ReadColumnInto(file, t, "outside_cells", &S::outside_cells, &rows);
-    // Columns added later: runs made before them have none (the fields stay 0).
-    const auto read_if_there = [&](const char* name, auto member) {
-      if (file.Exists(t + "/" + name)) ReadColumnInto(file, t, name, member, &rows);
-    };
-    read_if_there("job_bytes", &S::job_bytes);
-    read_if_there("job_max_bytes", &S::job_max_bytes);
-    read_if_there("seconds_insert_early", &S::seconds_insert_early);
-    read_if_there("cameras_in_matter", &S::cameras_in_matter);
-    read_if_there("jobs_smoothed", &S::jobs_smoothed);
-    read_if_there("image_noise_max", &S::image_noise_max);
-    ReadColumnInto(file, t, "cleanup_collapses", &S::cleanup_collapses, &rows);
-    ReadColumnInto(file, t, "cleanup_splits", &S::cleanup_splits, &rows);
-    ReadColumnInto(file, t, "float_problems_left", &S::float_problems_left, &rows);
-    ReadColumnInto(file, t, "seconds_jobs", &S::seconds_jobs, &rows);
-    ReadColumnInto(file, t, "seconds_sweep", &S::seconds_sweep, &rows);
-    ReadColumnInto(file, t, "seconds_kernel", &S::seconds_kernel, &rows);
-    ReadColumnInto(file, t, "seconds_insert", &S::seconds_insert, &rows);
-    ReadColumnInto(file, t, "seconds_extract", &S::seconds_extract, &rows);
-    ReadColumnInto(file, t, "seconds_checkpoint", &S::seconds_checkpoint, &rows);
-    ReadColumnInto(file, t, "seconds_total", &S::seconds_total, &rows);
-    if (static_cast<int64_t>(rows.size()) != completed + 1) {
-      throw InputError(fmt::format("{}: {}: {} rows for {} completed iterations (+ the build)",
-                                   path, t, rows.size(), completed));
-    }
+  record.iterations = ReadTable(file, "/stats/iterations", IterationColumns());
+  if (static_cast<int64_t>(record.iterations.size()) != completed + 1) {
+    throw InputError(
+        fmt::format("{}: /stats/iterations: {} rows for {} completed iterations (+ the "
+                    "build)",
+                    path, record.iterations.size(), completed));
   }
-  {
-    using W = WorkerIterationStats;
-    const std::string t = "/stats/workers";
-    std::vector<W>& rows = record.workers;
-    ReadColumnInto(file, t, "iteration", &W::iteration, &rows);
-    ReadColumnInto(file, t, "worker", &W::worker, &rows);
-    ReadColumnInto(file, t, "jobs", &W::jobs, &rows);
-    ReadColumnInto(file, t, "points", &W::points, &rows);
-    ReadColumnInto(file, t, "seconds_kernel", &W::seconds_kernel, &rows);
-  }
+  record.workers = ReadTable(file, "/stats/workers", WorkerColumns());
   return record;
 }
 
@@ -313,36 +294,13 @@ void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
   j["options_fingerprint"] = record.options_fingerprint;
   j["iterations_completed"] = record.completed_iterations();
   json rows = json::array();
+  const std::vector<Column<IterationStats>> columns = IterationColumns();
   for (const IterationStats& s : record.iterations) {
-    rows.push_back(
-        {{"iteration", s.iteration},
-         {"jobs", s.jobs},
-         {"jobs_bad", s.jobs_bad},
-         {"jobs_requeued", s.jobs_requeued},
-         {"cameras_skipped", s.cameras_skipped},
-         {"workers", s.workers},
-         {"points_found", s.points_found},
-         {"points_inserted", s.points_inserted},
-         {"points_discarded", s.discarded_conflict + s.discarded_duplicate + s.discarded_outside},
-         {"points_duplicate", s.discarded_duplicate},
-         {"vertices", s.vertices},
-         {"faces", s.faces},
-         {"cameras_in_matter", s.cameras_in_matter},
-         {"job_bytes", s.job_bytes},
-         {"job_max_bytes", s.job_max_bytes},
-         {"jobs_smoothed", s.jobs_smoothed},
-         {"image_noise_max", s.image_noise_max},
-         {"cleanup_collapses", s.cleanup_collapses},
-         {"cleanup_splits", s.cleanup_splits},
-         {"float_problems_left", s.float_problems_left},
-         {"seconds_jobs", s.seconds_jobs},
-         {"seconds_sweep", s.seconds_sweep},
-         {"seconds_kernel", s.seconds_kernel},
-         {"seconds_insert", s.seconds_insert},
-         {"seconds_insert_early", s.seconds_insert_early},
-         {"seconds_extract", s.seconds_extract},
-         {"seconds_checkpoint", s.seconds_checkpoint},
-         {"seconds_total", s.seconds_total}});
+    json row = RowJson(s, columns);
+    // Kept from summary.json's first format, which scripts read.
+    row["points_discarded"] = s.discarded_conflict + s.discarded_duplicate + s.discarded_outside;
+    row["points_duplicate"] = s.discarded_duplicate;
+    rows.push_back(std::move(row));
   }
   j["iterations"] = rows;
   json workers = json::object();

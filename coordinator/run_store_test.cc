@@ -1,0 +1,135 @@
+// run.h5's statistics tables and summary.json: every field survives the round trip.
+#include "coordinator/run_store.h"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "base/file_util.h"
+#include "scene/scene_testing.h"
+
+namespace ms {
+namespace {
+
+using testing::TempDir;
+
+// Every field of the row a value of its own (k, k + 1, ...), so that a column written from one
+// field and read into another shows.
+IterationStats DistinctStats(int32_t k) {
+  IterationStats s;
+  s.iteration = k;
+  s.jobs = k + 1;
+  s.jobs_bad = k + 2;
+  s.jobs_requeued = k + 3;
+  s.cameras_skipped = k + 4;
+  s.workers = k + 5;
+  s.points_found = k + 6;
+  s.points_inserted = k + 7;
+  s.discarded_conflict = k + 8;
+  s.discarded_duplicate = k + 9;
+  s.discarded_outside = k + 10;
+  s.vertices = k + 11;
+  s.faces = k + 12;
+  s.outside_cells = k + 13;
+  s.cameras_in_matter = k + 14;
+  s.job_bytes = k + 15;
+  s.job_max_bytes = k + 16;
+  s.jobs_smoothed = k + 17;
+  s.image_noise_max = k + 18.5;
+  s.cleanup_collapses = k + 19;
+  s.cleanup_splits = k + 20;
+  s.float_problems_left = k + 21;
+  s.seconds_jobs = k + 22.5;
+  s.seconds_sweep = k + 23.5;
+  s.seconds_kernel = k + 24.5;
+  s.seconds_insert = k + 25.5;
+  s.seconds_insert_early = k + 26.5;
+  s.seconds_extract = k + 27.5;
+  s.seconds_checkpoint = k + 28.5;
+  s.seconds_total = k + 29.5;
+  return s;
+}
+
+void ExpectSameStats(const IterationStats& a, const IterationStats& b) {
+  EXPECT_EQ(a.iteration, b.iteration);
+  EXPECT_EQ(a.jobs, b.jobs);
+  EXPECT_EQ(a.jobs_bad, b.jobs_bad);
+  EXPECT_EQ(a.jobs_requeued, b.jobs_requeued);
+  EXPECT_EQ(a.cameras_skipped, b.cameras_skipped);
+  EXPECT_EQ(a.workers, b.workers);
+  EXPECT_EQ(a.points_found, b.points_found);
+  EXPECT_EQ(a.points_inserted, b.points_inserted);
+  EXPECT_EQ(a.discarded_conflict, b.discarded_conflict);
+  EXPECT_EQ(a.discarded_duplicate, b.discarded_duplicate);
+  EXPECT_EQ(a.discarded_outside, b.discarded_outside);
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.faces, b.faces);
+  EXPECT_EQ(a.outside_cells, b.outside_cells);
+  EXPECT_EQ(a.cameras_in_matter, b.cameras_in_matter);
+  EXPECT_EQ(a.job_bytes, b.job_bytes);
+  EXPECT_EQ(a.job_max_bytes, b.job_max_bytes);
+  EXPECT_EQ(a.jobs_smoothed, b.jobs_smoothed);
+  EXPECT_EQ(a.image_noise_max, b.image_noise_max);
+  EXPECT_EQ(a.cleanup_collapses, b.cleanup_collapses);
+  EXPECT_EQ(a.cleanup_splits, b.cleanup_splits);
+  EXPECT_EQ(a.float_problems_left, b.float_problems_left);
+  EXPECT_EQ(a.seconds_jobs, b.seconds_jobs);
+  EXPECT_EQ(a.seconds_sweep, b.seconds_sweep);
+  EXPECT_EQ(a.seconds_kernel, b.seconds_kernel);
+  EXPECT_EQ(a.seconds_insert, b.seconds_insert);
+  EXPECT_EQ(a.seconds_insert_early, b.seconds_insert_early);
+  EXPECT_EQ(a.seconds_extract, b.seconds_extract);
+  EXPECT_EQ(a.seconds_checkpoint, b.seconds_checkpoint);
+  EXPECT_EQ(a.seconds_total, b.seconds_total);
+}
+
+RunRecord RecordWithOneIteration(const TempDir& dir) {
+  RunRecord record;
+  record.scene = testing::MakeSyntheticScene(dir.path().string());
+  record.scene_fingerprint = SceneFingerprint(record.scene);
+  record.options_fingerprint = "options";
+  RayPoint p;
+  p.position = Eigen::Vector3d(0.1, 0.2, 0.3);
+  p.cameras = {0, 1};
+  record.batches = {{p}};
+  record.iterations = {DistinctStats(0), DistinctStats(100)};
+  record.workers = {{1, "worker-1", 3, 40, 1.25}, {1, "worker-2", 2, 30, 0.75}};
+  return record;
+}
+
+TEST(RunStore, EveryStatisticSurvivesRunH5) {
+  const TempDir dir("run_store");
+  const RunRecord written = RecordWithOneIteration(dir);
+  const std::string path = (dir.path() / "run.h5").string();
+  WriteRunFile(written, path);
+  const RunRecord read = ReadRunFile(path);
+  ASSERT_EQ(read.iterations.size(), written.iterations.size());
+  for (size_t i = 0; i < read.iterations.size(); ++i) {
+    ExpectSameStats(read.iterations[i], written.iterations[i]);
+  }
+  ASSERT_EQ(read.workers.size(), 2u);
+  EXPECT_EQ(read.workers[1].worker, "worker-2");
+  EXPECT_EQ(read.workers[1].jobs, 2);
+  EXPECT_EQ(read.workers[1].points, 30);
+  EXPECT_EQ(read.workers[1].seconds_kernel, 0.75);
+}
+
+TEST(RunStore, SummaryJsonHasEveryColumnAndTheTotals) {
+  const TempDir dir("run_store");
+  const RunRecord record = RecordWithOneIteration(dir);
+  const std::string path = (dir.path() / "summary.json").string();
+  RunSummaryInfo info;
+  info.status = "finished";
+  WriteSummaryJson(record, info, path);
+  const nlohmann::json j = nlohmann::json::parse(ReadFileToString(path));
+  const nlohmann::json& row = j["iterations"][1];
+  EXPECT_EQ(row["discarded_outside"], 110);
+  EXPECT_EQ(row["seconds_insert_early"], 126.5);
+  EXPECT_EQ(row["points_discarded"], 108 + 109 + 110);
+  EXPECT_EQ(row["points_duplicate"], 109);
+  EXPECT_EQ(row.size(), 30u + 2u);  // every column, and the two totals
+  EXPECT_EQ(j["workers"]["worker-1"]["points"], 40);
+}
+
+}  // namespace
+}  // namespace ms
