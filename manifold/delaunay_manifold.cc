@@ -123,19 +123,25 @@ void DelaunayManifold::Impl::CheckAndBound(const std::vector<RayPoint>& points, 
 namespace {
 
 // Keeps the box grid and, of the graded points, those hidden in every view that holds them
-// (steiner_sight.h).
-void KeepHiddenGradedPoints(const std::vector<RayPoint>& points,
-                            const std::vector<ManifoldCamera>& cameras, SteinerPoints* made) {
+// and those in open air that rays cross densely (steiner_sight.h).
+void KeepGradedPointsBySight(const std::vector<RayPoint>& points,
+                             const std::vector<ManifoldCamera>& cameras, SteinerPoints* made) {
   const size_t box = made->points.size() - static_cast<size_t>(made->graded);
   const std::vector<Eigen::Vector3d> graded(made->points.begin() + box, made->points.end());
-  const std::vector<uint8_t> hidden = HiddenInEveryView(graded, points, cameras);
+  const std::vector<SteinerSight> sight =
+      ClassifyBySight(graded, points, cameras, made->median_spacing);
   made->points.resize(box);
+  int64_t hidden = 0;
   for (size_t k = 0; k < graded.size(); ++k) {
-    if (hidden[k]) made->points.push_back(graded[k]);
+    if (sight[k] == SteinerSight::kDrop) continue;
+    made->points.push_back(graded[k]);
+    hidden += sight[k] == SteinerSight::kHidden;
   }
   made->graded = static_cast<int64_t>(made->points.size() - box);
-  spdlog::info("manifold: {} of {} graded Steiner points hidden in every view, kept", made->graded,
-               graded.size());
+  spdlog::info(
+      "manifold: graded Steiner points kept by sight: {} hidden in every view, {} in open air "
+      "(of {})",
+      hidden, made->graded - hidden, graded.size());
 }
 
 }  // namespace
@@ -160,7 +166,7 @@ SteinerPoints DelaunayManifold::Impl::PlaceSteinerPoints(const std::vector<RayPo
   steiner_options.clearance = options_.steiner_clearance;
   steiner_options.min_spacing_factor = options_.steiner_min_spacing;
   SteinerPoints made = MakeSteinerPoints(lo, hi, data, steiner_options);
-  if (scheme == GradedSteiner::kHidden) KeepHiddenGradedPoints(points, cameras_, &made);
+  if (scheme == GradedSteiner::kHidden) KeepGradedPointsBySight(points, cameras_, &made);
   stats->steiner_points = static_cast<int64_t>(made.points.size());
   stats->graded_steiner_points = made.graded;
   box_min_ = Eigen::Vector3d::Constant(INFINITY);

@@ -25,14 +25,16 @@ MS_OPTION(int, steiner_grid, 3, "steiner-grid",
 // points). on: all of them, a cell of Steiner points only being free space (viewing rays cross
 // 3x fewer cells at 10^6 points); hidden: only those behind what every view holding them sees
 // (inside objects, under the ground: they keep long cells from joining a facade to the far box
-// points, which rays then carve through); off: the paper's box grid only. auto: hidden below
+// points, which rays then carve through) and those in open air that rays cross densely
+// (manifold/steiner_sight.h); off: the paper's box grid only. auto: hidden below
 // graded_steiner_min_points input points, on from there (docs/manifold.md).
-MS_OPTION(GradedSteiner, steiner_graded, GradedSteiner::kAuto, "graded-steiner",
-          "graded Steiner points in the empty space: on (all, cells of Steiner points only being "
-          "free), hidden (only those behind what every camera sees), off (the paper's box grid "
-          "only) or auto (hidden below --manifold.graded-steiner-min-points points, on from "
-          "there; docs/manifold.md)",
-          AnyValue())
+MS_OPTION(
+    GradedSteiner, steiner_graded, GradedSteiner::kAuto, "graded-steiner",
+    "graded Steiner points in the empty space: on (all, cells of Steiner points only being "
+    "free), hidden (those behind what every camera sees, and in open air far from the points), "
+    "off (the paper's box grid only) or auto (hidden below "
+    "--manifold.graded-steiner-min-points points, on from there; docs/manifold.md)",
+    AnyValue())
 MS_OPTION(int64_t, graded_steiner_min_points, 50000, "graded-steiner-min-points",
           "auto mode: input points from which all graded Steiner points are used (hidden below)",
           AtLeast(0))

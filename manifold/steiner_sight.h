@@ -1,9 +1,9 @@
-// Which graded Steiner points lie behind what every camera sees (docs/manifold.md, "Steiner
+// Which graded Steiner points to keep, from what the cameras see (docs/manifold.md, "Steiner
 // points"). Inside objects, under the ground and behind walls a graded point breaks the long
 // cells that would otherwise join a facade to the far box points (viewing rays cross those
-// cells and carve the corners of buildings away); in front of the surface, where few rays go,
+// cells and carve the corners of buildings away). In front of the surface, where few rays go,
 // a graded point makes cells that no ray crosses, which then stand as blocks of matter before
-// the surface. So only the points hidden in every view that holds them are kept.
+// the surface; far from the surface, where many rays go, it only keeps the rays' walks short.
 #pragma once
 
 #include <Eigen/Core>
@@ -14,15 +14,30 @@
 
 namespace ms {
 
-// For each candidate: whether at least one camera sees input points in front of it, no camera
-// sees it in front of its points, and no camera whose view holds it sees no point near its
-// direction. Each camera's view is cut into kSightBins x kSightBins bins of the depths of the
-// points it observes: "in front" compares with the nearest depth of the bin and its 8
-// neighbours, "behind" with the farthest depth of the bin itself.
-std::vector<uint8_t> HiddenInEveryView(const std::vector<Eigen::Vector3d>& candidates,
-                                       const std::vector<RayPoint>& points,
-                                       const std::vector<ManifoldCamera>& cameras);
+enum class SteinerSight : uint8_t {
+  kDrop,
+  // At least one camera sees input points in front of it, no camera whose view holds it sees
+  // it in front of its points, and every such camera sees points near its direction.
+  kHidden,
+  // In front of the points some camera sees, at least kOpenAirSpacings median point spacings
+  // from every input point, and crossed by rays densely: the cameras that see it in front send
+  // at least kOpenAirRays rays (by the density of their points' directions) through a disc of
+  // half its distance to the nearest point. The rays make its cells free; it only shortens
+  // their walks.
+  kOpenAir,
+};
 
-inline constexpr int kSightBins = 64;
+inline constexpr int kSightBins = 64;  // each camera's view cut into kSightBins^2 bins
+inline constexpr double kOpenAirSpacings = 50;
+inline constexpr double kOpenAirRays = 1000;
+
+// Classifies each candidate by the depths of the input points in each camera's view bins: "in
+// front" against the nearest depth of the bin and its 8 neighbours (and a bin that holds a
+// point), "behind" against the farthest depth in the bin. `median_spacing`: of the input points.
+// Costs cameras x candidates projections.
+std::vector<SteinerSight> ClassifyBySight(const std::vector<Eigen::Vector3d>& candidates,
+                                          const std::vector<RayPoint>& points,
+                                          const std::vector<ManifoldCamera>& cameras,
+                                          double median_spacing);
 
 }  // namespace ms

@@ -5,6 +5,15 @@
 namespace ms {
 namespace {
 
+using Sight = SteinerSight;
+
+// ClassifyBySight with the wall's spacing (0.2).
+std::vector<SteinerSight> Classify(const std::vector<Eigen::Vector3d>& candidates,
+                                   const std::vector<RayPoint>& points,
+                                   const std::vector<ManifoldCamera>& cameras) {
+  return ClassifyBySight(candidates, points, cameras, 0.2);
+}
+
 // A camera at the origin looking down +z (identity rotation), a 90-degree view.
 ManifoldCamera CameraAt(const Eigen::Vector3d& center) {
   ManifoldCamera camera;
@@ -21,7 +30,7 @@ std::vector<RayPoint> LeftHalfWall() {
   return points;
 }
 
-TEST(HiddenInEveryView, KeepsOnlyWhatLiesBehindTheSeenPoints) {
+TEST(ClassifyBySight, KeepsOnlyWhatLiesBehindTheSeenPoints) {
   const std::vector<ManifoldCamera> cameras = {CameraAt(Eigen::Vector3d::Zero())};
   const std::vector<Eigen::Vector3d> candidates = {
       {-5, 0, 15},   // behind the wall
@@ -29,11 +38,11 @@ TEST(HiddenInEveryView, KeepsOnlyWhatLiesBehindTheSeenPoints) {
       {5, 0, 15},    // where the camera sees no point (the right half)
       {-5, 0, -15},  // behind the camera: no view holds it
   };
-  const std::vector<uint8_t> hidden = HiddenInEveryView(candidates, LeftHalfWall(), cameras);
-  EXPECT_EQ(hidden, (std::vector<uint8_t>{1, 0, 0, 0}));
+  EXPECT_EQ(Classify(candidates, LeftHalfWall(), cameras),
+            (std::vector<Sight>{Sight::kHidden, Sight::kDrop, Sight::kDrop, Sight::kDrop}));
 }
 
-TEST(HiddenInEveryView, OneViewThatSeesNoPointThereRefuses) {
+TEST(ClassifyBySight, OneViewThatSeesNoPointThereRefuses) {
   // Camera 1 stands beside camera 0 and observes only a patch far ahead of it: the candidate
   // behind the wall lies in its view, in a direction where it observes no point.
   std::vector<RayPoint> points = LeftHalfWall();
@@ -41,11 +50,11 @@ TEST(HiddenInEveryView, OneViewThatSeesNoPointThereRefuses) {
   const std::vector<ManifoldCamera> cameras = {CameraAt(Eigen::Vector3d::Zero()),
                                                CameraAt(Eigen::Vector3d(-10, 0, 5))};
   const std::vector<Eigen::Vector3d> behind = {{-5, 0, 15}};
-  EXPECT_EQ(HiddenInEveryView(behind, LeftHalfWall(), {cameras[0]}), std::vector<uint8_t>{1});
-  EXPECT_EQ(HiddenInEveryView(behind, points, cameras), std::vector<uint8_t>{0});
+  EXPECT_EQ(Classify(behind, LeftHalfWall(), {cameras[0]}), std::vector<Sight>{Sight::kHidden});
+  EXPECT_EQ(Classify(behind, points, cameras), std::vector<Sight>{Sight::kDrop});
 }
 
-TEST(HiddenInEveryView, ADepthBetweenTheBinsPointsDecidesNothing) {
+TEST(ClassifyBySight, ADepthBetweenTheBinsPointsDecidesNothing) {
   // Two walls in the same bins, at z = 10 and z = 20: a candidate between them is neither in
   // front of the nearest nor behind the farthest, so no view votes for it.
   std::vector<RayPoint> points = LeftHalfWall();
@@ -54,7 +63,24 @@ TEST(HiddenInEveryView, ADepthBetweenTheBinsPointsDecidesNothing) {
   }
   const std::vector<ManifoldCamera> cameras = {CameraAt(Eigen::Vector3d::Zero())};
   const std::vector<Eigen::Vector3d> candidates = {{-5, 0, 15}, {-5, 0, 25}};
-  EXPECT_EQ(HiddenInEveryView(candidates, points, cameras), (std::vector<uint8_t>{0, 1}));
+  EXPECT_EQ(Classify(candidates, points, cameras),
+            (std::vector<Sight>{Sight::kDrop, Sight::kHidden}));
+}
+
+TEST(ClassifyBySight, KeepsOpenAirOnlyFarFromThePointsWhereRaysAreDense) {
+  // A wall at z = 1000 with a point every 10 units, seen by camera 0 (about 9 points per bin).
+  std::vector<RayPoint> points;
+  for (double x = -900; x < 900; x += 10) {
+    for (double y = -900; y < 900; y += 10) points.push_back({Eigen::Vector3d(x, y, 1000), {0}});
+  }
+  const std::vector<ManifoldCamera> cameras = {CameraAt(Eigen::Vector3d::Zero())};
+  // 600 from the wall, 60 spacings: the rays toward the wall's points cross a disc of radius
+  // 300 there by the ten thousand. 5 from the wall: too near.
+  EXPECT_EQ(ClassifyBySight({{0, 0, 400}, {0, 0, 995}}, points, cameras, 10.0),
+            (std::vector<Sight>{Sight::kOpenAir, Sight::kDrop}));
+  // 10 from the wall but 100 spacings of 0.1: far enough, yet about one ray crosses a disc of
+  // radius 5 there.
+  EXPECT_EQ(ClassifyBySight({{0, 0, 990}}, points, cameras, 0.1), std::vector<Sight>{Sight::kDrop});
 }
 
 }  // namespace
