@@ -694,7 +694,7 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
         incident.clear();
         dt_.incident_cells(c->vertex(i), std::back_inserter(incident));
         for (const Cell_handle& n : incident) {
-          if (n->info().stamp == found || !free_outside_o(n)) continue;
+          if (n->info().stamp == found) continue;
           n->info().stamp = found;
           if (grow_shrink_.NextToO(n)) out.push_back(n);
         }
