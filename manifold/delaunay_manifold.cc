@@ -684,20 +684,28 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
     return !dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c);
   };
   // The cells next to O (GrowShrink::NextToO) around the vertices of `cells`, each once: where
-  // growing or a pocket may have become possible when `cells` joined O.
+  // growing or a pocket may have become possible when `cells` joined O. Each vertex's star is
+  // scanned once, however many of `cells` hold it (a box point's star can hold 10^4 cells):
+  // a repeated star adds nothing, its cells are all stamped already.
   std::vector<Cell_handle> incident;
+  std::unordered_set<const void*> scanned;
   const auto around = [&](const std::vector<Cell_handle>& cells) {
-    const uint32_t found = walker_.NextStamp();
-    std::vector<Cell_handle> out;
+    std::vector<Vertex_handle> vertices;
+    scanned.clear();
     for (const Cell_handle& c : cells) {
       for (int i = 0; i < 4; ++i) {
-        incident.clear();
-        dt_.incident_cells(c->vertex(i), std::back_inserter(incident));
-        for (const Cell_handle& n : incident) {
-          if (n->info().stamp == found) continue;
-          n->info().stamp = found;
-          if (grow_shrink_.NextToO(n)) out.push_back(n);
-        }
+        if (scanned.insert(&*c->vertex(i)).second) vertices.push_back(c->vertex(i));
+      }
+    }
+    const uint32_t found = walker_.NextStamp();
+    std::vector<Cell_handle> out;
+    for (const Vertex_handle& v : vertices) {
+      incident.clear();
+      dt_.incident_cells(v, std::back_inserter(incident));
+      for (const Cell_handle& n : incident) {
+        if (n->info().stamp == found) continue;
+        n->info().stamp = found;
+        if (grow_shrink_.NextToO(n)) out.push_back(n);
       }
     }
     return out;

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <iterator>
 #include <random>
 #include <set>
@@ -170,6 +171,49 @@ TEST(VertexRegularity, FastTestAgreesWithExhaustiveTest) {
     EXPECT_EQ(manifold_internal::RegularityTestMismatches(points, seed, &checked), 0);
     EXPECT_GT(checked, 10000);
   }
+}
+
+// The link walk that tests vertices of large stars must agree with the exhaustive test, on
+// small stars and on one of hundreds of cells (a point inside a sphere of points, like a
+// box point amid a scene), for O sets that leave vertices regular and irregular.
+TEST(VertexRegularity, LinkWalkAgreesWithExhaustiveTest) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0, 1);
+  std::vector<Eigen::Vector3d> points = {Eigen::Vector3d::Zero()};
+  for (int i = 0; i < 300; ++i)
+    points.push_back(Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized());
+  for (int i = 0; i < 200; ++i) {
+    points.push_back((1.3 + i % 7 * 0.25) * Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized());
+  }
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<double> coin(1 << 16);
+  for (double& c : coin) c = u(rng);
+  const auto hash = [&](const Eigen::Vector3d& x) {
+    return coin[static_cast<size_t>(std::abs(x.x() * 7919 + x.y() * 104729 + x.z() * 1299709)) %
+                coin.size()];
+  };
+  const std::vector<std::function<bool(const Eigen::Vector3d&)>> sets = {
+      [](const Eigen::Vector3d& x) { return x.z() > 0.1; },                  // one cap
+      [](const Eigen::Vector3d& x) { return std::abs(x.z()) > 0.3; },        // two caps
+      [](const Eigen::Vector3d& x) { return x.norm() < 0.6; },               // a ball
+      [&](const Eigen::Vector3d& x) { return hash(x) < 0.3; },               // random
+      [&](const Eigen::Vector3d& x) { return x.z() > 0 && hash(x) < 0.9; },  // holes
+  };
+  int64_t regular = 0, irregular = 0;
+  std::vector<manifold_internal::LinkWalkComparison> results;
+  for (const auto& in_o : sets) {
+    results.push_back(manifold_internal::CompareLinkWalk(points, in_o));
+    EXPECT_EQ(results.back().mismatches, 0);
+    EXPECT_EQ(results.back().checked, 2 * static_cast<int64_t>(points.size()));
+    regular += results.back().regular;
+    irregular += results.back().irregular;
+  }
+  EXPECT_GT(regular, 500);
+  EXPECT_GT(irregular, 100);
+  // The centre's star holds hundreds of cells; its link is one cycle with one cap, two with two.
+  EXPECT_GT(results[0].largest_star, 400);
+  EXPECT_TRUE(results[0].largest_star_regular);
+  EXPECT_FALSE(results[1].largest_star_regular);
 }
 
 struct RandomScene {

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace ms::manifold_internal {
@@ -28,6 +29,17 @@ bool IsVertexRegular(const std::vector<Eigen::Vector3d>& points,
 // Returns the number of disagreements; *checked receives the number of comparisons.
 int64_t RegularityTestMismatches(const std::vector<Eigen::Vector3d>& points, uint32_t seed,
                                  int64_t* checked);
+
+// Puts in O the finite cells of the triangulation of `points` whose centroid `in_o` accepts,
+// then compares, on every vertex, the link-walk regularity test (started from the whole star,
+// and from one cell of it) with the exhaustive one.
+struct LinkWalkComparison {
+  int64_t checked = 0, mismatches = 0, regular = 0, irregular = 0;
+  int64_t largest_star = 0;           // cells around the vertex with the most
+  bool largest_star_regular = false;  // that vertex's verdict
+};
+LinkWalkComparison CompareLinkWalk(const std::vector<Eigen::Vector3d>& points,
+                                   const std::function<bool(const Eigen::Vector3d&)>& in_o);
 
 // Cells crossed by the open segment camera -> points[target] in a manifold built from
 // `points` (with Steiner points, ids -1-k): as found by the walk and by testing every cell.

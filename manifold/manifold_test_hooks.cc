@@ -1,6 +1,8 @@
 // Test hooks (manifold/manifold_internal.h): compiled into manifold_test only, never into the
 // ms_manifold library. They reach DelaunayManifold::Impl through the internal headers.
 #include <algorithm>
+#include <functional>
+#include <iterator>
 #include <utility>
 #include <vector>
 
@@ -109,6 +111,35 @@ struct ManifoldTestAccess {
     return mismatches;
   }
 
+  static manifold_internal::LinkWalkComparison CompareLinkWalk(
+      const std::vector<Eigen::Vector3d>& points,
+      const std::function<bool(const Eigen::Vector3d&)>& in_o) {
+    DelaunayManifold::Impl impl({}, ManifoldOptions{});
+    impl.dt_ = manifold_internal::Triangulate(points);
+    for (auto c = impl.dt_.finite_cells_begin(); c != impl.dt_.finite_cells_end(); ++c) {
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (int i = 0; i < 4; ++i) centroid += manifold_detail::ToEigen(c->vertex(i)->point()) / 4;
+      if (in_o(centroid)) impl.labels_.SetOutside(c, true);
+    }
+    manifold_internal::LinkWalkComparison result;
+    std::vector<Cell_handle> star;
+    for (auto v = impl.dt_.finite_vertices_begin(); v != impl.dt_.finite_vertices_end(); ++v) {
+      star.clear();
+      impl.dt_.incident_cells(v, std::back_inserter(star));
+      const bool exhaustive = impl.regularity_.VertexRegular(v, Cell_handle());
+      const bool from_star = impl.regularity_.VertexRegularByLinkWalk(v, star);
+      const bool from_one = impl.regularity_.VertexRegularByLinkWalk(v, {star.back()});
+      result.checked += 2;
+      result.mismatches += (from_star != exhaustive) + (from_one != exhaustive);
+      ++(exhaustive ? result.regular : result.irregular);
+      if (static_cast<int64_t>(star.size()) > result.largest_star) {
+        result.largest_star = static_cast<int64_t>(star.size());
+        result.largest_star_regular = exhaustive;
+      }
+    }
+    return result;
+  }
+
   static void CrossedCells(const std::vector<Eigen::Vector3d>& points,
                            const Eigen::Vector3d& camera, int32_t target,
                            std::vector<manifold_internal::CellVertices>* walked,
@@ -146,6 +177,11 @@ bool IsVertexRegular(const std::vector<Eigen::Vector3d>& points,
   std::vector<CellVertices> sorted = outside;
   std::sort(sorted.begin(), sorted.end());
   return ManifoldTestAccess::IsVertexRegular(points, sorted, v);
+}
+
+LinkWalkComparison CompareLinkWalk(const std::vector<Eigen::Vector3d>& points,
+                                   const std::function<bool(const Eigen::Vector3d&)>& in_o) {
+  return ManifoldTestAccess::CompareLinkWalk(points, in_o);
 }
 
 void CrossedCells(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& camera,

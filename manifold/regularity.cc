@@ -94,57 +94,104 @@ bool Regularity::VertexRegular(const Vertex_handle& v, const Cell_handle& flippe
   std::vector<Cell_handle>& around = cells_;
   around.clear();
   dt_.incident_cells(v, std::back_inserter(around));
-  std::vector<std::pair<Vertex_handle, Vertex_handle>>& link = link_;
-  link.clear();
+  // Each link edge pq as the half-edges (p, q) and (q, p), sorted by their first vertex: the
+  // degree test and the cycle walk then cost O(L log L), not O(L^2). Vertices with huge stars
+  // (the box's Steiner points) have links of thousands of edges.
+  std::vector<std::pair<uintptr_t, uintptr_t>>& half_edges = half_edges_;
+  half_edges.clear();
   for (const Cell_handle& c : around) {
     if (!label(c)) continue;
     for (int i = 0; i < 4; ++i) {
       if (c->vertex(i) == v || label(c->neighbor(i))) continue;
-      Vertex_handle ends[2];
+      uintptr_t ends[2];
       int n = 0;
       for (int j = 0; j < 4; ++j) {
-        if (j != i && c->vertex(j) != v) ends[n++] = c->vertex(j);
+        if (j != i && c->vertex(j) != v) ends[n++] = reinterpret_cast<uintptr_t>(&*c->vertex(j));
       }
-      link.emplace_back(ends[0], ends[1]);
+      half_edges.emplace_back(ends[0], ends[1]);
+      half_edges.emplace_back(ends[1], ends[0]);
     }
   }
-  if (link.empty()) return true;
-  // Every link vertex must have degree 2 and the edges must form a single cycle.
-  std::vector<std::pair<Vertex_handle, int>>& degree = degree_;
-  degree.clear();
-  for (const auto& [p, q] : link) {
-    for (const Vertex_handle& w : {p, q}) {
-      auto it = std::find_if(degree.begin(), degree.end(),
-                             [&](const auto& entry) { return entry.first == w; });
-      if (it == degree.end()) {
-        degree.emplace_back(w, 1);
-      } else if (++it->second > 2) {
-        return false;
-      }
-    }
+  if (half_edges.empty()) return true;
+  std::sort(half_edges.begin(), half_edges.end());
+  // Every link vertex must have degree 2: its half-edges come in exactly one pair.
+  const size_t num_half_edges = half_edges.size();
+  for (size_t k = 0; k < num_half_edges; k += 2) {
+    if (half_edges[k].first != half_edges[k + 1].first) return false;
+    if (k + 2 < num_half_edges && half_edges[k + 2].first == half_edges[k].first) return false;
   }
-  for (const auto& entry : degree) {
-    if (entry.second != 2) return false;
-  }
-  // Walk the cycle from the first edge; it must use every edge.
-  const Vertex_handle first = link[0].first;
-  Vertex_handle previous = first, current = link[0].second;
+  // Walk the cycle from the first vertex; it must use every edge.
+  const size_t num_edges = num_half_edges / 2;
+  const uintptr_t first = half_edges[0].first;
+  uintptr_t previous = first;
+  uintptr_t current = half_edges[0].second;
   size_t length = 1;
   while (current != first) {
-    bool advanced = false;
-    for (const auto& [p, q] : link) {
-      const Vertex_handle other = p == current ? q : q == current ? p : Vertex_handle();
-      if (other != Vertex_handle() && other != previous) {
-        previous = current;
-        current = other;
-        advanced = true;
-        break;
+    const auto at = std::lower_bound(half_edges.begin(), half_edges.end(),
+                                     std::make_pair(current, uintptr_t{0}));
+    // at and at + 1 are current's two half-edges (degrees are all 2).
+    const uintptr_t next = at->second != previous ? at->second : (at + 1)->second;
+    if (next == previous) return false;  // both lead back: a doubled edge
+    previous = current;
+    current = next;
+    if (++length > num_edges) return false;
+  }
+  return length == num_edges;
+}
+
+bool Regularity::VertexRegularByLinkWalk(const Vertex_handle& v,
+                                         const std::vector<Cell_handle>& near) {
+  const int32_t num_edges = v->info().surface_faces;
+  if (num_edges == 0) return true;
+  // A start: a surface face (v, first, current) of a cell of `near`.
+  Cell_handle cell;
+  Vertex_handle first, current;
+  for (const Cell_handle& c : near) {
+    int iv = 0;
+    if (!c->has_vertex(v, iv)) continue;
+    for (int i = 0; i < 4 && cell == Cell_handle(); ++i) {
+      if (i == iv || InO(dt_, c) == InO(dt_, c->neighbor(i))) continue;
+      cell = c;
+      for (int j = 0; j < 4; ++j) {
+        if (j == iv || j == i) continue;
+        (first == Vertex_handle() ? first : current) = c->vertex(j);
       }
     }
-    if (!advanced) return false;
-    if (++length > link.size()) return false;
+    if (cell != Cell_handle()) break;
   }
-  return length == link.size();
+  if (cell == Cell_handle()) return VertexRegular(v, Cell_handle());
+  // Circle the edge (v, current): its surface faces are where the label changes between
+  // consecutive cells; a link vertex has degree 2 iff there are exactly two, one of them the
+  // face we came by. Faces are unique in a triangulation, so the other leads on.
+  Vertex_handle previous = first;
+  int32_t length = 1;
+  while (current != first) {
+    Vertex_handle next;
+    Cell_handle next_cell;
+    int changes = 0;
+    auto circ = dt_.incident_cells(cell, cell->index(v), cell->index(current)), done = circ;
+    do {
+      const Cell_handle a = circ;
+      auto successor = circ;
+      const Cell_handle b = ++successor;
+      if (InO(dt_, a) == InO(dt_, b)) continue;
+      if (++changes > 2) return false;
+      // The face a and b share holds v, current and the vertex of a that is not opposite b.
+      const int opposite = a->index(b);
+      for (int j = 0; j < 4; ++j) {
+        const Vertex_handle w = a->vertex(j);
+        if (j == opposite || w == v || w == current || w == previous) continue;
+        next = w;
+        next_cell = a;
+      }
+    } while (++circ != done);
+    if (changes != 2 || next == Vertex_handle()) return false;
+    previous = current;
+    current = next;
+    cell = next_cell;
+    if (++length > num_edges) return false;
+  }
+  return length == num_edges;
 }
 
 }  // namespace ms::manifold_detail

@@ -36,6 +36,13 @@ class Regularity {
   // label inverted (Cell_handle(): none).
   bool VertexRegular(const Vertex_handle& v, const Cell_handle& flipped);
 
+  // The same verdict as VertexRegular(v, Cell_handle()) for a vertex with a large star: walks
+  // the link from a surface face of one of `near` (cells around v), checking each link vertex's
+  // degree by circling its edge to v, and compares the length with v's surface-face count.
+  // Costs O(link x edge degree) instead of O(star); scans the star when no cell of `near`
+  // has a surface face at v.
+  bool VertexRegularByLinkWalk(const Vertex_handle& v, const std::vector<Cell_handle>& near);
+
   const Counts& counts() const { return counts_; }
 
  private:
@@ -43,8 +50,7 @@ class Regularity {
   Counts counts_;
   // Reused by VertexRegular (no allocation in the hot path).
   std::vector<Cell_handle> cells_;
-  std::vector<std::pair<Vertex_handle, Vertex_handle>> link_;
-  std::vector<std::pair<Vertex_handle, int>> degree_;
+  std::vector<std::pair<uintptr_t, uintptr_t>> half_edges_;  // (vertex address, link neighbour)
 };
 
 }  // namespace ms::manifold_detail
