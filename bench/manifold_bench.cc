@@ -1,8 +1,8 @@
 // Throughput of the manifold reconstruction steps (docs/performance.md):
-//   manifold_bench [points ...] [--insert=N] [--export=DIR] [--graded-steiner=auto|on|off|hidden]
+//   manifold_bench [points ...] [--insert=N] [--export=DIR] [--graded-steiner=hidden|on|off]
 //                  [--steiner-grid=N] [--steiner-min-spacing=X] [--steiner-clearance=X]
 //                  [--regrow-seeds=boundary|changed] [--join-pockets=on|off]
-//   default Steiner mode: the library's (auto: graded from 5*10^4 points)
+//   default Steiner mode: the library's (hidden graded points, at every size)
 //   default sizes: 10^4 10^5 10^6
 // For each size: Delaunay insertion, ray tracing (rays/s), growing (cells/s), peak memory per
 // point; then incremental insertion of N (default 10^4) points near the surface (points/s), in
@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
   ms::ManifoldOptions options;
   const char* usage =
       "usage: manifold_bench [points ...] [--insert=N] [--export=DIR] "
-      "[--graded-steiner=auto|on|off|hidden] [--steiner-grid=N] [--steiner-min-spacing=X] "
+      "[--graded-steiner=hidden|on|off] [--steiner-grid=N] [--steiner-min-spacing=X] "
       "[--steiner-clearance=X] [--regrow-seeds=boundary|changed] [--join-pockets=on|off]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];

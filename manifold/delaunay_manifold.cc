@@ -155,12 +155,7 @@ SteinerPoints DelaunayManifold::Impl::PlaceSteinerPoints(const std::vector<RayPo
   SteinerOptions steiner_options;
   steiner_options.margin = options_.steiner_margin;
   steiner_options.grid = options_.steiner_grid;
-  GradedSteiner scheme = options_.steiner_graded;
-  if (scheme == GradedSteiner::kAuto) {
-    scheme = static_cast<int64_t>(points.size()) >= options_.graded_steiner_min_points
-                 ? GradedSteiner::kOn
-                 : GradedSteiner::kHidden;
-  }
+  const GradedSteiner scheme = options_.steiner_graded;
   labels_.set_graded(scheme == GradedSteiner::kOn);
   steiner_options.graded = scheme != GradedSteiner::kOff;
   steiner_options.clearance = options_.steiner_clearance;

@@ -10,10 +10,7 @@ const std::vector<std::pair<const char*, W2Rule>>& OptionChoices(W2Rule) {
 
 const std::vector<std::pair<const char*, GradedSteiner>>& OptionChoices(GradedSteiner) {
   static const std::vector<std::pair<const char*, GradedSteiner>> choices = {
-      {"auto", GradedSteiner::kAuto},
-      {"on", GradedSteiner::kOn},
-      {"off", GradedSteiner::kOff},
-      {"hidden", GradedSteiner::kHidden}};
+      {"hidden", GradedSteiner::kHidden}, {"on", GradedSteiner::kOn}, {"off", GradedSteiner::kOff}};
   return choices;
 }
 

@@ -22,7 +22,7 @@ enum class W2Rule {
 const std::vector<std::pair<const char*, W2Rule>>& OptionChoices(W2Rule);
 
 // Whether Build adds graded Steiner points (--manifold.graded-steiner).
-enum class GradedSteiner { kAuto, kOn, kOff, kHidden };
+enum class GradedSteiner { kHidden, kOn, kOff };
 const std::vector<std::pair<const char*, GradedSteiner>>& OptionChoices(GradedSteiner);
 
 // Where regrowing starts after an insertion batch (--manifold.regrow-seeds, docs/manifold.md).

@@ -26,18 +26,13 @@ MS_OPTION(int, steiner_grid, 3, "steiner-grid",
 // 3x fewer cells at 10^6 points); hidden: only those behind what every view holding them sees
 // (inside objects, under the ground: they keep long cells from joining a facade to the far box
 // points, which rays then carve through) and those in open air that rays cross densely
-// (manifold/steiner_sight.h); off: the paper's box grid only. auto: hidden below
-// graded_steiner_min_points input points, on from there (docs/manifold.md).
-MS_OPTION(
-    GradedSteiner, steiner_graded, GradedSteiner::kAuto, "graded-steiner",
-    "graded Steiner points in the empty space: on (all, cells of Steiner points only being "
-    "free), hidden (those behind what every camera sees, and in open air far from the points), "
-    "off (the paper's box grid only) or auto (hidden below "
-    "--manifold.graded-steiner-min-points points, on from there; docs/manifold.md)",
-    AnyValue())
-MS_OPTION(int64_t, graded_steiner_min_points, 50000, "graded-steiner-min-points",
-          "auto mode: input points from which all graded Steiner points are used (hidden below)",
-          AtLeast(0))
+// (manifold/steiner_sight.h), the default at every size; off: the paper's box grid only
+// (docs/manifold.md compares them).
+MS_OPTION(GradedSteiner, steiner_graded, GradedSteiner::kHidden, "graded-steiner",
+          "graded Steiner points in the empty space: hidden (those behind what every camera "
+          "sees, and in open air far from the points), on (all, cells of Steiner points only "
+          "being free) or off (the paper's box grid only); docs/manifold.md",
+          AnyValue())
 MS_OPTION(double, steiner_clearance, 1.5, "steiner-clearance",
           "graded Steiner points keep this x their size away from every point", AtLeast(1))
 MS_OPTION(double, steiner_min_spacing, 6.0, "steiner-min-spacing",

@@ -76,7 +76,7 @@ void ExpectBlobCloseToTheGroundTruth(const ManifoldOptions& options) {
 // A closed object with dense points and visibility: the manifold hugs the ground truth.
 TEST(InitialManifold, BlobIsCloseToTheGroundTruth) { ExpectBlobCloseToTheGroundTruth({}); }
 
-// Graded Steiner points (the default from 5*10^4 points) on the same blob: cells of Steiner
+// All graded Steiner points (--manifold.graded-steiner on) on the same blob: cells of Steiner
 // points only count as free, otherwise the free space is narrow cones that growing cannot
 // carve and views see the closure from behind (MAE 0.71 before that rule).
 TEST(InitialManifold, BlobWithGradedSteinerPointsIsCloseToTheGroundTruth) {
