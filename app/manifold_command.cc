@@ -62,9 +62,12 @@ void RunManifold(const ManifoldCommandOptions& options) {
               static_cast<long long>(stats.rays),
               stats.rays ? static_cast<double>(stats.ray_cell_steps) / stats.rays : 0.0,
               stats.seconds_ray_tracing);
-  std::printf("  growing           %lld of %lld free cells outside (%lld pockets joined), %.3f s\n",
-              static_cast<long long>(stats.outside_cells), static_cast<long long>(stats.free_cells),
-              static_cast<long long>(stats.pockets_joined), stats.seconds_growing);
+  std::printf(
+      "  growing           %lld of %lld free cells outside (%lld pockets joined, with %lld "
+      "pinching slivers), %.3f s\n",
+      static_cast<long long>(stats.outside_cells), static_cast<long long>(stats.free_cells),
+      static_cast<long long>(stats.pockets_joined), static_cast<long long>(stats.slivers_joined),
+      stats.seconds_growing);
   const std::vector<int32_t> enclosed = manifold.CamerasInMatter();
   std::printf(
       "  cameras           %zu in the matter%s (%lld vertex stars completed to free cameras)\n",

@@ -85,8 +85,11 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   timer.Restart();
   GrowInitial(&stats);
   stats.seconds_growing = timer.Seconds();
-  spdlog::info("manifold: grew O to {} of {} free cells ({} pockets joined) in {:.2f} s",
-               stats.outside_cells, stats.free_cells, stats.pockets_joined, stats.seconds_growing);
+  spdlog::info(
+      "manifold: grew O to {} of {} free cells ({} pockets joined, with {} pinching slivers) in "
+      "{:.2f} s",
+      stats.outside_cells, stats.free_cells, stats.pockets_joined, stats.slivers_joined,
+      stats.seconds_growing);
   LogCameraStars(stats.camera_stars_completed);
   if (options_.validate_each_step) {
     const std::string problem = Validate(true);
@@ -256,7 +259,9 @@ void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
   }
   grow_shrink_.GrowFromHeaviest();
   stats->camera_stars_completed = FreeEnclosedCameras();
+  const int64_t slivers_before = grow_shrink_.slivers_joined();
   stats->pockets_joined = JoinFreePockets(RegrowSeeds::kBoundary, 0);
+  stats->slivers_joined = grow_shrink_.slivers_joined() - slivers_before;
   stats->outside_cells = labels_.outside_count();
   stats->free_cells_left_inside = CountFreeCellsInside();
   const manifold_detail::Regularity::Counts& counts = regularity_.counts();
@@ -324,13 +329,13 @@ InsertionStats DelaunayManifold::Impl::FinishInsert() {
   stats.seconds_growing = timer.Seconds();
   spdlog::info(
       "manifold: {} new points: {} inserted, {} discarded (conflict {}, duplicate {}, outside "
-      "{}), {} cells shrunk, {} rays re-walked, {} pockets joined; {:.2f} s inserting, {:.2f} s "
-      "regrowing",
+      "{}), {} cells shrunk, {} rays re-walked, {} pockets joined (with {} pinching slivers); "
+      "{:.2f} s inserting, {:.2f} s regrowing",
       stats.requested, stats.inserted,
       stats.discarded_conflict + stats.discarded_duplicate + stats.discarded_outside,
       stats.discarded_conflict, stats.discarded_duplicate, stats.discarded_outside,
-      stats.shrunk_cells, stats.rewalked_rays, stats.pockets_joined, stats.seconds_insertion,
-      stats.seconds_growing);
+      stats.shrunk_cells, stats.rewalked_rays, stats.pockets_joined, stats.slivers_joined,
+      stats.seconds_insertion, stats.seconds_growing);
   if (options_.validate_each_step) {
     const std::string problem = Validate(true);
     if (!problem.empty()) throw InternalError("manifold invalid after insertion: " + problem);
@@ -606,7 +611,9 @@ void DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, InsertionStats*
   grow_shrink_.Grow(grow_shrink_.BoundarySeeds(options_.regrow_seeds, batch.number));
   if (labels_.outside_count() == 0) grow_shrink_.GrowFromHeaviest();
   stats->camera_stars_completed = FreeEnclosedCameras();
+  const int64_t slivers_before = grow_shrink_.slivers_joined();
   stats->pockets_joined = JoinFreePockets(options_.regrow_seeds, batch.number);
+  stats->slivers_joined = grow_shrink_.slivers_joined() - slivers_before;
 }
 
 void DelaunayManifold::Impl::LogCameraStars(int64_t completed) const {

@@ -48,6 +48,7 @@ struct BuildStats {
   int64_t free_cells_left_inside = 0;  // free but not in O: refused by the manifold test
   int64_t camera_stars_completed = 0;  // as InsertionStats's, after growing
   int64_t pockets_joined = 0;          // as InsertionStats's
+  int64_t slivers_joined = 0;          // as InsertionStats's
   // Manifold tests while growing: all, those the fast (V,E,F) test could not decide, and the
   // surface edges walked by the full test.
   int64_t manifold_tests = 0, full_manifold_tests = 0, link_steps = 0;
@@ -73,6 +74,9 @@ struct InsertionStats {
   // Joins of free pockets that growing could not enter one cell at a time (whole pockets or a
   // vertex's free cells; --manifold.join-pockets).
   int64_t pockets_joined = 0;
+  // Matter cells crossed by no ray that joined with a pocket, which they alone kept out of O by
+  // pinching one of its vertices (GrowShrink::PinchingSlivers).
+  int64_t slivers_joined = 0;
   double seconds_insertion = 0, seconds_growing = 0;
 };
 

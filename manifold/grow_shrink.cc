@@ -21,6 +21,33 @@ struct QueueEntry {
   }
 };
 
+// Splits `cells` into pieces connected through shared faces: (*piece)[k] is the piece of
+// cells[k], (*sizes)[p] the number of cells in piece p. Quadratic: for the few cells of a star.
+void FaceConnectedPieces(const std::vector<Cell_handle>& cells, std::vector<int>* piece,
+                         std::vector<size_t>* sizes) {
+  piece->assign(cells.size(), -1);
+  sizes->clear();
+  std::vector<size_t> stack;
+  for (size_t a = 0; a < cells.size(); ++a) {
+    if ((*piece)[a] >= 0) continue;
+    const int id = static_cast<int>(sizes->size());
+    sizes->push_back(0);
+    stack.assign(1, a);
+    (*piece)[a] = id;
+    while (!stack.empty()) {
+      const size_t k = stack.back();
+      stack.pop_back();
+      ++(*sizes)[id];
+      for (size_t b = 0; b < cells.size(); ++b) {
+        if ((*piece)[b] < 0 && cells[k]->has_neighbor(cells[b])) {
+          (*piece)[b] = id;
+          stack.push_back(b);
+        }
+      }
+    }
+  }
+}
+
 }  // namespace
 
 void GrowShrink::Grow(const std::vector<Cell_handle>& seeds,
@@ -132,10 +159,14 @@ int64_t GrowShrink::CountJoinableCells(std::vector<Cell_handle>* first, size_t m
   return joinable;
 }
 
-bool GrowShrink::FlipAllIfRegular(const std::vector<Cell_handle>& cells) {
+bool GrowShrink::FlipAllIfRegular(const std::vector<Cell_handle>& cells,
+                                  const std::vector<Cell_handle>& matter) {
   std::vector<Cell_handle> missing;
   for (const Cell_handle& c : cells) {
     if (!dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c)) missing.push_back(c);
+  }
+  for (const Cell_handle& c : matter) {
+    if (!dt_.is_infinite(c) && !c->info().outside && !labels_.IsFree(c)) missing.push_back(c);
   }
   if (missing.empty()) return false;
   for (const Cell_handle& c : missing) labels_.SetOutside(c, true);
@@ -176,10 +207,57 @@ bool GrowShrink::CompleteFreeStar(const Vertex_handle& v, double min_weight) {
   return FlipAllIfRegular(std::vector<Cell_handle>(around_.begin(), around_.end()));
 }
 
+std::vector<Cell_handle> GrowShrink::PinchingSlivers(const std::vector<Cell_handle>& pocket) {
+  constexpr size_t kMaxSliverCells = 3;
+  // Pinches at vertices of larger stars (the box's Steiner points) are left alone: their pieces
+  // cost the square of the star to find.
+  constexpr int32_t kMaxStar = 256;
+  std::vector<Cell_handle> joined;
+  for (const Cell_handle& c : pocket) {
+    if (!dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c)) joined.push_back(c);
+  }
+  for (const Cell_handle& c : joined) labels_.SetOutside(c, true);
+  std::unordered_set<const void*> seen_vertices, seen_slivers;
+  std::vector<Cell_handle> slivers, star, rest;
+  std::vector<int> piece;
+  std::vector<size_t> sizes;
+  for (const Cell_handle& joined_cell : joined) {
+    for (int i = 0; i < 4; ++i) {
+      const Vertex_handle v = joined_cell->vertex(i);
+      if (!seen_vertices.insert(&*v).second || v->info().cells > kMaxStar) continue;
+      if (regularity_.VertexRegular(v, Cell_handle())) continue;
+      star.clear();
+      dt_.incident_cells(v, std::back_inserter(star));
+      rest.clear();
+      for (const Cell_handle& c : star) {
+        if (!labels_.InO(c)) rest.push_back(c);
+      }
+      FaceConnectedPieces(rest, &piece, &sizes);
+      if (sizes.size() < 2) continue;
+      const auto largest = std::max_element(sizes.begin(), sizes.end()) - sizes.begin();
+      for (size_t a = 0; a < rest.size(); ++a) {
+        const Cell_handle& c = rest[a];
+        if (piece[a] == largest || sizes[piece[a]] > kMaxSliverCells) continue;
+        if (dt_.is_infinite(c) || c->info().crossings > 0 || labels_.Weight(c) <= 0) continue;
+        if (seen_slivers.insert(&*c).second) slivers.push_back(c);
+      }
+    }
+  }
+  for (auto c = joined.rbegin(); c != joined.rend(); ++c) labels_.SetOutside(*c, false);
+  return slivers;
+}
+
 std::vector<Cell_handle> GrowShrink::JoinPocket(const std::vector<Cell_handle>& pocket,
                                                 double star_min_weight,
                                                 std::unordered_set<const void*>* tried) {
   if (FlipAllIfRegular(pocket)) return pocket;
+  const std::vector<Cell_handle> slivers = PinchingSlivers(pocket);
+  if (!slivers.empty() && FlipAllIfRegular(pocket, slivers)) {
+    slivers_joined_ += static_cast<int64_t>(slivers.size());
+    std::vector<Cell_handle> flipped = pocket;
+    flipped.insert(flipped.end(), slivers.begin(), slivers.end());
+    return flipped;
+  }
   for (const Cell_handle& cell : pocket) {
     for (int i = 0; i < 4; ++i) {
       const Vertex_handle v = cell->vertex(i);

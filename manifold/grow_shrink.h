@@ -44,17 +44,27 @@ class GrowShrink {
   // theirs stays regular; otherwise changes nothing. Escapes a state greedy growing cannot
   // leave: a pocket of free space that touches O only where adding any one of its cells would
   // pinch the surface. Returns whether it flipped.
-  bool FlipAllIfRegular(const std::vector<Cell_handle>& cells);
+  // `matter` cells not in O flip with them though they are not free.
+  bool FlipAllIfRegular(const std::vector<Cell_handle>& cells,
+                        const std::vector<Cell_handle>& matter = {});
+  // The matter cells that would pinch a vertex of `pocket` once the pocket is in O: around each
+  // vertex that would not stay regular, the cells not in O split into face-connected pieces;
+  // every piece but the largest, if it has at most kMaxSliverCells cells, each crossed by no
+  // ray but weighing more than nothing (rays through its neighbours spread into it).
+  std::vector<Cell_handle> PinchingSlivers(const std::vector<Cell_handle>& pocket);
   // FlipAllIfRegular on the cells around v, unless a free cell among them not in O weighs less
   // than `min_weight` (then nothing changes and it returns false).
   bool CompleteFreeStar(const Vertex_handle& v, double min_weight = 0);
-  // Joins a pocket (from Pocket) into O: whole if FlipAllIfRegular allows it, else the free
-  // cells around the first of its surface vertices whose CompleteFreeStar(v, star_min_weight)
-  // succeeds. Vertices in `tried` are skipped, and those tried are added to it. Returns the
-  // cells flipped (for a vertex: all the cells around it); empty when nothing changed.
+  // Joins a pocket (from Pocket) into O: whole if FlipAllIfRegular allows it, else whole with
+  // its PinchingSlivers, else the free cells around the first of its surface vertices whose
+  // CompleteFreeStar(v, star_min_weight) succeeds. Vertices in `tried` are skipped, and those tried
+  // are added to it. Returns the cells flipped (for a vertex: all the cells around it); empty when
+  // nothing changed.
   std::vector<Cell_handle> JoinPocket(const std::vector<Cell_handle>& pocket,
                                       double star_min_weight,
                                       std::unordered_set<const void*>* tried);
+  // Matter cells joined by JoinPocket through PinchingSlivers so far.
+  int64_t slivers_joined() const { return slivers_joined_; }
   // Free, not in O, and sharing a face with O: a cell growing can start from.
   bool NextToO(const Cell_handle& c) const;
 
@@ -76,6 +86,7 @@ class GrowShrink {
   const ManifoldOptions& options_;
   CellLabels& labels_;
   Regularity& regularity_;
+  int64_t slivers_joined_ = 0;
   // Reused by ShrinkAround.
   std::vector<std::pair<CellKey, Cell_handle>> shrink_set_;
   std::vector<Cell_handle> around_;
