@@ -258,8 +258,8 @@ void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
     stats->free_cells += labels_.IsFree(c);
   }
   grow_shrink_.GrowFromHeaviest();
-  stats->camera_stars_completed = FreeEnclosedCameras();
   const int64_t slivers_before = grow_shrink_.slivers_joined();
+  stats->camera_stars_completed = FreeEnclosedCameras();
   stats->pockets_joined = JoinFreePockets(RegrowSeeds::kBoundary, 0);
   stats->slivers_joined = grow_shrink_.slivers_joined() - slivers_before;
   stats->outside_cells = labels_.outside_count();
@@ -610,8 +610,8 @@ void DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, InsertionStats*
   if (stats->inserted == 0 && stats->shrunk_cells == 0 && stats->gained_rays == 0) return;
   grow_shrink_.Grow(grow_shrink_.BoundarySeeds(options_.regrow_seeds, batch.number));
   if (labels_.outside_count() == 0) grow_shrink_.GrowFromHeaviest();
-  stats->camera_stars_completed = FreeEnclosedCameras();
   const int64_t slivers_before = grow_shrink_.slivers_joined();
+  stats->camera_stars_completed = FreeEnclosedCameras();
   stats->pockets_joined = JoinFreePockets(options_.regrow_seeds, batch.number);
   stats->slivers_joined = grow_shrink_.slivers_joined() - slivers_before;
 }
