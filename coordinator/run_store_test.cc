@@ -1,11 +1,17 @@
-// run.h5's statistics tables and summary.json: every field survives the round trip.
+// run.h5's statistics tables and summary.json: every field survives the round trip, and files of
+// the older format (without the later columns) still read.
 #include "coordinator/run_store.h"
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
 #include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
 
+#include "base/error.h"
 #include "base/file_util.h"
+#include "scene/h5_file.h"
 #include "scene/scene_testing.h"
 
 namespace ms {
@@ -112,6 +118,61 @@ TEST(RunStore, EveryStatisticSurvivesRunH5) {
   EXPECT_EQ(read.workers[1].jobs, 2);
   EXPECT_EQ(read.workers[1].points, 30);
   EXPECT_EQ(read.workers[1].seconds_kernel, 0.75);
+}
+
+// Takes /stats/iterations/<column> out of a written run.h5 (the dataset and its name in the
+// table's 'columns' list), as a file of an older format lacks it.
+void DropStatsColumn(const std::string& path, const std::string& column) {
+  const std::string table = "/stats/iterations";
+  const hid_t raw = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(raw, 0) << path;
+  EXPECT_GE(H5Ldelete(raw, (table + "/" + column).c_str(), H5P_DEFAULT), 0) << column;
+  H5Fclose(raw);
+  H5File file = H5File::OpenReadWrite(path);
+  std::string kept;
+  std::stringstream names(file.ReadStringAttribute(table, "columns"));
+  for (std::string name; std::getline(names, name, ',');) {
+    if (name != column) kept += (kept.empty() ? "" : ",") + name;
+  }
+  file.SetStringAttribute(table, "columns", kept);
+}
+
+// A run.h5 written before the later columns existed still reads (a resume of an old run): their
+// fields read as zero, every other field as written.
+TEST(RunStore, RunH5WithoutTheLaterColumnsReads) {
+  const TempDir dir("run_store");
+  const RunRecord written = RecordWithOneIteration(dir);
+  const std::string path = (dir.path() / "run.h5").string();
+  WriteRunFile(written, path);
+  for (const char* column : {"cameras_in_matter", "job_bytes", "job_max_bytes", "jobs_smoothed",
+                             "image_noise_max", "seconds_insert_early"}) {
+    DropStatsColumn(path, column);
+  }
+  const RunRecord read = ReadRunFile(path);
+  ASSERT_EQ(read.iterations.size(), written.iterations.size());
+  IterationStats expected = written.iterations[1];
+  expected.cameras_in_matter = 0;
+  expected.job_bytes = 0;
+  expected.job_max_bytes = 0;
+  expected.jobs_smoothed = 0;
+  expected.image_noise_max = 0;
+  expected.seconds_insert_early = 0;
+  ExpectSameStats(read.iterations[1], expected);
+}
+
+// A column of the first format is never optional: a run.h5 without it is refused with an error
+// that names it.
+TEST(RunStore, RunH5WithoutAFirstFormatColumnIsRefused) {
+  const TempDir dir("run_store");
+  const std::string path = (dir.path() / "run.h5").string();
+  WriteRunFile(RecordWithOneIteration(dir), path);
+  DropStatsColumn(path, "vertices");
+  try {
+    ReadRunFile(path);
+    ADD_FAILURE() << "read a run.h5 without /stats/iterations/vertices";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("vertices"), std::string::npos) << e.what();
+  }
 }
 
 TEST(RunStore, SummaryJsonHasEveryColumnAndTheTotals) {
