@@ -132,12 +132,15 @@ void KeepGradedPointsBySight(const std::vector<RayPoint>& points,
   const size_t box = made->points.size() - static_cast<size_t>(made->graded);
   const std::vector<Eigen::Vector3d> graded(made->points.begin() + box, made->points.end());
   const std::vector<SteinerSight> sight =
-      ClassifyBySight(graded, points, cameras, made->median_spacing);
+      ClassifyBySight(graded, made->graded_clearance, points, cameras, made->median_spacing);
+  const std::vector<double> clearance = std::move(made->graded_clearance);
+  made->graded_clearance.clear();
   made->points.resize(box);
   int64_t hidden = 0;
   for (size_t k = 0; k < graded.size(); ++k) {
     if (sight[k] == SteinerSight::kDrop) continue;
     made->points.push_back(graded[k]);
+    made->graded_clearance.push_back(clearance[k]);
     hidden += sight[k] == SteinerSight::kHidden;
   }
   made->graded = static_cast<int64_t>(made->points.size() - box);

@@ -179,6 +179,7 @@ SteinerPoints MakeSteinerPoints(const Eigen::Vector3d& min, const Eigen::Vector3
       }
       if ((p.array() > inner_lo.array()).all() && (p.array() < inner_hi.array()).all()) {
         result.points.push_back(p);
+        result.graded_clearance.push_back(tree.NearestDistance(p));
         ++result.graded;
       }
       continue;

@@ -28,7 +28,10 @@ struct SteinerPoints {
   std::vector<Eigen::Vector3d> points;
   Eigen::Vector3d box_min, box_max;  // the enlarged box
   int64_t graded = 0;                // how many of the points are graded ones
-  double median_spacing = 0;         // of the input points (0 if fewer than 2)
+  // For each graded point (the last `graded` of `points`), its distance to the nearest input
+  // point.
+  std::vector<double> graded_clearance;
+  double median_spacing = 0;  // of the input points (0 if fewer than 2)
 };
 
 SteinerPoints MakeSteinerPoints(const Eigen::Vector3d& min, const Eigen::Vector3d& max,

@@ -89,9 +89,12 @@ TEST(SteinerPoints, GradedPointsKeepTheirClearanceAndAreDeterministic) {
   const double min_half = options.min_spacing_factor * made.median_spacing;
   const double guaranteed = (options.clearance - 0.1) * min_half;
   const PointKdTree tree(data);
-  for (size_t i = made.points.size() - made.graded; i < made.points.size(); ++i) {
+  ASSERT_EQ(made.graded_clearance.size(), static_cast<size_t>(made.graded));
+  const size_t first_graded = made.points.size() - made.graded;
+  for (size_t i = first_graded; i < made.points.size(); ++i) {
     const Eigen::Vector3d& p = made.points[i];
     EXPECT_GE(tree.NearestDistance(p), guaranteed) << p.transpose();
+    EXPECT_EQ(made.graded_clearance[i - first_graded], tree.NearestDistance(p));
     EXPECT_TRUE((p.array() > made.box_min.array()).all() &&
                 (p.array() < made.box_max.array()).all());
   }

@@ -5,7 +5,6 @@
 #include <limits>
 
 #include "base/check.h"
-#include "manifold/steiner_points.h"
 
 namespace ms {
 namespace {
@@ -95,24 +94,16 @@ class DepthBins {
 }  // namespace
 
 std::vector<SteinerSight> ClassifyBySight(const std::vector<Eigen::Vector3d>& candidates,
+                                          const std::vector<double>& clearance,
                                           const std::vector<RayPoint>& points,
                                           const std::vector<ManifoldCamera>& cameras,
                                           double median_spacing) {
+  MS_CHECK(clearance.size() == candidates.size()) << "one clearance per candidate";
   std::vector<std::vector<int32_t>> observed(cameras.size());
-  std::vector<Eigen::Vector3d> positions(points.size());
   for (size_t i = 0; i < points.size(); ++i) {
-    positions[i] = points[i].position;
     for (const int32_t c : points[i].cameras) {
       MS_CHECK(c >= 0 && static_cast<size_t>(c) < cameras.size()) << "camera index out of range";
       observed[c].push_back(static_cast<int32_t>(i));
-    }
-  }
-  // Each candidate's distance to the nearest input point.
-  std::vector<double> clearance(candidates.size(), std::numeric_limits<double>::infinity());
-  if (!positions.empty()) {
-    const PointKdTree tree(std::move(positions));
-    for (size_t k = 0; k < candidates.size(); ++k) {
-      clearance[k] = tree.NearestDistance(candidates[k]);
     }
   }
   std::vector<uint8_t> behind_somewhere(candidates.size(), 0), refused(candidates.size(), 0);

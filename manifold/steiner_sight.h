@@ -33,9 +33,11 @@ inline constexpr double kOpenAirRays = 1000;
 
 // Classifies each candidate by the depths of the input points in each camera's view bins: "in
 // front" against the nearest depth of the bin and its 8 neighbours (and a bin that holds a
-// point), "behind" against the farthest depth in the bin. `median_spacing`: of the input points.
-// Costs cameras x candidates projections.
+// point), "behind" against the farthest depth in the bin. `clearance[k]`: candidate k's
+// distance to the nearest input point (SteinerPoints::graded_clearance); `median_spacing`: of
+// the input points. Costs cameras x candidates projections.
 std::vector<SteinerSight> ClassifyBySight(const std::vector<Eigen::Vector3d>& candidates,
+                                          const std::vector<double>& clearance,
                                           const std::vector<RayPoint>& points,
                                           const std::vector<ManifoldCamera>& cameras,
                                           double median_spacing);

@@ -2,16 +2,25 @@
 
 #include <gtest/gtest.h>
 
+#include "manifold/steiner_points.h"
+
 namespace ms {
 namespace {
 
 using Sight = SteinerSight;
 
-// ClassifyBySight with the wall's spacing (0.2).
+// ClassifyBySight with each candidate's distance to the nearest point, as MakeSteinerPoints
+// gives it; the median spacing defaults to the wall's (0.2).
 std::vector<SteinerSight> Classify(const std::vector<Eigen::Vector3d>& candidates,
                                    const std::vector<RayPoint>& points,
-                                   const std::vector<ManifoldCamera>& cameras) {
-  return ClassifyBySight(candidates, points, cameras, 0.2);
+                                   const std::vector<ManifoldCamera>& cameras,
+                                   double median_spacing = 0.2) {
+  std::vector<Eigen::Vector3d> positions;
+  for (const RayPoint& p : points) positions.push_back(p.position);
+  const PointKdTree tree(std::move(positions));
+  std::vector<double> clearance;
+  for (const Eigen::Vector3d& c : candidates) clearance.push_back(tree.NearestDistance(c));
+  return ClassifyBySight(candidates, clearance, points, cameras, median_spacing);
 }
 
 // A camera at the origin looking down +z (identity rotation), a 90-degree view.
@@ -76,11 +85,11 @@ TEST(ClassifyBySight, KeepsOpenAirOnlyFarFromThePointsWhereRaysAreDense) {
   const std::vector<ManifoldCamera> cameras = {CameraAt(Eigen::Vector3d::Zero())};
   // 600 from the wall, 60 spacings: the rays toward the wall's points cross a disc of radius
   // 300 there by the ten thousand. 5 from the wall: too near.
-  EXPECT_EQ(ClassifyBySight({{0, 0, 400}, {0, 0, 995}}, points, cameras, 10.0),
+  EXPECT_EQ(Classify({{0, 0, 400}, {0, 0, 995}}, points, cameras, 10.0),
             (std::vector<Sight>{Sight::kOpenAir, Sight::kDrop}));
   // 10 from the wall but 100 spacings of 0.1: far enough, yet about one ray crosses a disc of
   // radius 5 there.
-  EXPECT_EQ(ClassifyBySight({{0, 0, 990}}, points, cameras, 0.1), std::vector<Sight>{Sight::kDrop});
+  EXPECT_EQ(Classify({{0, 0, 990}}, points, cameras, 0.1), std::vector<Sight>{Sight::kDrop});
 }
 
 }  // namespace
