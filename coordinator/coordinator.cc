@@ -347,7 +347,7 @@ class Coordinator::Impl {
   }
 
   void Handle(const PeerMessage& message) {
-    if (sent_away_.count(message.peer)) {
+    if (unfit_.SentAway(message.peer)) {
       junk_.Warn("sent away", fmt::format("dropped a message from {}, sent away earlier",
                                           PeerTag(message.peer)));
       return;
@@ -413,19 +413,6 @@ class Coordinator::Impl {
     return ValidateResultPoints(result, it->second, points);
   }
 
-  // A worker whose results keep not fitting their jobs is buggy or hostile: after a few it is
-  // told to shut down and its messages are dropped (CURVE is what keeps strangers out).
-  void NoteUnfitResult(const std::string& peer, const std::string& sender) {
-    if (++unfit_results_[peer] < kMaxUnfitResults) return;
-    spdlog::warn("worker {} ({}) sent {} results that do not fit their jobs: sending it away",
-                 sender, PeerTag(peer), kMaxUnfitResults);
-    wire::Envelope envelope = stamper_.New();
-    envelope.mutable_shutdown()->set_reason("its results do not fit the jobs handed out");
-    transport_->Send(peer, Serialize(envelope));
-    scheduler_.Remove(peer);
-    sent_away_.insert(peer);
-  }
-
   void OnResult(const std::string& peer, const std::string& sender, const wire::Result& result,
                 double now) {
     if (result.session_id() != session_) {
@@ -442,7 +429,7 @@ class Coordinator::Impl {
                                        JobName(result.job_id()), sender, problem));
       last_failure_[result.job_id()] = "malformed result: " + problem;
       scheduler_.OnWorkerFailure(peer, sender, result.job_id(), now);
-      NoteUnfitResult(peer, sender);
+      unfit_.Note(peer, sender, &scheduler_, transport_, &stamper_);
       return;
     }
     const JobScheduler::Outcome outcome = scheduler_.OnResult(peer, sender, result.job_id(), now);
@@ -464,17 +451,9 @@ class Coordinator::Impl {
 
   void OnError(const std::string& peer, const std::string& sender, const wire::Error& error,
                double now) {
-    if (error.code() == wire::Error::BUSY) {
-      spdlog::info("worker {} did not take job {}: {}", sender, JobName(error.job_id()),
-                   error.message());
-      scheduler_.OnBusy(peer, sender, error.job_id(), BusyJob(error, session_), now);
-      return;
-    }
     const bool ours = error.session_id() == session_ && error.job_id() != 0;
-    if (!ours) {
-      scheduler_.Touch(peer, sender, now);
-      if (error.job_id() != 0) scheduler_.OnResult(peer, sender, kForeignJob, now);
-      spdlog::warn("worker {} reports: {}", sender, error.message());
+    if (HandleBusyOrForeignError(error, ours, "job " + JobName(error.job_id()), session_, peer,
+                                 sender, now, &scheduler_)) {
       return;
     }
     if (error.code() == wire::Error::BAD_JOB) {
@@ -526,8 +505,7 @@ class Coordinator::Impl {
   std::set<std::string> warned_kernels_;
   // Peers whose results did not fit their jobs, and those sent away for it (their messages are
   // dropped from then on).
-  std::map<std::string, int> unfit_results_;
-  std::set<std::string> sent_away_;
+  UnfitWorkers unfit_;
 };
 
 Coordinator::Coordinator(const CoordinatorOptions& options, ServerTransport* transport)

@@ -2,6 +2,33 @@
 
 namespace ms {
 
+void UnfitWorkers::Note(const std::string& peer, const std::string& sender, JobScheduler* scheduler,
+                        ServerTransport* transport, EnvelopeStamper* stamper) {
+  if (++unfit_results_[peer] < kMaxUnfitResults) return;
+  spdlog::warn("worker {} ({}) sent {} results that do not fit their jobs: sending it away", sender,
+               PeerTag(peer), kMaxUnfitResults);
+  wire::Envelope envelope = stamper->New();
+  envelope.mutable_shutdown()->set_reason("its results do not fit the jobs handed out");
+  transport->Send(peer, Serialize(envelope));
+  scheduler->Remove(peer);
+  sent_away_.insert(peer);
+}
+
+bool HandleBusyOrForeignError(const wire::Error& error, bool ours, const std::string& job_label,
+                              uint64_t session, const std::string& peer, const std::string& sender,
+                              double now, JobScheduler* scheduler) {
+  if (error.code() == wire::Error::BUSY) {
+    spdlog::info("worker {} did not take {}: {}", sender, job_label, error.message());
+    scheduler->OnBusy(peer, sender, error.job_id(), BusyJob(error, session), now);
+    return true;
+  }
+  if (ours) return false;
+  scheduler->Touch(peer, sender, now);
+  if (error.job_id() != 0) scheduler->OnResult(peer, sender, kForeignJob, now);
+  spdlog::warn("worker {} reports: {}", sender, error.message());
+  return true;
+}
+
 bool DecodeWorkerMessage(const PeerMessage& message, const WireLimits& limits,
                          ServerTransport* transport, EnvelopeStamper* stamper, JunkLog* junk,
                          wire::Envelope* envelope, bool* wrong_version) {

@@ -10,9 +10,11 @@
 #include <limits>
 #include <map>
 #include <random>
+#include <set>
 #include <string>
 
 #include "coordinator/image_catalog.h"
+#include "coordinator/job_scheduler.h"
 #include "proto/content_hash.h"
 #include "proto/transport.h"
 #include "proto/wire.h"
@@ -37,6 +39,21 @@ inline uint64_t NewSessionId() {
 
 // Results that do not fit their jobs before a worker is sent away.
 constexpr int kMaxUnfitResults = 3;
+
+// Workers whose results keep not fitting their jobs are buggy or hostile: after
+// kMaxUnfitResults of them a worker is told to shut down, leaves the scheduler, and its later
+// messages are dropped (CURVE is what keeps strangers out).
+class UnfitWorkers {
+ public:
+  // Counts one unfit result of `peer`; at the limit sends it away.
+  void Note(const std::string& peer, const std::string& sender, JobScheduler* scheduler,
+            ServerTransport* transport, EnvelopeStamper* stamper);
+  bool SentAway(const std::string& peer) const { return sent_away_.count(peer) > 0; }
+
+ private:
+  std::map<std::string, int> unfit_results_;
+  std::set<std::string> sent_away_;
+};
 
 // Transport identities are binary; logs show a short hash.
 inline std::string PeerTag(const std::string& peer) {
@@ -83,6 +100,14 @@ inline uint64_t BusyJob(const wire::Error& error, uint64_t session) {
   if (error.busy_job_id() != 0 && error.busy_session_id() == session) return error.busy_job_id();
   return kForeignJob;
 }
+
+// What both loops do with an Error before their own codes. BUSY: the worker is on another
+// job and stays out of the idle pool. Not `ours` (no job of this round): logged, and the
+// worker's state updated. `job_label` names the job in the log ("job …"). Returns whether
+// `error` was handled.
+bool HandleBusyOrForeignError(const wire::Error& error, bool ours, const std::string& job_label,
+                              uint64_t session, const std::string& peer, const std::string& sender,
+                              double now, JobScheduler* scheduler);
 
 // Answers an ImageRequest from `catalog` (null: the coordinator is still starting) and logs
 // a refusal, or the start of a file's transfer.

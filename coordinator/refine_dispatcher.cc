@@ -231,7 +231,7 @@ class RefineDispatcher::Impl {
   bool OfThisRound(uint64_t job_id) const { return active_ && jobs_.count(job_id) > 0; }
 
   void Handle(const PeerMessage& message) {
-    if (sent_away_.count(message.peer)) return;
+    if (unfit_.SentAway(message.peer)) return;
     wire::Envelope envelope;
     bool wrong_version = false;
     if (!DecodeWorkerMessage(message, limits_, transport_, &stamper_, &junk_, &envelope,
@@ -293,15 +293,7 @@ class RefineDispatcher::Impl {
                                        PairName(result.job_id()), sender, problem));
       last_failure_[result.job_id()] = "malformed result: " + problem;
       scheduler_.OnWorkerFailure(peer, sender, result.job_id(), now);
-      if (++unfit_results_[peer] >= kMaxUnfitResults) {
-        spdlog::warn("worker {} sent {} results that do not fit their jobs: sending it away",
-                     sender, kMaxUnfitResults);
-        wire::Envelope envelope = stamper_.New();
-        envelope.mutable_shutdown()->set_reason("its results do not fit the jobs handed out");
-        transport_->Send(peer, Serialize(envelope));
-        scheduler_.Remove(peer);
-        sent_away_.insert(peer);
-      }
+      unfit_.Note(peer, sender, &scheduler_, transport_, &stamper_);
       return;
     }
     if (scheduler_.OnResult(peer, sender, result.job_id(), now) !=
@@ -317,17 +309,9 @@ class RefineDispatcher::Impl {
 
   void OnError(const std::string& peer, const std::string& sender, const wire::Error& error,
                double now) {
-    if (error.code() == wire::Error::BUSY) {
-      spdlog::info("worker {} did not take refinement job {}: {}", sender, PairName(error.job_id()),
-                   error.message());
-      scheduler_.OnBusy(peer, sender, error.job_id(), BusyJob(error, session_), now);
-      return;
-    }
     const bool ours = error.session_id() == session_ && OfThisRound(error.job_id());
-    if (!ours) {
-      scheduler_.Touch(peer, sender, now);
-      if (error.job_id() != 0) scheduler_.OnResult(peer, sender, kForeignJob, now);
-      spdlog::warn("worker {} reports: {}", sender, error.message());
+    if (HandleBusyOrForeignError(error, ours, "refinement job " + PairName(error.job_id()),
+                                 session_, peer, sender, now, &scheduler_)) {
       return;
     }
     if (error.code() == wire::Error::NEED_MESH) {  // send it again, with the mesh
@@ -393,8 +377,7 @@ class RefineDispatcher::Impl {
   std::map<std::string, uint32_t> mesh_sent_;  // peer -> the last round whose mesh it got
   std::vector<PairGradient> gradients_;        // by pair, as results come in
   std::map<uint64_t, std::string> last_failure_;
-  std::map<std::string, int> unfit_results_;
-  std::set<std::string> sent_away_;
+  UnfitWorkers unfit_;
   JunkLog junk_;
 };
 

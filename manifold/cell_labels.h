@@ -59,6 +59,9 @@ class CellLabels {
     return Weight(c) >= free_threshold_;
   }
 
+  // Free space that has not joined O: what growing, pockets and star completion may add.
+  bool FreeOutsideO(const Cell_handle& c) const { return !c->info().outside && IsFree(c); }
+
   // Flips so far: a vertex whose VertexInfo::relabelled is at most a value read earlier has
   // seen no cell around it flip since.
   uint32_t relabels() const { return relabels_; }

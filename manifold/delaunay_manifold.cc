@@ -685,9 +685,6 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
     std::vector<Cell_handle> pocket;
     uint32_t relabels = 0;  // labels_.relabels() when it was refused
   };
-  const auto free_outside_o = [&](const Cell_handle& c) {
-    return !dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c);
-  };
   // The cells next to O (GrowShrink::NextToO) around the vertices of `cells`, each once: where
   // growing or a pocket may have become possible when `cells` joined O. Each vertex's star is
   // scanned once, however many of `cells` hold it (a box point's star can hold 10^4 cells):
@@ -745,7 +742,8 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
     std::vector<Refused> still_refused;
     for (std::vector<Refused>* list : {&refused, &refused_now}) {
       for (Refused& r : *list) {
-        if (!free_outside_o(r.pocket.front())) continue;  // next to what entered O, if anything
+        if (!labels_.FreeOutsideO(r.pocket.front()))
+          continue;  // next to what entered O, if anything
         if (FlippedAroundSince(r.pocket, r.relabels)) {
           seeds.push_back(r.pocket.front());
         } else {

@@ -54,9 +54,7 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds,
                       std::vector<Cell_handle>* added_cells) {
   std::priority_queue<QueueEntry> queue;
   const auto push = [&](const Cell_handle& c, uint32_t refused_after) {
-    if (dt_.is_infinite(c) || c->info().outside || c->info().queued || !labels_.IsFree(c)) {
-      return;
-    }
+    if (c->info().queued || !labels_.FreeOutsideO(c)) return;
     c->info().queued = true;
     queue.push({labels_.Weight(c), KeyOf(c), c, refused_after});
   };
@@ -107,7 +105,7 @@ int64_t GrowShrink::GrowFromHeaviest() {
     Cell_handle best;
     QueueEntry best_entry{-1, {}, Cell_handle()};
     for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
-      if (c->info().outside || !labels_.IsFree(c)) continue;
+      if (!labels_.FreeOutsideO(c)) continue;
       if (labels_.outside_count() > 0) {
         // Later seeds must start a separate component: no vertex touching O.
         bool touches = false;
@@ -130,7 +128,7 @@ int64_t GrowShrink::GrowFromHeaviest() {
 std::vector<Cell_handle> GrowShrink::BoundarySeeds(RegrowSeeds which, uint32_t changed_in) const {
   std::vector<Cell_handle> seeds;
   for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
-    if (c->info().outside || !labels_.IsFree(c)) continue;
+    if (!labels_.FreeOutsideO(c)) continue;
     if (which == RegrowSeeds::kChanged) {
       bool changed = false;
       for (int i = 0; i < 4; ++i) changed |= c->vertex(i)->info().changed == changed_in;
@@ -142,7 +140,7 @@ std::vector<Cell_handle> GrowShrink::BoundarySeeds(RegrowSeeds which, uint32_t c
 }
 
 bool GrowShrink::NextToO(const Cell_handle& c) const {
-  if (dt_.is_infinite(c) || c->info().outside || !labels_.IsFree(c)) return false;
+  if (!labels_.FreeOutsideO(c)) return false;
   for (int i = 0; i < 4; ++i) {
     if (labels_.InO(c->neighbor(i))) return true;
   }
@@ -161,15 +159,8 @@ int64_t GrowShrink::CountJoinableCells(std::vector<Cell_handle>* first, size_t m
 
 bool GrowShrink::FlipAllIfRegular(const std::vector<Cell_handle>& cells,
                                   const std::vector<Cell_handle>& matter) {
-  std::vector<Cell_handle> missing;
-  for (const Cell_handle& c : cells) {
-    if (!dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c)) missing.push_back(c);
-  }
-  for (const Cell_handle& c : matter) {
-    if (!dt_.is_infinite(c) && !c->info().outside && !labels_.IsFree(c)) missing.push_back(c);
-  }
+  const std::vector<Cell_handle> missing = FlipIntoO(cells, matter);
   if (missing.empty()) return false;
-  for (const Cell_handle& c : missing) labels_.SetOutside(c, true);
   // A vertex's link depends only on the labels of its own cells: the vertices of the flipped
   // cells are tested, each with the flipped cells around it.
   std::vector<std::pair<Vertex_handle, Cell_handle>> touched;
@@ -189,18 +180,32 @@ bool GrowShrink::FlipAllIfRegular(const std::vector<Cell_handle>& cells,
     regular = w->info().cells > kLargeStar ? regularity_.VertexRegularByLinkWalk(w, near)
                                            : regularity_.VertexRegular(w, Cell_handle());
   }
-  if (!regular) {
-    for (auto c = missing.rbegin(); c != missing.rend(); ++c) labels_.SetOutside(*c, false);
-  }
+  if (!regular) UndoFlips(missing);
   return regular;
+}
+
+std::vector<Cell_handle> GrowShrink::FlipIntoO(const std::vector<Cell_handle>& cells,
+                                               const std::vector<Cell_handle>& matter) {
+  std::vector<Cell_handle> flipped;
+  for (const Cell_handle& c : cells) {
+    if (labels_.FreeOutsideO(c)) flipped.push_back(c);
+  }
+  for (const Cell_handle& c : matter) {
+    if (!dt_.is_infinite(c) && !c->info().outside && !labels_.IsFree(c)) flipped.push_back(c);
+  }
+  for (const Cell_handle& c : flipped) labels_.SetOutside(c, true);
+  return flipped;
+}
+
+void GrowShrink::UndoFlips(const std::vector<Cell_handle>& flipped) {
+  for (auto c = flipped.rbegin(); c != flipped.rend(); ++c) labels_.SetOutside(*c, false);
 }
 
 bool GrowShrink::CompleteFreeStar(const Vertex_handle& v, double min_weight) {
   around_.clear();
   dt_.incident_cells(v, std::back_inserter(around_));
   for (const Cell_handle& c : around_) {
-    if (!dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c) &&
-        labels_.Weight(c) < min_weight) {
+    if (labels_.FreeOutsideO(c) && labels_.Weight(c) < min_weight) {
       return false;
     }
   }
@@ -212,11 +217,8 @@ std::vector<Cell_handle> GrowShrink::PinchingSlivers(const std::vector<Cell_hand
   // Pinches at vertices of larger stars (the box's Steiner points) are left alone: their pieces
   // cost the square of the star to find.
   constexpr int32_t kMaxStar = 256;
-  std::vector<Cell_handle> joined;
-  for (const Cell_handle& c : pocket) {
-    if (!dt_.is_infinite(c) && !c->info().outside && labels_.IsFree(c)) joined.push_back(c);
-  }
-  for (const Cell_handle& c : joined) labels_.SetOutside(c, true);
+  // The pinches are those of the pocket in O: it goes in for the search and out again.
+  const std::vector<Cell_handle> joined = FlipIntoO(pocket);
   std::unordered_set<const void*> seen_vertices, seen_slivers;
   std::vector<Cell_handle> slivers, star, rest;
   std::vector<int> piece;
@@ -243,7 +245,7 @@ std::vector<Cell_handle> GrowShrink::PinchingSlivers(const std::vector<Cell_hand
       }
     }
   }
-  for (auto c = joined.rbegin(); c != joined.rend(); ++c) labels_.SetOutside(*c, false);
+  UndoFlips(joined);
   return slivers;
 }
 
@@ -276,8 +278,7 @@ std::vector<Cell_handle> GrowShrink::Pocket(const Cell_handle& start, size_t max
                                             uint32_t stamp) {
   // Not yet found (stamp), and free space not in O.
   const auto joins = [&](const Cell_handle& c) {
-    return c->info().stamp != stamp && !dt_.is_infinite(c) && !c->info().outside &&
-           labels_.IsFree(c);
+    return c->info().stamp != stamp && labels_.FreeOutsideO(c);
   };
   std::vector<Cell_handle> pocket;
   if (!joins(start)) return pocket;

@@ -82,6 +82,13 @@ class GrowShrink {
                     int64_t* shrunk);
 
  private:
+  // Puts into O, in this order, the free cells of `cells` and the matter cells of `matter` that
+  // are not in O yet, and returns them for UndoFlips.
+  std::vector<Cell_handle> FlipIntoO(const std::vector<Cell_handle>& cells,
+                                     const std::vector<Cell_handle>& matter = {});
+  // Takes the cells FlipIntoO returned out of O again, last first.
+  void UndoFlips(const std::vector<Cell_handle>& flipped);
+
   const Delaunay& dt_;
   const ManifoldOptions& options_;
   CellLabels& labels_;

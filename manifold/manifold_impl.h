@@ -63,7 +63,7 @@ class DelaunayManifold::Impl {
   int64_t CountFreeCellsInside() const {
     int64_t n = 0;
     for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
-      n += !c->info().outside && labels_.IsFree(c);
+      n += labels_.FreeOutsideO(c);
     }
     return n;
   }
