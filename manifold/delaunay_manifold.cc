@@ -742,8 +742,8 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
     std::vector<Refused> still_refused;
     for (std::vector<Refused>* list : {&refused, &refused_now}) {
       for (Refused& r : *list) {
-        if (!labels_.FreeOutsideO(r.pocket.front()))
-          continue;  // next to what entered O, if anything
+        // Next to what entered O, if anything.
+        if (!labels_.FreeOutsideO(r.pocket.front())) continue;
         if (FlippedAroundSince(r.pocket, r.relabels)) {
           seeds.push_back(r.pocket.front());
         } else {
