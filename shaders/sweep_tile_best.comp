@@ -4,8 +4,8 @@
 // the smaller k, then the earlier neighbour, then the earlier pixel in row-major order, and
 // replaces the tile's running best if strictly higher (running bests start at t_NCC; batches run
 // in increasing k, so ties keep the earlier batch). A pixel competes only where u_required
-// neighbours support it at its offset (its own NCC above t_NCC, the others' above u_support), or
-// all that see it if fewer. Also counts defined NCC values and covered pixels of the batch for
+// neighbours support it at its offset (its own NCC above t_NCC, the others' above u_support;
+// one that does not see it does not). Also counts defined NCC values and covered pixels of the batch for
 // the statistics.
 layout(local_size_x = REDUCE_THREADS) in;
 
@@ -41,18 +41,14 @@ shared uint s_defined[REDUCE_THREADS];
 shared uint s_covered[REDUCE_THREADS];
 
 // Whether neighbour j's match at pixel p of layer group b has enough support: u_required
-// neighbours (j, and the others above u_support), or every one whose NCC is defined there
-// (undefined is -2).
+// neighbours, j and the others above u_support (undefined, -2, never supports).
 bool Supported(ivec2 p, int b, int j) {
   int supporters = 1;
-  int defined = 1;
   for (int other = 0; other < u_neighbours; ++other) {
     if (other == j) continue;
-    float value = imageLoad(u_ncc, ivec3(p, b * u_neighbours + other)).r;
-    if (value > u_support) ++supporters;
-    if (value >= -1.0) ++defined;
+    if (imageLoad(u_ncc, ivec3(p, b * u_neighbours + other)).r > u_support) ++supporters;
   }
-  return supporters >= min(u_required, defined);
+  return supporters >= u_required;
 }
 
 // a beats b: higher NCC, or equal and earlier (layer, then pixel).

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <tuple>
 
 #include "base/error.h"
 #include "base/testing.h"
@@ -151,6 +152,29 @@ TEST(SweepKernel, TileGridSplitsEvenly) {
   EXPECT_EQ(small.NumTiles(), 1);
 }
 
+TEST(SweepKernel, TileGridCountsTilesPerImage) {
+  SweepOptions options;
+  EXPECT_EQ(options.tile_size_px, 100);
+  EXPECT_EQ(options.tiles_across, 0);
+  EXPECT_EQ(TileGrid::ForOptions(1536, 1024, options).tiles_x, 15);
+  // The longer side has tiles_across tiles whatever the resolution or orientation.
+  options.tiles_across = 16;
+  for (const auto& [w, h, tiles_y] : {std::tuple{3072, 2048, 11}, std::tuple{1536, 1024, 11},
+                                      std::tuple{640, 480, 12}, std::tuple{1600, 1200, 12}}) {
+    TileGrid grid = TileGrid::ForOptions(w, h, options);
+    EXPECT_EQ(grid.tiles_x, 16) << w << "x" << h;
+    EXPECT_EQ(grid.tiles_y, tiles_y) << w << "x" << h;
+    grid = TileGrid::ForOptions(h, w, options);
+    EXPECT_EQ(grid.tiles_x, tiles_y) << h << "x" << w;
+    EXPECT_EQ(grid.tiles_y, 16) << h << "x" << w;
+  }
+  // Tiny images get one tile per pixel at most.
+  options.tiles_across = 64;
+  const TileGrid tiny = TileGrid::ForOptions(8, 3, options);
+  EXPECT_EQ(tiny.tiles_x, 8);
+  EXPECT_EQ(tiny.tiles_y, 3);
+}
+
 TEST(SweepKernel, GaussianWindowIsNormalised) {
   const cv::Mat w = GaussianWindow(8);
   EXPECT_EQ(w.rows, 49);
@@ -194,10 +218,19 @@ TEST(SweepKernel, PrepareSweepChoosesThePyramidLevel) {
   EXPECT_EQ(prep.neighbours[0].image.size(), cv::Size(1536, 1024));
   EXPECT_EQ(prep.tiles.tiles_x, 15);
   EXPECT_DOUBLE_EQ(prep.median_depth, 10);
+  // Tiles counted per image: the same count at the full-size level below.
+  job.options.tiles_across = 16;
+  EXPECT_EQ(PrepareSweep(job).tiles.tiles_x, 16);
+  EXPECT_EQ(PrepareSweep(job).tiles.tiles_y, 11);
+  job.options.tiles_across = 0;
   job.options.alpha = 0.03;
   job.options.max_image_dimension = 0;
   prep = PrepareSweep(job);
   EXPECT_EQ(prep.pyramid_level, 0);
+  EXPECT_EQ(prep.tiles.tiles_x, 31);
+  job.options.tiles_across = 16;
+  EXPECT_EQ(PrepareSweep(job).tiles.tiles_x, 16);
+  job.options.tiles_across = 0;
   EXPECT_EQ(prep.alpha, 0.03);
   job.options.pyramid_level = 2;
   EXPECT_EQ(PrepareSweep(job).camera.image.size(), cv::Size(768, 512));

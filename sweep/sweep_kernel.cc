@@ -128,7 +128,7 @@ Eigen::Vector3d SweepVertex(const Eigen::Vector3d& v, const Eigen::Vector3d& n,
   return v + alpha_k * std::abs(n.dot(d)) * d;
 }
 
-TileGrid TileGrid::Make(int width, int height, int tile_size_px) {
+TileGrid TileGrid::Make(int width, int height, double tile_size_px) {
   TileGrid grid;
   grid.width = width;
   grid.height = height;
@@ -139,6 +139,13 @@ TileGrid TileGrid::Make(int width, int height, int tile_size_px) {
   grid.tiles_x = std::min(grid.tiles_x, std::max(1, width));
   grid.tiles_y = std::min(grid.tiles_y, std::max(1, height));
   return grid;
+}
+
+TileGrid TileGrid::ForOptions(int width, int height, const SweepOptions& options) {
+  const double size = options.tiles_across > 0
+                          ? static_cast<double>(std::max(width, height)) / options.tiles_across
+                          : options.tile_size_px;
+  return Make(width, height, size);
 }
 
 cv::Mat GaussianWindow(double sigma_px) {
@@ -239,18 +246,15 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
                        const int32_t* face, const Eigen::Vector3d* world, float threshold,
                        int required_matches, float support, std::vector<TileWinner>* best) {
   const int num_neighbours = static_cast<int>(ncc.size());
-  // Enough support for neighbour j's match at a pixel: required_matches neighbours (j and
-  // those above `support`), or every one whose NCC is defined there (a neighbour that does not
-  // see the pixel cannot support it).
+  // Enough support for neighbour j's match at a pixel: required_matches neighbours, j and
+  // those above `support`. A neighbour that does not see the pixel (NaN) does not support it:
+  // such single-neighbour matches are the street's outliers (docs/sweep.md).
   const auto supported_at = [&](int j, size_t index) {
-    int supporters = 1, defined = 1;
+    int supporters = 1;
     for (int other = 0; other < num_neighbours; ++other) {
-      if (other == j) continue;
-      const float value = ncc[other][index];
-      supporters += value > support;
-      defined += !std::isnan(value);
+      if (other != j && ncc[other][index] > support) ++supporters;
     }
-    return supporters >= std::min(required_matches, defined);
+    return supporters >= required_matches;
   };
   for (int ty = 0; ty < tiles.tiles_y; ++ty) {
     for (int tx = 0; tx < tiles.tiles_x; ++tx) {
@@ -403,8 +407,8 @@ PreparedSweep PrepareSweep(const SweepJob& job) {
     prep.alpha = AutoSweepAlpha(prep.camera.view, views, job.mesh, options.alpha_parallax_px,
                                 prep.median_depth);
   }
-  prep.tiles = TileGrid::Make(prep.camera.view.intrinsics.width, prep.camera.view.intrinsics.height,
-                              options.tile_size_px);
+  prep.tiles = TileGrid::ForOptions(prep.camera.view.intrinsics.width,
+                                    prep.camera.view.intrinsics.height, options);
   prep.window = GaussianWindow(options.gaussian_sigma_px);
   return prep;
 }

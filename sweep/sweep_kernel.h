@@ -104,7 +104,10 @@ Eigen::Vector3d SweepVertex(const Eigen::Vector3d& v, const Eigen::Vector3d& n,
 // likewise rows.
 struct TileGrid {
   int width = 0, height = 0, tiles_x = 1, tiles_y = 1;
-  static TileGrid Make(int width, int height, int tile_size_px);
+  // round(W / tile_size) x round(H / tile_size) tiles, at least 1 x 1, at most one per pixel.
+  static TileGrid Make(int width, int height, double tile_size_px);
+  // The longer side / options.tiles_across, or (0) options.tile_size_px.
+  static TileGrid ForOptions(int width, int height, const SweepOptions& options);
   int XBegin(int tx) const { return static_cast<int>(int64_t{tx} * width / tiles_x); }
   int YBegin(int ty) const { return static_cast<int>(int64_t{ty} * height / tiles_y); }
   int NumTiles() const { return tiles_x * tiles_y; }
@@ -180,11 +183,10 @@ int RequiredMatches(const SweepOptions& options, int num_neighbours);
 // One offset's contribution to the tile winners, as every kernel keeps them: a pixel whose NCC
 // (ncc[j], row-major at the swept resolution, NaN where undefined) is strictly above the
 // threshold and strictly above its tile's best wins, if at least `required_matches` neighbours
-// support it at that pixel and offset (j, and the others whose NCC there is above `support`),
-// or all whose NCC is defined there (a neighbour that does not see a pixel cannot support it);
-// ties go to the smaller k (offsets in ascending order), then the earlier neighbour, then the
-// earlier pixel in row-major order. `face` gives each pixel's face; `world`, when not null, its
-// position (else left as is).
+// support it at that pixel and offset (j, and the others whose NCC there is above `support`;
+// a neighbour that does not see the pixel does not support it); ties go to the smaller k (offsets
+// in ascending order), then the earlier neighbour, then the earlier pixel in row-major order.
+// `face` gives each pixel's face; `world`, when not null, its position (else left as is).
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
                        const int32_t* face, const Eigen::Vector3d* world, float threshold,
                        int required_matches, float support, std::vector<TileWinner>* best);

@@ -20,11 +20,11 @@ MS_OPTION(double, alpha_parallax_px, 1.0, "alpha-parallax-px",
 MS_OPTION(double, ncc_threshold, 0.98, "ncc-threshold", "t_NCC: keep tile winners above this",
           InRange(-1, 1))
 // A pixel matched by one neighbour alone is an outlier 5-50 times as often as one matched by
-// two (docs/sweep.md "Matching neighbours"). 0 and 1 both mean any one neighbour (the paper);
-// jobs with fewer neighbours, or pixels fewer neighbours see, need all of theirs.
+// two (docs/sweep.md "Matching neighbours"), also where the other neighbour cannot see it.
+// 0 and 1 both mean any one neighbour (the paper); jobs with fewer neighbours need all of theirs.
 MS_OPTION(int, min_matching_neighbours, 2, "min-matching-neighbours",
           "a tile's winning pixel needs this many neighbours to support it at its offset: its own "
-          "above t_NCC, the others above --sweep.support-ncc (fewer where fewer see the pixel; "
+          "above t_NCC, the others above --sweep.support-ncc (at most the job's neighbours; "
           "1 = the paper's rule)",
           InRange(0, 64))
 // Another neighbour supports a winning pixel when its NCC there is above this: a false match
@@ -38,6 +38,12 @@ MS_OPTION(double, gaussian_sigma_px, 8, "gaussian-sigma-px",
 // The image is split into round(W/size) x round(H/size) tiles (at least 1 x 1).
 MS_OPTION(int, tile_size_px, 100, "tile-size-px",
           "tile size (swept-resolution pixels); one point per tile at most", AtLeast(1))
+// Tiles counted per image instead, the same at any swept resolution: the longer side has this
+// many. 16 halves Table 1's downward error but stalls the upward pyramid's sweep with noisy
+// images (docs/accuracy.md "Tiles counted per image"), so it is not the default.
+MS_OPTION(int, tiles_across, 0, "tiles-across",
+          "tiles along the image's longer side, overriding tile-size-px (0 = use tile-size-px)",
+          InRange(0, 4096))
 // Images are gray in [0, 1]; 1e-4 is a standard deviation of 2.55/255.
 MS_OPTION(double, min_texture_variance, 1e-4, "min-texture-variance",
           "textureless below this weighted variance (gray in [0, 1])", AtLeast(0))

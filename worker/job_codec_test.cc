@@ -46,6 +46,10 @@ TEST(JobCodec, SweepOptionsRoundTripThroughTheWire) {
   sent.ncc_threshold = 0.9;
   sent.gaussian_sigma_px = 3;
   sent.tile_size_px = 17;
+  sent.tiles_across = 9;
+  sent.min_matching_neighbours = 3;
+  sent.support_ncc = 0.7;
+  sent.image_noise_target = 1.5;
   sent.min_texture_variance = 2e-4;
   sent.min_window_weight = 0.75;
   sent.occlusion_tolerance = 0.02;
