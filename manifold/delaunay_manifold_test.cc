@@ -411,11 +411,15 @@ TEST(DelaunayManifold, FourCoplanarCornersGiveTheBaseSquare) {
 
 // Randomised property test: random points and rays, then batches of insertions; after every
 // step the state is valid (labels, weights = recount, all vertices regular) and the extracted
-// surface is a closed 2-manifold.
-TEST(DelaunayManifold, RandomInsertionsKeepTheSurfaceManifold) {
+// surface is a closed 2-manifold, whichever cells are shrunk before an insertion.
+class RandomInsertions : public ::testing::TestWithParam<int> {};
+
+TEST_P(RandomInsertions, KeepTheSurfaceManifold) {
+  ManifoldOptions options;
+  options.shrink_neighbourhood = GetParam();
   for (uint32_t seed = 1; seed <= 3; ++seed) {
     RandomScene scene = SphereScene(150, 10, seed, 1.0);
-    DelaunayManifold manifold(scene.cameras, ManifoldOptions{});
+    DelaunayManifold manifold(scene.cameras, options);
     manifold.Build(scene.points);
     ASSERT_EQ(manifold.Validate(true), "") << "seed " << seed;
     std::mt19937 rng(seed * 101);
@@ -443,6 +447,10 @@ TEST(DelaunayManifold, RandomInsertionsKeepTheSurfaceManifold) {
     EXPECT_EQ(manifold.num_points(), 150 + inserted);
   }
 }
+
+// 0: the conflict region and its face neighbours; 1: and every cell sharing a vertex with it;
+// 2: the vertex stars only where the face neighbours were not enough.
+INSTANTIATE_TEST_SUITE_P(ShrinkNeighbourhoods, RandomInsertions, ::testing::Values(0, 1, 2));
 
 // Inserts `points` into `whole` in one call and into `parts` cut at `cuts` (offsets from 0 to
 // points.size()), and expects the same insertion, the same manifold and every count right.

@@ -305,37 +305,49 @@ bool GrowShrink::ShrinkAround(const std::vector<Cell_handle>& conflicts, uint32_
     c->info().stamp = stamp;
     if (c->info().outside) shrink_set.push_back({KeyOf(c), c});
   };
+  const auto by_key = [](const auto& x, const auto& y) { return x.first < y.first; };
+  const auto add_neighbourhood = [&](bool vertex_stars) {
+    const size_t begin = shrink_set.size();
+    for (const Cell_handle& c : conflicts) {
+      for (int i = 0; i < 4; ++i) {
+        if (!vertex_stars) {
+          add_to_shrink_set(c->neighbor(i));
+          continue;
+        }
+        around_.clear();
+        dt_.incident_cells(c->vertex(i), std::back_inserter(around_));
+        for (const Cell_handle& a : around_) add_to_shrink_set(a);
+      }
+    }
+    std::sort(shrink_set.begin() + begin, shrink_set.end(), by_key);
+  };
   for (const Cell_handle& c : conflicts) add_to_shrink_set(c);
   const size_t num_in_d = shrink_set.size();
-  if (num_in_d > 0) {
-    for (const Cell_handle& c : conflicts) {
-      if (options_.shrink_neighbourhood == 0) {
-        for (int i = 0; i < 4; ++i) add_to_shrink_set(c->neighbor(i));
-      } else {
-        for (int i = 0; i < 4; ++i) {
-          around_.clear();
-          dt_.incident_cells(c->vertex(i), std::back_inserter(around_));
-          for (const Cell_handle& a : around_) add_to_shrink_set(a);
+  if (num_in_d == 0) return true;
+  std::sort(shrink_set.begin(), shrink_set.end(), by_key);
+  const int neighbourhood = options_.shrink_neighbourhood;
+  add_neighbourhood(/*vertex_stars=*/neighbourhood == 1);
+  size_t d_in_o = num_in_d;
+  const auto remove_while_manifold = [&] {
+    for (bool changed = true; changed && d_in_o > 0;) {
+      changed = false;
+      for (size_t k = 0; k < shrink_set.size() && d_in_o > 0; ++k) {
+        const Cell_handle& c = shrink_set[k].second;
+        if (c->info().outside && regularity_.FlipKeepsManifold(c)) {
+          labels_.SetOutside(c, false);
+          for (int i = 0; i < 4; ++i) c->vertex(i)->info().changed = batch;
+          ++*shrunk;
+          changed = true;
+          if (k < num_in_d) --d_in_o;
         }
       }
     }
-    const auto by_key = [](const auto& x, const auto& y) { return x.first < y.first; };
-    std::sort(shrink_set.begin(), shrink_set.begin() + num_in_d, by_key);
-    std::sort(shrink_set.begin() + num_in_d, shrink_set.end(), by_key);
-  }
-  size_t d_in_o = num_in_d;
-  for (bool changed = true; changed && d_in_o > 0;) {
-    changed = false;
-    for (size_t k = 0; k < shrink_set.size() && d_in_o > 0; ++k) {
-      const Cell_handle& c = shrink_set[k].second;
-      if (c->info().outside && regularity_.FlipKeepsManifold(c)) {
-        labels_.SetOutside(c, false);
-        for (int i = 0; i < 4; ++i) c->vertex(i)->info().changed = batch;
-        ++*shrunk;
-        changed = true;
-        if (k < num_in_d) --d_in_o;
-      }
-    }
+  };
+  remove_while_manifold();
+  // 2: only where the face neighbours were not enough, the vertex stars too.
+  if (d_in_o > 0 && neighbourhood == 2) {
+    add_neighbourhood(/*vertex_stars=*/true);
+    remove_while_manifold();
   }
   return d_in_o == 0;
 }
