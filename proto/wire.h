@@ -15,9 +15,7 @@ namespace ms {
 
 // The version both sides put in every envelope and require in every envelope they read.
 // 2: refinement jobs (Job.refine, Result.gradient).
-// 3: SweepOptions.min_matching_neighbours also binds where a neighbour cannot see the pixel;
-//    SweepOptions.tiles_across.
-constexpr uint32_t kProtocolVersion = 3;
+constexpr uint32_t kProtocolVersion = 2;
 
 enum class DecodeStatus {
   kOk,

@@ -4,9 +4,9 @@
 // the smaller k, then the earlier neighbour, then the earlier pixel in row-major order, and
 // replaces the tile's running best if strictly higher (running bests start at t_NCC; batches run
 // in increasing k, so ties keep the earlier batch). A pixel competes only where u_required
-// neighbours support it at its offset (its own NCC above t_NCC, the others' above u_support;
-// one that does not see it does not). Also counts defined NCC values and covered pixels of the batch for
-// the statistics.
+// neighbours support it at its offset (its own NCC above t_NCC, the others' above u_support), or
+// all that see it if fewer (unless u_strict). Also counts defined NCC values and covered pixels
+// of the batch for the statistics.
 layout(local_size_x = REDUCE_THREADS) in;
 
 // imageLoad rather than texelFetch: cheaper on llvmpipe, the same on GPUs.
@@ -32,6 +32,7 @@ uniform int u_width;          // C's image width
 uniform int u_batch;          // index of this batch (counter slot)
 uniform float u_threshold;    // t_NCC (float, as the reference compares)
 uniform int u_required;       // neighbours supporting a winner it needs (RequiredMatches)
+uniform int u_strict;         // 1: a neighbour that does not see the pixel never supports it
 uniform float u_support;      // NCC above which another neighbour supports it
 
 shared float s_ncc[REDUCE_THREADS];
@@ -41,14 +42,18 @@ shared uint s_defined[REDUCE_THREADS];
 shared uint s_covered[REDUCE_THREADS];
 
 // Whether neighbour j's match at pixel p of layer group b has enough support: u_required
-// neighbours, j and the others above u_support (undefined, -2, never supports).
+// neighbours (j, and the others above u_support), or unless u_strict every one whose NCC is
+// defined there (undefined is -2).
 bool Supported(ivec2 p, int b, int j) {
   int supporters = 1;
+  int defined = 1;
   for (int other = 0; other < u_neighbours; ++other) {
     if (other == j) continue;
-    if (imageLoad(u_ncc, ivec3(p, b * u_neighbours + other)).r > u_support) ++supporters;
+    float value = imageLoad(u_ncc, ivec3(p, b * u_neighbours + other)).r;
+    if (value > u_support) ++supporters;
+    if (value >= -1.0) ++defined;
   }
-  return supporters >= u_required;
+  return supporters >= (u_strict != 0 ? u_required : min(u_required, defined));
 }
 
 // a beats b: higher NCC, or equal and earlier (layer, then pixel).

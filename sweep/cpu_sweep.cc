@@ -293,7 +293,7 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, std::at
     }
     stage.Restart();
     UpdateTileWinners(prep.tiles, k, map_pointers, slab.faces().data(), nullptr, threshold,
-                      required_matches, support, &out.best);
+                      required_matches, support, job.options.strict_support, &out.best);
     out.reduce_s += stage.Seconds();
   }
   return out;

@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
+#include <utility>
 
 #include "base/error.h"
 #include "base/testing.h"
@@ -257,19 +258,21 @@ TEST(CpuSweep, TrueMeshWithOcclusionAndDefaultWindow) {
   job.options.num_offsets = 5;
   job.options.alpha = 0.03;
   job.options.gaussian_sigma_px = 8;
-  // The default rule (two matching neighbours) and the paper's (any one). The first's
-  // candidates are a subset of the second's, so it finds a point in fewer tiles or as many.
-  size_t points_with_two = 0;
-  for (int required : {2, 1}) {
+  // The strict rule, the default (two matching neighbours where both see the pixel) and the
+  // paper's (any one). Each one's candidates are a subset of the next one's, so it finds a point
+  // in fewer tiles or as many.
+  size_t points_before = 0;
+  for (const auto& [required, strict] :
+       {std::pair{2, true}, std::pair{2, false}, std::pair{1, false}}) {
     job.options.min_matching_neighbours = required;
+    job.options.strict_support = strict;
     const SweepResult ref = ReferenceSweepKernel().Run(job);
     ASSERT_GT(ref.points.size(), 30u);
-    ExpectSameWinners(ref, CpuSweepKernel().Run(job), ref.stats.median_depth,
-                      "cpu, occluder, " + std::to_string(required) + " matching");
-    if (required == 2) points_with_two = ref.points.size();
-    if (required == 1) {
-      EXPECT_LE(points_with_two, ref.points.size());
-    }
+    ExpectSameWinners(
+        ref, CpuSweepKernel().Run(job), ref.stats.median_depth,
+        "cpu, occluder, " + std::to_string(required) + " matching" + (strict ? ", strict" : ""));
+    EXPECT_LE(points_before, ref.points.size());
+    points_before = ref.points.size();
   }
 }
 

@@ -833,6 +833,7 @@ std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
   tile_best.Set("u_threshold", static_cast<float>(sweep.ncc_threshold));
   tile_best.Set("u_required", RequiredMatches(sweep, num_neighbours));
   tile_best.Set("u_support", static_cast<float>(sweep.support_ncc));
+  tile_best.Set("u_strict", sweep.strict_support ? 1 : 0);
   gl::CheckGlError("sweep setup");
   const bool transposed = variant == GlslBlurVariant::kUnrolled;
   gpu->rows_groups_x = DivUp(DivUp(width, block), local_x);

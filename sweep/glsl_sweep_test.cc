@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "base/error.h"
 #include "base/testing.h"
@@ -270,13 +271,16 @@ TEST_F(GlslSweepTest, TrueMeshWithOcclusionAndDefaultWindow) {
   job.options.num_offsets = 5;
   job.options.alpha = 0.03;
   job.options.gaussian_sigma_px = 8;  // the default window (radius 24)
-  // The default rule (two matching neighbours) and the paper's (any one).
-  for (int required : {2, 1}) {
+  // The default rule (two matching neighbours), the strict one and the paper's (any one).
+  for (const auto& [required, strict] :
+       {std::pair{2, false}, std::pair{2, true}, std::pair{1, false}}) {
     job.options.min_matching_neighbours = required;
+    job.options.strict_support = strict;
     const SweepResult ref = ReferenceSweepKernel().Run(job);
     ASSERT_GT(ref.points.size(), 30u);
     for (GlslSweepKernel* kernel : Kernels()) {
-      SCOPED_TRACE(Label(kernel) + ", " + std::to_string(required) + " matching");
+      SCOPED_TRACE(Label(kernel) + ", " + std::to_string(required) + " matching" +
+                   (strict ? ", strict" : ""));
       ExpectSameWinners(ref, kernel->Run(job), ref.stats.median_depth, Label(kernel));
     }
   }

@@ -182,7 +182,8 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
     std::vector<const float*> maps;
     for (const cv::Mat& m : ncc) maps.push_back(m.ptr<float>());
     UpdateTileWinners(prep.tiles, k, maps, camera_raster.face().data(),
-                      camera_raster.world().data(), threshold, required_matches, support, &best);
+                      camera_raster.world().data(), threshold, required_matches, support,
+                      options.strict_support, &best);
     stats.reduce_s += stage.Seconds();
   }
 

@@ -244,17 +244,21 @@ int RequiredMatches(const SweepOptions& options, int num_neighbours) {
 
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
                        const int32_t* face, const Eigen::Vector3d* world, float threshold,
-                       int required_matches, float support, std::vector<TileWinner>* best) {
+                       int required_matches, float support, bool strict,
+                       std::vector<TileWinner>* best) {
   const int num_neighbours = static_cast<int>(ncc.size());
-  // Enough support for neighbour j's match at a pixel: required_matches neighbours, j and
-  // those above `support`. A neighbour that does not see the pixel (NaN) does not support it:
-  // such single-neighbour matches are the street's outliers (docs/sweep.md).
+  // Enough support for neighbour j's match at a pixel: required_matches neighbours (j and
+  // those above `support`), or unless strict every one whose NCC is defined there (a neighbour
+  // that does not see the pixel cannot support it).
   const auto supported_at = [&](int j, size_t index) {
-    int supporters = 1;
+    int supporters = 1, defined = 1;
     for (int other = 0; other < num_neighbours; ++other) {
-      if (other != j && ncc[other][index] > support) ++supporters;
+      if (other == j) continue;
+      const float value = ncc[other][index];
+      supporters += value > support;
+      defined += !std::isnan(value);
     }
-    return supporters >= required_matches;
+    return supporters >= (strict ? required_matches : std::min(required_matches, defined));
   };
   for (int ty = 0; ty < tiles.tiles_y; ++ty) {
     for (int tx = 0; tx < tiles.tiles_x; ++tx) {

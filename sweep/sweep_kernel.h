@@ -183,13 +183,15 @@ int RequiredMatches(const SweepOptions& options, int num_neighbours);
 // One offset's contribution to the tile winners, as every kernel keeps them: a pixel whose NCC
 // (ncc[j], row-major at the swept resolution, NaN where undefined) is strictly above the
 // threshold and strictly above its tile's best wins, if at least `required_matches` neighbours
-// support it at that pixel and offset (j, and the others whose NCC there is above `support`;
-// a neighbour that does not see the pixel does not support it); ties go to the smaller k (offsets
+// support it at that pixel and offset (j, and the others whose NCC there is above `support`),
+// or unless `strict` all whose NCC is defined there (a neighbour that does not see a pixel
+// cannot support it); ties go to the smaller k (offsets
 // in ascending order), then the earlier neighbour, then the earlier pixel in row-major order.
 // `face` gives each pixel's face; `world`, when not null, its position (else left as is).
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
                        const int32_t* face, const Eigen::Vector3d* world, float threshold,
-                       int required_matches, float support, std::vector<TileWinner>* best);
+                       int required_matches, float support, bool strict,
+                       std::vector<TileWinner>* best);
 
 // Whether tile winner a beats b as UpdateTileWinners would decide had it seen both: the higher
 // NCC, on ties the smaller k, then the earlier neighbour, then the earlier pixel. An empty

@@ -104,10 +104,11 @@ TEST(SweepKernel, WinnersNeedTheRequiredMatches) {
   const std::vector<float> first = {0.999f, 0.5f, 0.985f, 0.992f};
   const std::vector<float> second = {0.97f, 0.995f, 0.99f, nan};
   const std::vector<int32_t> face = {10, 11, 12, 13};
-  const auto winner = [&](const std::vector<float>& a, const std::vector<float>& b, int required) {
+  const auto winner = [&](const std::vector<float>& a, const std::vector<float>& b, int required,
+                          bool strict = false) {
     std::vector<TileWinner> best(1);
     UpdateTileWinners(tiles, /*offset=*/-1, {a.data(), b.data()}, face.data(), nullptr, 0.98f,
-                      required, /*support=*/0.98f, &best);
+                      required, /*support=*/0.98f, strict, &best);
     return best[0];
   };
   // The paper's rule: the highest NCC of any neighbour.
@@ -115,20 +116,31 @@ TEST(SweepKernel, WinnersNeedTheRequiredMatches) {
   EXPECT_EQ(w.ncc, 0.999f);
   EXPECT_EQ(w.col, 0);
   EXPECT_TRUE(w.matched.empty());
-  // Two: neither pixel 0 (neighbour 1 disagrees) nor pixel 3 (neighbour 1 does not see it), but
-  // pixel 2, through neighbour 1's NCC, with neighbour 0 listed as matched.
+  // Two: pixel 3, which only neighbour 0 sees, beats pixel 2.
   w = winner(first, second, 2);
-  EXPECT_EQ(w.ncc, 0.99f);
-  EXPECT_EQ(w.col, 2);
-  EXPECT_EQ(w.neighbour, 1);
-  EXPECT_EQ(w.face, 12);
-  EXPECT_EQ(w.matched, std::vector<int>{0});
-  // No pixel above the threshold in both neighbours: no winner, also where one does not see.
+  EXPECT_EQ(w.ncc, 0.992f);
+  EXPECT_EQ(w.col, 3);
+  EXPECT_EQ(w.neighbour, 0);
+  EXPECT_TRUE(w.matched.empty());
+  // Two, strict: neighbour 1 does not see pixel 3, so pixel 2 wins, through neighbour 1's NCC,
+  // with neighbour 0 listed as matched; likewise without pixel 3.
+  for (const bool strict : {true, false}) {
+    std::vector<float> first_maybe_3 = first;
+    if (!strict) first_maybe_3[3] = nan;
+    w = winner(first_maybe_3, second, 2, strict);
+    EXPECT_EQ(w.ncc, 0.99f) << strict;
+    EXPECT_EQ(w.col, 2) << strict;
+    EXPECT_EQ(w.neighbour, 1) << strict;
+    EXPECT_EQ(w.face, 12) << strict;
+    EXPECT_EQ(w.matched, std::vector<int>{0}) << strict;
+  }
+  // No pixel above the threshold in both neighbours that see it: no winner.
   const std::vector<float> low = {0.97f, 0.97f, 0.97f, 0.97f};
   EXPECT_LT(winner(first, low, 2).neighbour, 0);
+  // A neighbour that sees nothing: the other alone decides, unless strict.
   const std::vector<float> unseen(4, nan);
-  EXPECT_LT(winner(first, unseen, 2).neighbour, 0);
-  EXPECT_EQ(winner(first, unseen, 1).col, 0);
+  EXPECT_EQ(winner(first, unseen, 2).col, 0);
+  EXPECT_LT(winner(first, unseen, 2, /*strict=*/true).neighbour, 0);
 }
 
 TEST(SweepKernel, RequiredMatchesAreAtMostTheNeighbours) {

@@ -20,13 +20,21 @@ MS_OPTION(double, alpha_parallax_px, 1.0, "alpha-parallax-px",
 MS_OPTION(double, ncc_threshold, 0.98, "ncc-threshold", "t_NCC: keep tile winners above this",
           InRange(-1, 1))
 // A pixel matched by one neighbour alone is an outlier 5-50 times as often as one matched by
-// two (docs/sweep.md "Matching neighbours"), also where the other neighbour cannot see it.
-// 0 and 1 both mean any one neighbour (the paper); jobs with fewer neighbours need all of theirs.
+// two (docs/sweep.md "Matching neighbours"). 0 and 1 both mean any one neighbour (the paper);
+// jobs with fewer neighbours, or pixels fewer neighbours see, need all of theirs.
 MS_OPTION(int, min_matching_neighbours, 2, "min-matching-neighbours",
           "a tile's winning pixel needs this many neighbours to support it at its offset: its own "
-          "above t_NCC, the others above --sweep.support-ncc (at most the job's neighbours; "
-          "1 = the paper's rule)",
+          "above t_NCC, the others above --sweep.support-ncc (fewer where fewer see the pixel, "
+          "unless --sweep.strict-support; 1 = the paper's rule)",
           InRange(0, 64))
+// Also where the other neighbours do not see the pixel: single-neighbour points were the
+// street's outliers, but at 100 px tiles the rule did not pay (docs/accuracy.md "Tiles counted
+// per image").
+MS_OPTION(
+    bool, strict_support, false, "strict-support",
+    "a neighbour that does not see a pixel counts as not supporting it (min-matching-neighbours "
+    "then binds everywhere)",
+    AnyValue())
 // Another neighbour supports a winning pixel when its NCC there is above this: a false match
 // in repeated texture is at the wrong depth for the other neighbour, a true one only
 // foreshortened.
