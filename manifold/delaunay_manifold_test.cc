@@ -449,7 +449,7 @@ TEST_P(RandomInsertions, KeepTheSurfaceManifold) {
 }
 
 // 0: the conflict region and its face neighbours; 1: and every cell sharing a vertex with it;
-// 2: the vertex stars only where the face neighbours were not enough.
+// 2: the stars of its points (not Steiner points) only where the face neighbours were not enough.
 INSTANTIATE_TEST_SUITE_P(ShrinkNeighbourhoods, RandomInsertions, ::testing::Values(0, 1, 2));
 
 // Inserts `points` into `whole` in one call and into `parts` cut at `cuts` (offsets from 0 to

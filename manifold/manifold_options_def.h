@@ -67,10 +67,12 @@ MS_OPTION(bool, float_cleanup, true, "float-cleanup",
           AnyValue())
 // Incremental insertion: E, the cells shrunk out of O before inserting a point, is the conflict
 // region D plus its face neighbours (0), every cell sharing a vertex with D (1), or the face
-// neighbours first and the vertex stars only if D still meets O (2).
+// neighbours first and, only if D still meets O, the stars of D's vertices that are points, not
+// Steiner points (2; docs/accuracy.md "Both as options").
 MS_OPTION(int, shrink_neighbourhood, 0, "shrink-neighbourhood",
           "cells shrunk before an insertion: 0 = conflict region + face neighbours, 1 = + every "
-          "cell sharing a vertex, 2 = 0 then 1 where 0 is not enough",
+          "cell sharing a vertex, 2 = 0, then the stars of its points (not Steiner points) "
+          "where 0 is not enough",
           InRange(0, 2))
 // Regrowing after an insertion batch: from every free cell on the boundary of O (the paper) or
 // only from those with a vertex the batch touched (docs/manifold.md compares them).
