@@ -306,8 +306,9 @@ bool GrowShrink::ShrinkAround(const std::vector<Cell_handle>& conflicts, uint32_
     if (c->info().outside) shrink_set.push_back({KeyOf(c), c});
   };
   const auto by_key = [](const auto& x, const auto& y) { return x.first < y.first; };
-  // The stars of D's vertices, all of them (1) or (2) those of its points: a Steiner vertex's
-  // star reaches from the surface to the cameras, and what was shrunk there did not regrow.
+  // Adds D's face neighbours, or the stars of D's vertices: all (1), or only those of points
+  // (2): a Steiner vertex's star reaches from the surface to the cameras, and what was shrunk
+  // there did not regrow.
   const auto add_neighbourhood = [&](bool vertex_stars, bool points_only) {
     const size_t begin = shrink_set.size();
     for (const Cell_handle& c : conflicts) {
