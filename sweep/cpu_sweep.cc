@@ -273,9 +273,7 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, std::at
     m.resize(pixels);
     map_pointers.push_back(m.data());
   }
-  const float threshold = static_cast<float>(job.options.ncc_threshold);
-  const int required_matches = RequiredMatches(job.options, num_neighbours);
-  const float support = static_cast<float>(job.options.support_ncc);
+  const WinnerRule rule = WinnerRule::For(job.options, num_neighbours);
   Timer stage;
   for (; i < num_offsets; i = next->fetch_add(1)) {
     const int k = prep.offsets[i];
@@ -292,8 +290,7 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, std::at
       out.ncc_s += stage.Seconds();
     }
     stage.Restart();
-    UpdateTileWinners(prep.tiles, k, map_pointers, slab.faces().data(), nullptr, threshold,
-                      required_matches, support, job.options.strict_support, &out.best);
+    UpdateTileWinners(prep.tiles, k, map_pointers, slab.faces().data(), nullptr, rule, &out.best);
     out.reduce_s += stage.Seconds();
   }
   return out;

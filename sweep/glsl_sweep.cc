@@ -830,10 +830,11 @@ std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
   SetDouble(programs.ncc, "u_min_texture_variance", sweep.min_texture_variance);
   tile_best.Set("u_neighbours", num_neighbours);
   tile_best.Set("u_width", width);
-  tile_best.Set("u_threshold", static_cast<float>(sweep.ncc_threshold));
-  tile_best.Set("u_required", RequiredMatches(sweep, num_neighbours));
-  tile_best.Set("u_support", static_cast<float>(sweep.support_ncc));
-  tile_best.Set("u_strict", sweep.strict_support ? 1 : 0);
+  const WinnerRule rule = WinnerRule::For(sweep, num_neighbours);
+  tile_best.Set("u_threshold", rule.threshold);
+  tile_best.Set("u_required", rule.required_matches);
+  tile_best.Set("u_support", rule.support);
+  tile_best.Set("u_strict", rule.strict ? 1 : 0);
   gl::CheckGlError("sweep setup");
   const bool transposed = variant == GlslBlurVariant::kUnrolled;
   gpu->rows_groups_x = DivUp(DivUp(width, block), local_x);

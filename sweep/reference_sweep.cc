@@ -150,9 +150,7 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
     shadow_maps.emplace_back(n.view, prep.near, /*keep_world=*/false);
   }
   std::vector<TileWinner> best(prep.tiles.NumTiles());
-  const float threshold = static_cast<float>(options.ncc_threshold);
-  const int required_matches = RequiredMatches(options, num_neighbours);
-  const float support = static_cast<float>(options.support_ncc);
+  const WinnerRule rule = WinnerRule::For(options, num_neighbours);
   stats.prepare_s = stage.Seconds();
 
   std::vector<cv::Mat> ncc(num_neighbours);
@@ -182,8 +180,7 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
     std::vector<const float*> maps;
     for (const cv::Mat& m : ncc) maps.push_back(m.ptr<float>());
     UpdateTileWinners(prep.tiles, k, maps, camera_raster.face().data(),
-                      camera_raster.world().data(), threshold, required_matches, support,
-                      options.strict_support, &best);
+                      camera_raster.world().data(), rule, &best);
     stats.reduce_s += stage.Seconds();
   }
 

@@ -238,27 +238,32 @@ bool BeatsInSweepOrder(const TileWinner& a, const TileWinner& b) {
          std::make_tuple(b.offset, b.neighbour, b.row, b.col);
 }
 
-int RequiredMatches(const SweepOptions& options, int num_neighbours) {
-  return std::clamp(options.min_matching_neighbours, 1, std::max(1, num_neighbours));
+WinnerRule WinnerRule::For(const SweepOptions& options, int num_neighbours) {
+  WinnerRule rule;
+  rule.threshold = static_cast<float>(options.ncc_threshold);
+  rule.required_matches =
+      std::clamp(options.min_matching_neighbours, 1, std::max(1, num_neighbours));
+  rule.support = static_cast<float>(options.support_ncc);
+  rule.strict = options.strict_support;
+  return rule;
 }
 
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
-                       const int32_t* face, const Eigen::Vector3d* world, float threshold,
-                       int required_matches, float support, bool strict,
+                       const int32_t* face, const Eigen::Vector3d* world, const WinnerRule& rule,
                        std::vector<TileWinner>* best) {
   const int num_neighbours = static_cast<int>(ncc.size());
-  // Enough support for neighbour j's match at a pixel: required_matches neighbours (j and
-  // those above `support`), or unless strict every one whose NCC is defined there (a neighbour
-  // that does not see the pixel cannot support it).
+  const float threshold = rule.threshold;
+  const int required_matches = rule.required_matches;
+  // Enough support for neighbour j's match at a pixel (WinnerRule).
   const auto supported_at = [&](int j, size_t index) {
     int supporters = 1, defined = 1;
     for (int other = 0; other < num_neighbours; ++other) {
       if (other == j) continue;
       const float value = ncc[other][index];
-      supporters += value > support;
+      supporters += value > rule.support;
       defined += !std::isnan(value);
     }
-    return supporters >= (strict ? required_matches : std::min(required_matches, defined));
+    return supporters >= (rule.strict ? required_matches : std::min(required_matches, defined));
   };
   for (int ty = 0; ty < tiles.tiles_y; ++ty) {
     for (int tx = 0; tx < tiles.tiles_x; ++tx) {

@@ -176,21 +176,29 @@ struct TileWinner {
   std::vector<int> matched;
 };
 
-// How many of a job's neighbours must support a winning pixel at its offset:
-// options.min_matching_neighbours, at least 1, at most the job's neighbours.
-int RequiredMatches(const SweepOptions& options, int num_neighbours);
+// What a pixel's NCC needs to win its tile, the same in every kernel (the GLSL kernel passes it
+// as uniforms): strictly above `threshold` (t_NCC), and support from `required_matches`
+// neighbours at that pixel and offset (its own, and the others whose NCC there is above
+// `support`). Unless `strict`, fewer suffice where fewer neighbours see the pixel; strict, a
+// neighbour that does not see it cannot support it.
+struct WinnerRule {
+  float threshold = 0.98f;
+  int required_matches = 1;
+  float support = 0.8f;
+  bool strict = false;
+
+  // From the options; required_matches is min_matching_neighbours clamped to [1, the job's
+  // neighbours].
+  static WinnerRule For(const SweepOptions& options, int num_neighbours);
+};
 
 // One offset's contribution to the tile winners, as every kernel keeps them: a pixel whose NCC
-// (ncc[j], row-major at the swept resolution, NaN where undefined) is strictly above the
-// threshold and strictly above its tile's best wins, if at least `required_matches` neighbours
-// support it at that pixel and offset (j, and the others whose NCC there is above `support`),
-// or unless `strict` all whose NCC is defined there (a neighbour that does not see a pixel
-// cannot support it); ties go to the smaller k (offsets
-// in ascending order), then the earlier neighbour, then the earlier pixel in row-major order.
-// `face` gives each pixel's face; `world`, when not null, its position (else left as is).
+// (ncc[j], row-major at the swept resolution, NaN where undefined) meets `rule` and is strictly
+// above its tile's best wins; ties go to the smaller k (offsets in ascending order), then the
+// earlier neighbour, then the earlier pixel in row-major order. `face` gives each pixel's face;
+// `world`, when not null, its position (else left as is).
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
-                       const int32_t* face, const Eigen::Vector3d* world, float threshold,
-                       int required_matches, float support, bool strict,
+                       const int32_t* face, const Eigen::Vector3d* world, const WinnerRule& rule,
                        std::vector<TileWinner>* best);
 
 // Whether tile winner a beats b as UpdateTileWinners would decide had it seen both: the higher

@@ -107,8 +107,9 @@ TEST(SweepKernel, WinnersNeedTheRequiredMatches) {
   const auto winner = [&](const std::vector<float>& a, const std::vector<float>& b, int required,
                           bool strict = false) {
     std::vector<TileWinner> best(1);
-    UpdateTileWinners(tiles, /*offset=*/-1, {a.data(), b.data()}, face.data(), nullptr, 0.98f,
-                      required, /*support=*/0.98f, strict, &best);
+    const WinnerRule rule{/*threshold=*/0.98f, required, /*support=*/0.98f, strict};
+    UpdateTileWinners(tiles, /*offset=*/-1, {a.data(), b.data()}, face.data(), nullptr, rule,
+                      &best);
     return best[0];
   };
   // The paper's rule: the highest NCC of any neighbour.
@@ -143,15 +144,22 @@ TEST(SweepKernel, WinnersNeedTheRequiredMatches) {
   EXPECT_LT(winner(first, unseen, 2, /*strict=*/true).neighbour, 0);
 }
 
-TEST(SweepKernel, RequiredMatchesAreAtMostTheNeighbours) {
+TEST(SweepKernel, WinnerRuleTakesTheOptions) {
   SweepOptions options;
   EXPECT_EQ(options.min_matching_neighbours, 2);
-  EXPECT_EQ(RequiredMatches(options, 2), 2);
-  EXPECT_EQ(RequiredMatches(options, 1), 1);
+  EXPECT_EQ(WinnerRule::For(options, 2).required_matches, 2);
+  EXPECT_EQ(WinnerRule::For(options, 1).required_matches, 1);
   options.min_matching_neighbours = 0;  // what an older coordinator's message holds
-  EXPECT_EQ(RequiredMatches(options, 2), 1);
+  EXPECT_EQ(WinnerRule::For(options, 2).required_matches, 1);
   options.min_matching_neighbours = 3;
-  EXPECT_EQ(RequiredMatches(options, 34), 3);
+  options.ncc_threshold = 0.95;
+  options.support_ncc = 0.7;
+  options.strict_support = true;
+  const WinnerRule rule = WinnerRule::For(options, 34);
+  EXPECT_EQ(rule.required_matches, 3);
+  EXPECT_EQ(rule.threshold, 0.95f);
+  EXPECT_EQ(rule.support, 0.7f);
+  EXPECT_TRUE(rule.strict);
 }
 
 TEST(SweepKernel, PreparedSweepStatsCountsTheHypotheses) {
