@@ -71,6 +71,7 @@ StepOutcome RunLifecycle::Prepare() {
   } else {
     record_ = RunRecord();
     record_.scene = std::move(input);
+    record_.scene_points = static_cast<int64_t>(record_.scene.points.size());
     record_.scene_fingerprint = SceneFingerprint(record_.scene);
     record_.options_fingerprint = fingerprint;
   }
@@ -308,6 +309,7 @@ RunRecord RunLifecycle::ReadCheckpoint(const std::string& run_file) {
 void RunLifecycle::Checkpoint() {
   WaitForCheckpoint();
   WriteCheckpoint();
+  ReleaseScenePointsOnce();
 }
 
 void RunLifecycle::CheckpointInBackground() {
@@ -316,14 +318,26 @@ void RunLifecycle::CheckpointInBackground() {
 }
 
 void RunLifecycle::WaitForCheckpoint() {
-  if (checkpoint_.valid()) checkpoint_.get();
+  if (!checkpoint_.valid()) return;
+  checkpoint_.get();
+  ReleaseScenePointsOnce();
 }
 
 void RunLifecycle::CheckCheckpoint() {
   if (checkpoint_.valid() &&
       checkpoint_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
     checkpoint_.get();
+    ReleaseScenePointsOnce();
   }
+}
+
+// After the first checkpoint this process wrote (a resumed run's file may be the fallback
+// run.prev.h5, which the next checkpoint replaces), run.h5 holds the whole scene.
+void RunLifecycle::ReleaseScenePointsOnce() {
+  if (!record_.scene_copy_from.empty() || record_.scene.points.empty()) return;
+  ReleaseScenePoints(Path("run.h5"), &record_);
+  ReleaseFreeMemory();
+  spdlog::info("memory after releasing the scene's points (run.h5 keeps them): {}", MemoryReport());
 }
 
 void RunLifecycle::WriteCheckpoint() {

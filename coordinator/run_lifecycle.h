@@ -102,6 +102,8 @@ class RunLifecycle {
   // The same on a background thread; record_ must not change until WaitForCheckpoint.
   void CheckpointInBackground();
   void WriteCheckpoint();
+  // Once run.h5 holds the whole scene: frees the scene's points (run_store.h).
+  void ReleaseScenePointsOnce();
   StepOutcome NextOrStop();
   void Finish(const std::string& reason);
   RunSummaryInfo SummaryInfo(const std::string& status) const;

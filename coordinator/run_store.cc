@@ -174,9 +174,18 @@ std::string CheckpointHash(int64_t completed, const std::string& scene_fingerpri
 
 }  // namespace
 
+void ReleaseScenePoints(const std::string& run_file, RunRecord* record) {
+  record->scene_copy_from = run_file;
+  std::vector<ScenePoint>().swap(record->scene.points);
+}
+
 void WriteRunFile(const RunRecord& record, const std::string& path) {
   H5File file = H5File::Create(path);
-  WriteSceneH5(record.scene, file, "/scene");
+  if (record.scene_copy_from.empty()) {
+    WriteSceneH5(record.scene, file, "/scene");
+  } else {
+    file.CopyFrom(H5File::OpenReadOnly(record.scene_copy_from), "/scene");
+  }
   file.CreateGroup("/checkpoint");
   file.SetStringAttribute("/checkpoint", "format", kRunFormat);
   file.SetIntAttribute("/checkpoint", "format_version", kRunFormatVersion);
@@ -224,6 +233,7 @@ RunRecord ReadRunFile(const std::string& path) {
   }
   RunRecord record;
   record.scene = ReadSceneH5(file, "/scene");
+  record.scene_points = static_cast<int64_t>(record.scene.points.size());
   record.scene_fingerprint = file.ReadStringAttribute("/checkpoint", "scene_fingerprint");
   record.options_fingerprint = file.ReadStringAttribute("/checkpoint", "options_fingerprint");
   record.stop_reason = file.ReadStringAttribute("/checkpoint", "stop_reason");
@@ -289,7 +299,7 @@ void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
   j["resumed"] = info.resumed;
   j["stop_reason"] = record.stop_reason;
   j["scene"] = {{"views", record.scene.views.size()},
-                {"points", record.scene.points.size()},
+                {"points", record.scene_points},
                 {"fingerprint", record.scene_fingerprint}};
   j["options_fingerprint"] = record.options_fingerprint;
   j["iterations_completed"] = record.completed_iterations();

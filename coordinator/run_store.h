@@ -76,7 +76,12 @@ struct WorkerIterationStats {
 };
 
 struct RunRecord {
+  // The scene's points are needed only to build the initial manifold, which keeps what it uses;
+  // once a run file holds the whole scene, ReleaseScenePoints frees them (about 200 bytes a
+  // point) and later run files copy /scene from that file.
   Scene scene;
+  int64_t scene_points = 0;         // scene.points.size() before any release
+  std::string scene_copy_from;      // the run file /scene is copied from; empty: write `scene`
   std::string scene_fingerprint;    // HashHex of the scene's content
   std::string options_fingerprint;  // options that change the result (manifold, sweep, ...)
   std::vector<std::vector<RayPoint>> batches;  // iterations 1..N, sorted as inserted
@@ -85,6 +90,10 @@ struct RunRecord {
   std::string stop_reason;  // empty while running
   int completed_iterations() const { return static_cast<int>(batches.size()); }
 };
+
+// Frees record->scene's points; WriteRunFile then copies /scene from `run_file`, which must hold
+// the whole scene (a run file written or read before the release).
+void ReleaseScenePoints(const std::string& run_file, RunRecord* record);
 
 // A stable hash of everything in the scene that the reconstruction uses.
 std::string SceneFingerprint(const Scene& scene);

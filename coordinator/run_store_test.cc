@@ -119,6 +119,32 @@ TEST(RunStore, EveryStatisticSurvivesRunH5) {
   EXPECT_EQ(read.workers[1].seconds_kernel, 0.75);
 }
 
+// A coordinator frees the scene's points after its first checkpoint; later run files copy /scene
+// from the last one, so a resume still reads the whole scene.
+TEST(RunStore, ReleasedScenePointsAreCopiedFromTheLastRunFile) {
+  const TempDir dir("run_store");
+  RunRecord record = RecordWithOneIteration(dir);
+  record.scene_points = static_cast<int64_t>(record.scene.points.size());
+  ASSERT_GT(record.scene_points, 0);
+  const std::string first = (dir.path() / "run.h5").string();
+  const std::string second = (dir.path() / "run2.h5").string();
+  WriteRunFile(record, first);
+  ReleaseScenePoints(first, &record);
+  EXPECT_TRUE(record.scene.points.empty());
+  EXPECT_FALSE(record.scene.views.empty());  // job building still needs them
+  WriteRunFile(record, second);
+  const RunRecord read = ReadRunFile(second);
+  EXPECT_EQ(SceneFingerprint(read.scene), record.scene_fingerprint);
+  EXPECT_EQ(read.scene_points, record.scene_points);
+  const std::string summary = (dir.path() / "summary.json").string();
+  WriteSummaryJson(record, RunSummaryInfo{}, summary);
+  const nlohmann::json json = nlohmann::json::parse(ReadFileToString(summary));
+  EXPECT_EQ(json["scene"]["points"].get<int64_t>(), record.scene_points);
+  // The file to copy from is gone: the error names it.
+  std::filesystem::remove(first);
+  testing::ExpectInputError([&] { WriteRunFile(record, second); }, {first});
+}
+
 // Takes /stats/iterations/<column> out of a written run.h5 (the dataset and its name in the
 // table's 'columns' list), as a file of an older format lacks it.
 void DropStatsColumn(const std::string& path, const std::string& column) {

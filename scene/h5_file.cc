@@ -865,6 +865,21 @@ std::vector<std::string> H5File::List(const std::string& group) const {
   });
 }
 
+void H5File::CopyFrom(const H5File& source, const std::string& object) {
+  Impl& im = impl();
+  const Impl& from = source.impl();
+  const std::string name = im.Normalize(object);
+  im.RequireWritable(name);
+  if (!from.ExistsChecked(name)) from.Fail(name, "not found (copying it to " + im.path + ")");
+  if (im.ExistsChecked(name)) im.Fail(name, "exists already (copying it from " + from.path + ")");
+  im.Guard(name, ("cannot copy it from " + from.path).c_str(), [&] {
+    if (H5Ocopy(from.file->getId(), name.c_str(), im.file->getId(), name.c_str(), H5P_DEFAULT,
+                H5P_DEFAULT) < 0) {
+      throw H5::Exception("H5Ocopy", "the copy failed");
+    }
+  });
+}
+
 void H5File::CreateGroup(const std::string& group) {
   Impl& im = impl();
   const std::string name = im.Normalize(group);

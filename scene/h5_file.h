@@ -121,6 +121,10 @@ class H5File {
   std::vector<std::string> List(const std::string& group) const;
   // Creates a group and its missing parents; an existing group is fine.
   void CreateGroup(const std::string& group);
+  // Copies `object` (a group with everything in it, or a dataset) from `source` to the same
+  // path here, whose parents must exist and which must not. Nothing is decoded: a run file's
+  // scene is carried from one checkpoint to the next without being held in memory.
+  void CopyFrom(const H5File& source, const std::string& object);
 
   // ---- Arrays (T: double, float, int32_t, int64_t, uint8_t, std::string)
   // Strings are written fixed-width (the longest one's length), UTF-8, NUL-padded, and may not

@@ -273,6 +273,32 @@ TEST_F(H5FileTest, WriteReplacesDatasetsAndRefusesGroups) {
   file.Commit();
 }
 
+TEST_F(H5FileTest, CopyFromCarriesAGroupWhole) {
+  const std::string source_path = Path("source.h5"), copy_path = Path("copy.h5");
+  {
+    H5File source = H5File::Create(source_path);
+    source.Write("/scene/points/position", std::vector<double>{1, 2, 3, 4, 5, 6}, H5Shape{2, 3});
+    source.Write("/scene/views/name", std::vector<std::string>{"a.jpg", "b.jpg"});
+    source.SetIntAttribute("/scene", "version", 7);
+    source.Write("/other", std::vector<int32_t>{1});
+    source.Commit();
+  }
+  const H5File source = H5File::OpenReadOnly(source_path);
+  H5File copy = H5File::Create(copy_path);
+  copy.CopyFrom(source, "scene");
+  ExpectInputError([&] { copy.CopyFrom(source, "/scene"); }, {copy_path, "/scene", "exists"});
+  ExpectInputError([&] { copy.CopyFrom(source, "/missing"); },
+                   {source_path, "/missing", "not found"});
+  copy.Commit();
+  const H5File read = H5File::OpenReadOnly(copy_path);
+  EXPECT_EQ(read.Read<double>("/scene/points/position", {2, 3}),
+            (std::vector<double>{1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(read.Read<std::string>("/scene/views/name", {2}),
+            (std::vector<std::string>{"a.jpg", "b.jpg"}));
+  EXPECT_EQ(read.ReadIntAttribute("/scene", "version"), 7);
+  EXPECT_FALSE(read.Exists("/other"));
+}
+
 TEST_F(H5FileTest, TablesAppendAcrossReopen) {
   const std::string path = Path("stats.h5");
   const std::vector<H5Column> columns = {{"iteration", H5Type::kInt64},
