@@ -306,20 +306,22 @@ bool GrowShrink::ShrinkAround(const std::vector<Cell_handle>& conflicts, uint32_
     if (c->info().outside) shrink_set.push_back({KeyOf(c), c});
   };
   const auto by_key = [](const auto& x, const auto& y) { return x.first < y.first; };
-  // Adds D's face neighbours, or the stars of D's vertices: all (1), or only those of points
-  // (2): a Steiner vertex's star reaches from the surface to the cameras, and what was shrunk
-  // there did not regrow.
-  const auto add_neighbourhood = [&](bool vertex_stars, bool points_only) {
+  // Adds D's face neighbours, or the stars of D's vertices: all of them (1), or only those of
+  // points (2): a Steiner vertex's star reaches from the surface to the cameras, and what was
+  // shrunk there did not regrow.
+  enum class Around { kFaces, kAllVertices, kPointVertices };
+  const auto add_neighbourhood = [&](Around around) {
     const size_t begin = shrink_set.size();
     for (const Cell_handle& c : conflicts) {
       for (int i = 0; i < 4; ++i) {
-        if (!vertex_stars) {
+        if (around == Around::kFaces) {
           add_to_shrink_set(c->neighbor(i));
           continue;
         }
-        if (points_only && (dt_.is_infinite(c->vertex(i)) || c->vertex(i)->info().id < 0)) continue;
+        const Vertex_handle v = c->vertex(i);
+        if (around == Around::kPointVertices && (dt_.is_infinite(v) || v->info().id < 0)) continue;
         around_.clear();
-        dt_.incident_cells(c->vertex(i), std::back_inserter(around_));
+        dt_.incident_cells(v, std::back_inserter(around_));
         for (const Cell_handle& a : around_) add_to_shrink_set(a);
       }
     }
@@ -330,7 +332,7 @@ bool GrowShrink::ShrinkAround(const std::vector<Cell_handle>& conflicts, uint32_
   if (num_in_d == 0) return true;
   std::sort(shrink_set.begin(), shrink_set.end(), by_key);
   const int neighbourhood = options_.shrink_neighbourhood;
-  add_neighbourhood(/*vertex_stars=*/neighbourhood == 1, /*points_only=*/false);
+  add_neighbourhood(neighbourhood == 1 ? Around::kAllVertices : Around::kFaces);
   size_t d_in_o = num_in_d;
   const auto remove_while_manifold = [&] {
     for (bool changed = true; changed && d_in_o > 0;) {
@@ -350,7 +352,7 @@ bool GrowShrink::ShrinkAround(const std::vector<Cell_handle>& conflicts, uint32_
   remove_while_manifold();
   // 2: only where the face neighbours were not enough, the stars of D's points too.
   if (d_in_o > 0 && neighbourhood == 2) {
-    add_neighbourhood(/*vertex_stars=*/true, /*points_only=*/true);
+    add_neighbourhood(Around::kPointVertices);
     remove_while_manifold();
   }
   return d_in_o == 0;

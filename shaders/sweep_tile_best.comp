@@ -31,7 +31,7 @@ uniform int u_first_offset;   // k of layer 0
 uniform int u_width;          // C's image width
 uniform int u_batch;          // index of this batch (counter slot)
 uniform float u_threshold;    // t_NCC (float, as the reference compares)
-uniform int u_required;       // neighbours supporting a winner it needs (RequiredMatches)
+uniform int u_required;       // neighbours supporting a winner it needs (WinnerRule)
 uniform int u_strict;         // 1: a neighbour that does not see the pixel never supports it
 uniform float u_support;      // NCC above which another neighbour supports it
 

@@ -252,8 +252,6 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
                        const int32_t* face, const Eigen::Vector3d* world, const WinnerRule& rule,
                        std::vector<TileWinner>* best) {
   const int num_neighbours = static_cast<int>(ncc.size());
-  const float threshold = rule.threshold;
-  const int required_matches = rule.required_matches;
   // Enough support for neighbour j's match at a pixel (WinnerRule).
   const auto supported_at = [&](int j, size_t index) {
     int supporters = 1, defined = 1;
@@ -263,7 +261,8 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
       supporters += value > rule.support;
       defined += !std::isnan(value);
     }
-    return supporters >= (rule.strict ? required_matches : std::min(required_matches, defined));
+    return supporters >=
+           (rule.strict ? rule.required_matches : std::min(rule.required_matches, defined));
   };
   for (int ty = 0; ty < tiles.tiles_y; ++ty) {
     for (int tx = 0; tx < tiles.tiles_x; ++tx) {
@@ -273,16 +272,16 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
           const size_t row_offset = static_cast<size_t>(row) * tiles.width;
           const float* values = ncc[j] + row_offset;
           // Most rows hold no winner: one vectorised pass tells (no pixel above both bars).
-          const float bar = std::max(threshold, tile.ncc);
+          const float bar = std::max(rule.threshold, tile.ncc);
           if (RowMaximum(values + tiles.XBegin(tx), tiles.XBegin(tx + 1) - tiles.XBegin(tx)) <=
               bar) {
             continue;
           }
           for (int col = tiles.XBegin(tx); col < tiles.XBegin(tx + 1); ++col) {
             const float value = values[col];
-            if (!(value > threshold) || !(value > tile.ncc)) continue;  // NaN never wins
+            if (!(value > rule.threshold) || !(value > tile.ncc)) continue;  // NaN never wins
             const size_t index = row_offset + col;
-            if (required_matches > 1 && !supported_at(j, index)) continue;
+            if (rule.required_matches > 1 && !supported_at(j, index)) continue;
             tile.ncc = value;
             tile.offset = offset;
             tile.neighbour = j;
@@ -292,7 +291,7 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
             if (world != nullptr) tile.position = world[index];
             tile.matched.clear();
             for (int other = 0; other < num_neighbours; ++other) {
-              if (other != j && ncc[other][index] > threshold) tile.matched.push_back(other);
+              if (other != j && ncc[other][index] > rule.threshold) tile.matched.push_back(other);
             }
           }
         }
