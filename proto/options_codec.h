@@ -7,6 +7,7 @@
 
 #include <google/protobuf/descriptor.h>
 #include <google/protobuf/message.h>
+#include <google/protobuf/unknown_field_set.h>
 
 #include <cstdint>
 #include <string>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "base/check.h"
+#include "base/error.h"
 #include "base/options.h"
 
 namespace ms {
@@ -73,12 +75,24 @@ void OptionsToWire(const Options& options, google::protobuf::Message* out) {
   });
 }
 
-// Field by field; the result still needs Check() (values come from the network).
+// Field by field; the result still needs Check() (values come from the network). Throws
+// InputError for a field this build does not know: a newer sender's option would otherwise be
+// dropped without a word, and the job run with its default.
 template <typename Options>
 Options OptionsFromWire(const google::protobuf::Message& message) {
   using options_codec_internal::Field;
   Options options;
   const google::protobuf::Reflection* r = message.GetReflection();
+  const google::protobuf::UnknownFieldSet& unknown = r->GetUnknownFields(message);
+  if (!unknown.empty()) {
+    std::string numbers;
+    for (int i = 0; i < unknown.field_count(); ++i) {
+      numbers += (i > 0 ? ", " : "") + std::to_string(unknown.field(i).number());
+    }
+    throw InputError(message.GetDescriptor()->full_name() + " carries fields this build does not " +
+                     "know (numbers " + numbers + "): the sender runs a newer manisweep; run " +
+                     "the same version everywhere");
+  }
   Options::ForEachOption(options, [&](auto& value, const OptionSpec& spec) {
     using T = std::decay_t<decltype(value)>;
     const auto* f = Field<T>(message, spec);

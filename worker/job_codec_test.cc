@@ -3,6 +3,7 @@
 // job's options arrive as they were sent.
 #include <gtest/gtest.h>
 
+#include "base/error.h"
 #include "proto/manisweep.pb.h"
 #include "proto/options_codec.h"
 #include "refine/refine_options.h"
@@ -62,6 +63,24 @@ TEST(JobCodec, SweepOptionsRoundTripThroughTheWire) {
   EXPECT_EQ(message.pyramid_level(), 2);
   const SweepOptions received = OptionsFromWire<SweepOptions>(message);
   EXPECT_EQ(OptionGroupText(received), OptionGroupText(sent));
+}
+
+TEST(JobCodec, AnOptionThisBuildDoesNotKnowIsRefused) {
+  wire::SweepOptions message;
+  OptionsToWire(SweepOptions{}, &message);
+  // What a newer coordinator's extra option looks like to this build.
+  message.GetReflection()->MutableUnknownFields(&message)->AddVarint(901, 1);
+  wire::SweepOptions received;
+  ASSERT_TRUE(received.ParseFromString(message.SerializeAsString()));
+  try {
+    OptionsFromWire<SweepOptions>(received);
+    ADD_FAILURE() << "an unknown field was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("ms.wire.SweepOptions carries fields this build does not "
+                                         "know (numbers 901)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
