@@ -7,7 +7,10 @@
 // triangulation's structure is only read. Inline: growing and the ray walks call these per cell.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
+#include <unordered_map>
 
 #include "base/check.h"
 #include "manifold/manifold_options.h"
@@ -42,9 +45,16 @@ class CellLabels {
     int64_t neighbours = 0;
     for (int i = 0; i < 4; ++i) {
       const Cell_handle n = c->neighbor(i);
-      neighbours += n->info().spread[n->index(c)];
+      neighbours += Spread(n, n->index(c));
     }
     return w1_ * c->info().crossings + w2_ * static_cast<double>(neighbours);
+  }
+
+  // The rays crossing c that spread w2 across its face i.
+  int64_t Spread(const Cell_handle& c, int i) const {
+    const uint16_t packed = c->info().spread[i];
+    if (packed != CellInfo::kSpreadOverflow) return packed;
+    return overflow_.at(&*c)[i];
   }
 
   bool IsFree(const Cell_handle& c) const {
@@ -71,7 +81,26 @@ class CellLabels {
     CellInfo& info = c->info();
     ++info.crossings;
     if (w2_rule_ == W2Rule::kAllFaces) spread_mask = 0xF;
-    for (int i = 0; i < 4; ++i) info.spread[i] += (spread_mask >> i) & 1;
+    for (int i = 0; i < 4; ++i) {
+      if (((spread_mask >> i) & 1) == 0) continue;
+      uint16_t& packed = info.spread[i];
+      if (packed < CellInfo::kSpreadOverflow - 1) {
+        ++packed;
+      } else if (packed == CellInfo::kSpreadOverflow - 1) {
+        packed = CellInfo::kSpreadOverflow;
+        overflow_[&*c][i] = static_cast<int64_t>(CellInfo::kSpreadOverflow);
+      } else {
+        ++overflow_.at(&*c)[i];
+      }
+    }
+  }
+
+  // Drops what the overflow table holds for c, a cell an insertion is about to destroy (its
+  // memory may come back as a new cell).
+  void ForgetCounts(const Cell_handle& c) {
+    const uint16_t* spread = c->info().spread;
+    if (std::find(spread, spread + 4, CellInfo::kSpreadOverflow) != spread + 4)
+      overflow_.erase(&*c);
   }
 
   // Puts c into O or takes it out, keeping |O| and the per-vertex counts (cells in O, surface
@@ -102,6 +131,8 @@ class CellLabels {
   const double w1_, w2_, free_threshold_;
   const W2Rule w2_rule_;
   bool graded_ = false;
+  // Spread counts past 16 bits, by cell (CellInfo::kSpreadOverflow).
+  std::unordered_map<const void*, std::array<int64_t, 4>> overflow_;
   int64_t outside_count_ = 0;
   uint32_t relabels_ = 0;  // flips so far (a wrap can only cost a growing some retests)
 };

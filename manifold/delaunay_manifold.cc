@@ -76,7 +76,7 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
       stats.seconds_triangulation);
 
   timer.Restart();
-  TraceRays(&stats);
+  TraceRays(points, &stats);
   stats.seconds_ray_tracing = timer.Seconds();
   spdlog::info("manifold: traced {} rays ({} cell steps) in {:.2f} s ({:.0f} rays/s)", stats.rays,
                stats.ray_cell_steps, stats.seconds_ray_tracing,
@@ -197,14 +197,12 @@ void DelaunayManifold::Impl::Triangulate(const std::vector<RayPoint>& points,
   }
   dt_.insert(vertices.begin(), vertices.end());
   positions_.reserve(points.size());
-  point_cameras_.reserve(points.size());
   vertex_of_point_.assign(points.size(), Vertex_handle());
   for (auto v = dt_.finite_vertices_begin(); v != dt_.finite_vertices_end(); ++v) {
     if (v->info().id >= 0) vertex_of_point_[v->info().id] = v;
   }
   int64_t near_duplicates = 0;
   for (size_t i = 0; i < points.size(); ++i) {
-    point_cameras_.push_back(SortedCameras(points[i].cameras));
     const int32_t r = representative[i];
     if (r != static_cast<int32_t>(i)) {
       // Its rays run to the representative's vertex, so they are indexed by its position.
@@ -238,12 +236,15 @@ void DelaunayManifold::Impl::Triangulate(const std::vector<RayPoint>& points,
   stats->cells = num_cells();
 }
 
-void DelaunayManifold::Impl::TraceRays(BuildStats* stats) {
+void DelaunayManifold::Impl::TraceRays(const std::vector<RayPoint>& points, BuildStats* stats) {
   std::vector<Eigen::Vector3d> centers;
   for (const ManifoldCamera& c : cameras_) centers.push_back(c.center);
   walker_.LocateCameras(centers);
-  for (size_t i = 0; i < positions_.size(); ++i) {
-    for (int32_t c : point_cameras_[i]) ray_index_->Add(c, static_cast<int32_t>(i), positions_[i]);
+  // From here on a point's cameras are its rays in the index.
+  for (size_t i = 0; i < points.size(); ++i) {
+    for (int32_t c : SortedCameras(points[i].cameras)) {
+      ray_index_->Add(c, static_cast<int32_t>(i), positions_[i]);
+    }
   }
   ray_index_->Flush();
   Progress progress("manifold: ray tracing", static_cast<int64_t>(ray_index_->size()));
@@ -366,9 +367,7 @@ DelaunayManifold::Impl::InsertionBatch DelaunayManifold::Impl::StartBatch() {
   batch.first_part = parts_ + 1;
   batch.part = parts_;
   batch.first_new_id = static_cast<int32_t>(positions_.size());
-  batch.ray_reach.assign(ray_index_->size(), 2.0f);
-  batch.ray_counted.assign(ray_index_->size(), parts_);
-  batch.ray_marked.assign(ray_index_->size(), 0);
+  batch.rays.Reset(ray_index_->size(), parts_);
   batch.box_slack = 1e-9 * (box_max_ - box_min_).norm();
   return batch;
 }
@@ -463,11 +462,11 @@ void DelaunayManifold::Impl::MarkRaysNear(InsertionBatch* batch, InsertionStats*
     double entry;
     if (SegmentMeetsBox(cameras_[ray.camera].center, positions_[ray.point], lo - slack, hi + slack,
                         &entry)) {
-      float& reach = batch->ray_reach[ray.id];
+      BatchRays::State& state = batch->rays.Touch(ray.id);
       // Rounded down (float), so the walk starts no later than the box.
-      reach = std::min(reach, static_cast<float>(entry) - 1e-6f);
-      if (batch->ray_marked[ray.id] != batch->part) {
-        batch->ray_marked[ray.id] = batch->part;
+      state.reach = std::min(state.reach, static_cast<float>(entry) - 1e-6f);
+      if (state.marked != batch->part) {
+        state.marked = batch->part;
         batch->marked_in.back().push_back(ray);
       }
     }
@@ -477,7 +476,9 @@ void DelaunayManifold::Impl::MarkRaysNear(InsertionBatch* batch, InsertionStats*
 void DelaunayManifold::Impl::InsertPoint(const Point& p, const RayPoint& point,
                                          InsertionBatch* batch, InsertionStats* stats) {
   for (const Cell_handle& c : batch->conflicts) {
-    if (c->info().has_camera) walker_.ForgetStartsIn(c);  // destroyed below
+    // Destroyed below.
+    if (c->info().has_camera) walker_.ForgetStartsIn(c);
+    labels_.ForgetCounts(c);
     for (int i = 0; i < 4; ++i) --c->vertex(i)->info().cells;
   }
   const Vertex_handle v =
@@ -496,7 +497,7 @@ void DelaunayManifold::Impl::InsertPoint(const Point& p, const RayPoint& point,
     }
   }
   positions_.push_back(point.position);
-  point_cameras_.push_back(SortedCameras(point.cameras));
+  batch->part_cameras.push_back(SortedCameras(point.cameras));
   vertex_of_point_.push_back(v);
   ++stats->inserted;
   batch->hint = v->cell();
@@ -509,10 +510,7 @@ void DelaunayManifold::Impl::EndPart(InsertionBatch* batch, InsertionStats* stat
     RewalkMarked(batch, batch->part - kRecountLag, stats);
   }
   TraceNewRays(batch, stats);
-  const size_t rays = ray_index_->size();
-  batch->ray_reach.resize(rays, 2.0f);
-  batch->ray_counted.resize(rays, batch->part);  // traced: counted on every cell there is
-  batch->ray_marked.resize(rays, 0);
+  batch->rays.AddTraced(ray_index_->size(), batch->part);
 }
 
 // Walks the pending rays whose last mark came from a part <= last_marked_by, camera by camera
@@ -524,25 +522,32 @@ void DelaunayManifold::Impl::RewalkMarked(InsertionBatch* batch, uint32_t last_m
     std::vector<RayRef>& bucket = batch->marked_in[q - batch->first_part];
     for (const RayRef& ray : bucket) {
       // Pending, and in the bucket of its last mark (not marked again since).
-      if (batch->ray_marked[ray.id] == q && batch->ray_reach[ray.id] <= 1.0f) due.push_back(ray);
+      const BatchRays::State state = batch->rays.Get(ray.id);
+      if (state.marked == q && state.reach <= 1.0f) due.push_back(ray);
     }
     std::vector<RayRef>().swap(bucket);
   }
   std::sort(due.begin(), due.end());
-  for (const RayRef& ray : due) RewalkRay(batch, ray, batch->ray_reach[ray.id], stats);
+  for (const RayRef& ray : due) {
+    BatchRays::State& state = batch->rays.Touch(ray.id);
+    RewalkRay(batch, ray, state.reach, stats);
+    state.counted = batch->part;
+    state.reach = 2.0f;
+  }
 }
 
 // Every ray from its camera on (a batch whose holes meet most rays).
 void DelaunayManifold::Impl::RewalkAll(InsertionBatch* batch, InsertionStats* stats) {
   ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) { RewalkRay(batch, ray, 0, stats); });
   for (std::vector<RayRef>& bucket : batch->marked_in) std::vector<RayRef>().swap(bucket);
+  batch->rays.Reset(ray_index_->size(), batch->part);  // every ray is counted now
 }
 
 // One ray, counted on the cells born since its last walk (the others have its crossing
-// already, or their geometry did not change).
+// already, or their geometry did not change). The caller records the walk in batch->rays.
 void DelaunayManifold::Impl::RewalkRay(InsertionBatch* batch, const RayRef& ray, float reach,
                                        InsertionStats* stats) {
-  const uint32_t after = batch->ray_counted[ray.id], upto = batch->part;
+  const uint32_t after = batch->rays.Get(ray.id).counted, upto = batch->part;
   const auto is_new = [&](const Cell_handle& c) {
     return c->info().born > after && c->info().born <= upto;
   };
@@ -557,8 +562,6 @@ void DelaunayManifold::Impl::RewalkRay(InsertionBatch* batch, const RayRef& ray,
     stats->rewalk_steps += walker_.WalkFromCamera(ray.camera, target, count_new_cells);
   }
   ++stats->rewalked_rays;
-  batch->ray_counted[ray.id] = upto;
-  batch->ray_reach[ray.id] = 2.0f;
 }
 
 // The cameras of a duplicate that `vertex` does not have yet, for TraceNewRays (Steiner vertices
@@ -568,9 +571,14 @@ void DelaunayManifold::Impl::GainCameras(const Vertex_handle& vertex,
                                          InsertionBatch* batch) {
   const int32_t id = vertex->info().id;
   if (id < 0) return;
-  const std::vector<int32_t>& has = point_cameras_[id];
+  // A point of this part has its cameras in the batch until its rays join the index.
+  const bool in_part = id >= batch->first_new_id;
   for (int32_t c : cameras) {
-    if (!std::binary_search(has.begin(), has.end(), c)) batch->gained_rays.emplace_back(id, c);
+    const bool has =
+        in_part ? std::binary_search(batch->part_cameras[id - batch->first_new_id].begin(),
+                                     batch->part_cameras[id - batch->first_new_id].end(), c)
+                : ray_index_->Contains(c, id, positions_[id]);
+    if (!has) batch->gained_rays.emplace_back(id, c);
   }
 }
 
@@ -584,25 +592,28 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
   gained.erase(std::unique(gained.begin(), gained.end()), gained.end());
   for (const auto& [id, c] : gained) {
     const Vertex_handle target = vertex_of_point_[id];
-    std::vector<int32_t>& cams = point_cameras_[id];
-    cams.insert(std::upper_bound(cams.begin(), cams.end(), c), c);
     target->info().changed = batch->number;  // growing looks at its cells again
     ++stats->gained_rays;
-    // A point new in this batch has its rays, the gained one included, traced below.
-    if (id >= batch->first_new_id) continue;
+    // A point new in this part has its rays, the gained one included, traced below.
+    if (id >= batch->first_new_id) {
+      std::vector<int32_t>& cams = batch->part_cameras[id - batch->first_new_id];
+      cams.insert(std::upper_bound(cams.begin(), cams.end(), c), c);
+      continue;
+    }
     walker_.WalkFromCamera(c, target, count);
     ray_index_->Add(c, id, positions_[id]);
     ++stats->new_rays;
   }
   for (int32_t id = batch->first_new_id; id < static_cast<int32_t>(positions_.size()); ++id) {
     const Vertex_handle target = vertex_of_point_[id];
-    for (int32_t c : point_cameras_[id]) {
+    for (int32_t c : batch->part_cameras[id - batch->first_new_id]) {
       walker_.WalkFromCamera(c, target, count);
       ray_index_->Add(c, id, positions_[id]);
       ++stats->new_rays;
     }
   }
   gained.clear();
+  batch->part_cameras.clear();
   ray_index_->Flush();
 }
 

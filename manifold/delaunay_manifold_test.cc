@@ -123,6 +123,17 @@ TEST(RayWalk, MatchesBruteForceIncludingDegenerateSegments) {
 }
 
 // Figure 1 of the paper, on the boundary of a set of tetrahedra around a vertex.
+// Spread counts are 16 bits in the cell, with the larger ones in a table: the weights must not
+// notice where a count lives.
+TEST(CellLabels, SpreadCountsPastSixteenBitsAreExact) {
+  for (int64_t rays : {int64_t{65533}, int64_t{65534}, int64_t{65535}, int64_t{200000}}) {
+    const manifold_internal::SpreadCounts counts = manifold_internal::CountSpreads(rays);
+    EXPECT_EQ(counts.spread, rays);
+    EXPECT_DOUBLE_EQ(counts.neighbour_weight, static_cast<double>(rays));
+    EXPECT_EQ(counts.after_forget, 1) << rays;
+  }
+}
+
 TEST(VertexRegularity, PaperFigureOneCases) {
   // An octahedron around the origin: eight cells share vertex 0.
   const std::vector<Eigen::Vector3d> points = {{0, 0, 0},  {1, 0, 0}, {-1, 0, 0}, {0, 1, 0},

@@ -90,13 +90,55 @@ class DelaunayManifold::Impl {
     return dt_.number_of_cells() * sizeof(Delaunay::Cell) +
            dt_.number_of_vertices() * sizeof(Delaunay::Vertex) +
            positions_.capacity() * sizeof(Eigen::Vector3d) +
-           point_cameras_.capacity() * sizeof(std::vector<int32_t>) +
-           ray_index_->size() * sizeof(int32_t) +
            vertex_of_point_.capacity() * sizeof(Vertex_handle) + ray_index_->MemoryBytes();
   }
 
  private:
   friend struct ManifoldTestAccess;
+
+  // What an insertion batch knows of each ray in the index (by its id), stored only for the
+  // rays it touched: most rays are never marked in a batch, and three values for every ray
+  // were 120 bytes a point at 10 rays a point (docs/scalability.md, "Memory per point").
+  class BatchRays {
+   public:
+    struct State {
+      // The smallest parameter (0 at the camera, 1 at the point) where the ray may enter a
+      // cell born since its last walk; > 1: none (not pending).
+      float reach = 2.0f;
+      uint32_t counted = 0;  // it has been counted on every cell born in parts <= counted
+      uint32_t marked = 0;   // the last part that marked it
+    };
+    // `rays` rays, each counted on every cell born in parts <= `counted`, none pending.
+    void Reset(size_t rays, uint32_t counted) {
+      slot_.assign(rays, -1);
+      std::vector<State>().swap(states_);
+      counted_ = counted;
+    }
+    // The rays added to the index since, traced in `part` (so counted on every cell there is).
+    void AddTraced(size_t rays, uint32_t part) {
+      while (slot_.size() < rays) {
+        slot_.push_back(static_cast<int32_t>(states_.size()));
+        states_.push_back({2.0f, part, 0});
+      }
+    }
+    State Get(int32_t id) const {
+      const int32_t slot = slot_[id];
+      return slot < 0 ? State{2.0f, counted_, 0} : states_[slot];
+    }
+    State& Touch(int32_t id) {
+      int32_t& slot = slot_[id];
+      if (slot < 0) {
+        slot = static_cast<int32_t>(states_.size());
+        states_.push_back({2.0f, counted_, 0});
+      }
+      return states_[slot];
+    }
+
+   private:
+    std::vector<int32_t> slot_;  // -1: untouched (the defaults)
+    std::vector<State> states_;
+    uint32_t counted_ = 0;
+  };
 
   // One Insert call's state, shared by its steps. A batch is inserted in one or more parts
   // (InsertPart). The exact recount of the cells born in the batch is done ray by ray once no
@@ -108,13 +150,7 @@ class DelaunayManifold::Impl {
     uint32_t first_part = 0;   // parts first_part, first_part + 1, ...: cells carry theirs
     uint32_t part = 0;         // the current part (CellInfo::born of the cells it makes)
     int32_t first_new_id = 0;  // id of the current part's first inserted point
-    // Per ray in the index (by its id):
-    //   reach: the smallest parameter (0 at the camera, 1 at the point) where it may enter a
-    //     cell born since its last walk; > 1: none (not pending);
-    //   counted: it has been counted on every cell born in parts <= counted;
-    //   marked: the last part that marked it.
-    std::vector<float> ray_reach;
-    std::vector<uint32_t> ray_counted, ray_marked;
+    BatchRays rays;            // what the batch knows of each ray in the index
     // The rays each part marked (by part - first_part); a ray is walked from the bucket of the
     // last part that marked it.
     std::vector<std::vector<RayRef>> marked_in;
@@ -125,6 +161,9 @@ class DelaunayManifold::Impl {
     // The current point's conflict region D and the facets on its boundary.
     std::vector<Cell_handle> conflicts;
     std::vector<manifold_detail::Facet> boundary;
+    // The cameras of the current part's points (from first_new_id on), sorted, until their
+    // rays join the index at the end of the part; older points' cameras are their rays there.
+    std::vector<std::vector<int32_t>> part_cameras;
     // Cameras of duplicate points that the vertex they duplicate gains: (point id, camera).
     std::vector<std::pair<int32_t, int32_t>> gained_rays;
     std::vector<RayRef> candidates;   // scratch of MarkRaysNear
@@ -142,7 +181,7 @@ class DelaunayManifold::Impl {
   void Triangulate(const std::vector<RayPoint>& points, const std::vector<Eigen::Vector3d>& steiner,
                    BuildStats* stats);
   // (2) Every viewing ray walked and counted on the cells it crosses.
-  void TraceRays(BuildStats* stats);
+  void TraceRays(const std::vector<RayPoint>& points, BuildStats* stats);
   // (3) O grown from the heaviest free cell.
   void GrowInitial(BuildStats* stats);
 
@@ -196,7 +235,6 @@ class DelaunayManifold::Impl {
   manifold_detail::GrowShrink grow_shrink_{dt_, options_, labels_, regularity_};
   std::unique_ptr<RayIndex> ray_index_;
   std::vector<Eigen::Vector3d> positions_;
-  std::vector<std::vector<int32_t>> point_cameras_;
   std::vector<Vertex_handle> vertex_of_point_;
   Eigen::Vector3d box_min_, box_max_;  // Steiner box: points outside are discarded
   MergeTolerance merge_;               // near-duplicate input points (set by Build)

@@ -54,6 +54,29 @@ std::vector<CellVertices> DelaunayCells(const std::vector<Eigen::Vector3d>& poin
   return cells;
 }
 
+SpreadCounts CountSpreads(int64_t rays) {
+  Delaunay dt =
+      Triangulate({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}, {0.9, 0.8, -0.3}});
+  ManifoldOptions options;
+  options.w1 = 1;
+  options.w2 = 1;
+  manifold_detail::CellLabels labels(dt, options);
+  Cell_handle cell;
+  for (auto c = dt.finite_cells_begin(); c != dt.finite_cells_end() && cell == Cell_handle(); ++c) {
+    if (!dt.is_infinite(c->neighbor(0))) cell = c;
+  }
+  MS_CHECK(cell != Cell_handle()) << "no finite cell with a finite neighbour";
+  for (int64_t k = 0; k < rays; ++k) labels.CountCrossing(cell, 0x1);
+  SpreadCounts counts;
+  counts.spread = labels.Spread(cell, 0);
+  counts.neighbour_weight = labels.Weight(cell->neighbor(0));
+  labels.ForgetCounts(cell);
+  cell->info() = manifold_detail::CellInfo{};
+  labels.CountCrossing(cell, 0x1);
+  counts.after_forget = labels.Spread(cell, 0);
+  return counts;
+}
+
 }  // namespace manifold_internal
 
 // Friend of DelaunayManifold::Impl for the hooks that need its internals.

@@ -13,7 +13,6 @@
 namespace ms {
 
 using manifold_detail::CameraStart;
-using manifold_detail::CellInfo;
 
 std::string DelaunayManifold::Impl::Validate(bool check_weights) {
   std::string problems = ValidateTriangulation();
@@ -97,30 +96,24 @@ std::string DelaunayManifold::Impl::ValidateManifold() {
 // compared with every cell's counts.
 std::string DelaunayManifold::Impl::ValidateWeights() {
   std::unordered_map<const void*, std::array<int32_t, 5>> recount;  // crossings, spread[4]
-  for (size_t i = 0; i < positions_.size(); ++i) {
-    const Vertex_handle target_vertex = vertex_of_point_[i];
-    const auto count = [&](const Cell_handle& c, unsigned mask) {
-      auto& entry = recount.try_emplace(&*c, std::array<int32_t, 5>{0, 0, 0, 0, 0}).first->second;
-      ++entry[0];
-      if (options_.w2_rule == W2Rule::kAllFaces) mask = 0xF;
-      for (int k = 0; k < 4; ++k) entry[1 + k] += (mask >> k) & 1;
-    };
-    for (int32_t c : point_cameras_[i]) {
-      const CameraStart start = walker_.Locate(c);
-      walker_.Walk(start, walker_.camera_point(c), target_vertex, count);
-    }
-  }
+  const auto count = [&](const Cell_handle& c, unsigned mask) {
+    auto& entry = recount.try_emplace(&*c, std::array<int32_t, 5>{0, 0, 0, 0, 0}).first->second;
+    ++entry[0];
+    if (options_.w2_rule == W2Rule::kAllFaces) mask = 0xF;
+    for (int k = 0; k < 4; ++k) entry[1 + k] += (mask >> k) & 1;
+  };
+  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
+    const CameraStart start = walker_.Locate(ray.camera);
+    walker_.Walk(start, walker_.camera_point(ray.camera), vertex_of_point_[ray.point], count);
+  });
   int64_t wrong = 0;
   for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
     const auto it = recount.find(&*c);
     const std::array<int32_t, 5> expected =
         it == recount.end() ? std::array<int32_t, 5>{0, 0, 0, 0, 0} : it->second;
-    const CellInfo& info = c->info();
-    if (info.crossings != expected[0] || info.spread[0] != expected[1] ||
-        info.spread[1] != expected[2] || info.spread[2] != expected[3] ||
-        info.spread[3] != expected[4]) {
-      ++wrong;
-    }
+    bool same = c->info().crossings == expected[0];
+    for (int i = 0; i < 4; ++i) same &= labels_.Spread(c, i) == expected[1 + i];
+    if (!same) ++wrong;
   }
   if (wrong == 0) return "";
   return std::to_string(wrong) + " cells whose ray count differs from a recount; ";

@@ -43,12 +43,17 @@ class RayIndex {
   RayIndex(std::vector<Camera> cameras, int grid = 128);
   // Filed rays per bucket a camera's grid aims at before it doubles its side.
   static constexpr size_t kRaysPerBucket = 4;
+  // At most 65,536 buckets per side: a bucket holds whole fixed-point steps.
+  static constexpr int kMaxGrid = 1 << 16;
 
   // Returns the ray's id: rays are numbered 0, 1, ... in the order they are added. Added rays
   // wait in a short list that queries scan whole until Flush files them into the buckets:
   // add a batch, then flush.
   int32_t Add(int32_t camera, int32_t point, const Eigen::Vector3d& position);
   void Flush();
+  // Whether the ray camera -> point is in the index; `position` must be the one it was added
+  // with (its direction finds the bucket).
+  bool Contains(int32_t camera, int32_t point, const Eigen::Vector3d& position) const;
   // Appends to `out` every ray that may intersect the closed box [min, max].
   void Query(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
              std::vector<RayRef>* out) const;
@@ -63,26 +68,42 @@ class RayIndex {
   int num_cameras() const { return static_cast<int>(cameras_.size()); }
 
  private:
+  // A ray in a camera's grid: its direction as 16-bit fixed point across the grid's extent
+  // (16 bytes against 20 with floats; 10 rays a point make this the index's size).
   struct Entry {
     int32_t point;
     int32_t id;
-    float depth;  // camera-frame z of the end point
-    float u, v;   // its normalised image coordinates (direction from the camera)
+    float depth;      // camera-frame z of the end point
+    uint16_t qu, qv;  // floor(65536 (u - u_min) / (u_max - u_min)), the same for v
+  };
+  // A ray outside the grid's extent, or ending at or behind the camera plane.
+  struct OverflowEntry {
+    int32_t point;
+    int32_t id;
+    float depth;
+    float u, v;  // its normalised image coordinates (direction from the camera)
   };
   struct CameraBuckets {
     Camera camera;
     int side = 1;  // buckets per side: a power of two, or grid_
-    double du = 1, dv = 1;
+    // Fixed-point steps per unit of u and v: 65536 / (u_max - u_min), 65536 / (v_max - v_min).
+    double su = 1, sv = 1;
     // Bucket b (row-major, side x side) is entries[start[b], start[b + 1]): a query's rows of
     // buckets are contiguous runs.
     std::vector<Entry> entries;
     std::vector<uint32_t> start{0, 0};
-    std::vector<Entry> pending;   // inside the grid, until Flush files them
-    std::vector<Entry> overflow;  // outside the grid, or at depth <= 0
+    std::vector<Entry> pending;           // inside the grid, until Flush files them
+    std::vector<OverflowEntry> overflow;  // outside the grid, or at depth <= 0
     size_t count = 0;
     // Box of the camera centre and every end point: it holds every ray of the camera.
     Eigen::Vector3d lo, hi;
   };
+  // The entry Add files for a ray: false for a ray that goes to the overflow list (then in
+  // *overflow), true for one in the grid (in *entry).
+  static bool MakeEntry(const CameraBuckets& cb, int32_t point, int32_t id,
+                        const Eigen::Vector3d& position, Entry* entry, OverflowEntry* overflow);
+  // The bucket of an entry: from its fixed-point direction only, so filing and queries agree.
+  static uint32_t BucketOf(const CameraBuckets& cb, const Entry& e);
   // Sets cb's side for `rays` filed rays (it only grows) and files entries and pending anew.
   void Refile(CameraBuckets* cb, size_t rays) const;
   int SideFor(size_t rays) const;
@@ -106,7 +127,7 @@ void RayIndex::ForEachInDirectionOrder(Visit&& visit) const {
       }
     }
     for (const Entry& e : cb.pending) visit(RayRef{camera, e.point, e.id});
-    for (const Entry& e : cb.overflow) visit(RayRef{camera, e.point, e.id});
+    for (const OverflowEntry& e : cb.overflow) visit(RayRef{camera, e.point, e.id});
   }
 }
 

@@ -118,6 +118,33 @@ TEST(RayIndex, VisitsEveryRayOnceCameraByCameraInDirectionOrder) {
   for (int count : seen) EXPECT_EQ(count, 1);
 }
 
+// The manifold keeps no camera list per point: the index answers whether a ray is there.
+TEST(RayIndex, ContainsAnswersForFiledPendingAndOverflowRays) {
+  RayIndex::Camera cam;
+  cam.R.setIdentity();
+  cam.center.setZero();
+  RayIndex index({cam, cam}, 8);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-2, 2);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 300; ++i) {
+    if (i == 200) index.Flush();  // 0..199 filed (the grid grows), the rest pending
+    // Every 7th behind the camera, and |x/z| up to 2 past the grid's [-1, 1]: the overflow.
+    points.emplace_back(u(rng), u(rng), i % 7 == 0 ? -1.0 : 1.0 + std::abs(u(rng)));
+    if (i % 3 != 0) index.Add(0, i, points.back());
+    if (i % 2 == 0) index.Add(1, i, points.back());
+  }
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int i = 0; i < 300; ++i) {
+      EXPECT_EQ(index.Contains(0, i, points[i]), i % 3 != 0) << "camera 0, point " << i;
+      EXPECT_EQ(index.Contains(1, i, points[i]), i % 2 == 0) << "camera 1, point " << i;
+    }
+    // Another point at the same place is another ray.
+    EXPECT_FALSE(index.Contains(0, 1000, points[1]));
+    index.Flush();  // and again with every ray filed
+  }
+}
+
 // Brute-force reference for the two tests below: the rays whose segment clearly meets the box.
 std::vector<RayRef> RaysHitting(const std::vector<RayIndex::Camera>& cameras,
                                 const std::vector<Eigen::Vector3d>& points,
