@@ -12,7 +12,7 @@ OutputMeshes MakeOutputMeshes(const Mesh& surface, const SurfaceInfo& info, bool
   out.closed = surface;
   std::vector<uint8_t> steiner = SteinerFlags(info);
   if (float_cleanup && !surface.faces.empty()) {
-    out.cleanup = CleanForFloatingPoint(&out.closed, &steiner);
+    out.cleanup = CleanForFloatingPoint(&out.closed, &steiner, {}, &surface);
     const FloatCleanupStats& c = out.cleanup;
     if (c.problems_before > 0) {
       spdlog::log(c.problems_after > 0 ? spdlog::level::warn : spdlog::level::info,

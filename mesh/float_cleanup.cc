@@ -706,7 +706,7 @@ ProblemPairs CheckAfterRound(const Mesh& mesh, const Cleaner& cleaner, const Pro
 }  // namespace
 
 FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffold,
-                                        const FloatCleanupOptions& options) {
+                                        const FloatCleanupOptions& options, const Mesh* unchanged) {
   Timer timer;
   options.check.Check();
   std::vector<uint8_t> no_scaffold;
@@ -734,7 +734,14 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
   const double max_collapse = options.max_collapse_fraction * report.diagonal;
   // Splits help only in numbers, and clusters of near vertices can defeat the collapses: a
   // cleanup that ends with no fewer problems leaves the mesh as it was.
-  const Mesh original = *mesh;
+  MS_CHECK(unchanged == nullptr ||
+           (unchanged->vertices == mesh->vertices && unchanged->faces == mesh->faces))
+      << "the unchanged copy differs from the mesh";
+  Mesh own_copy;
+  if (unchanged == nullptr) {
+    own_copy = *mesh;
+    unchanged = &own_copy;
+  }
   const std::vector<uint8_t> original_scaffold = *scaffold;
   int64_t problems_left = stats.problems_before;
   if (problems_left > 0) {
@@ -760,7 +767,7 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
   }
   stats.problems_after = problems_left;
   if (stats.problems_after > 0 && stats.problems_after >= stats.problems_before) {
-    *mesh = original;
+    *mesh = *unchanged;
     *scaffold = original_scaffold;
     stats.problems_after = stats.problems_before;
     stats.collapses = stats.splits = stats.moves = 0;

@@ -137,6 +137,12 @@ TEST(FloatCleanup, WhatCannotBeCleanedIsLeftValidAndReported) {
   EXPECT_EQ(stats.collapses + stats.splits, 0);
   EXPECT_EQ(mesh.vertices, original.vertices);
   EXPECT_EQ(mesh.faces, original.faces);
+  // The same from the caller's copy of the mesh (the cleanup then keeps none of its own).
+  Mesh again = original;
+  const FloatCleanupStats from_copy = CleanForFloatingPoint(&again, nullptr, {}, &original);
+  EXPECT_EQ(from_copy.problems_after, stats.problems_before);
+  EXPECT_EQ(again.vertices, original.vertices);
+  EXPECT_EQ(again.faces, original.faces);
 }
 
 // A tiny tetrahedron (vertices 4-7) 1e-3 above the middle of a face 100 long and 0.01 wide

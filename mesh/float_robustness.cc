@@ -1,7 +1,6 @@
 #include "mesh/float_robustness.h"
 
 // CGAL only for its box intersection (candidate pairs); every predicate here is in double.
-#include <CGAL/Bbox_3.h>
 #include <CGAL/box_intersection_d.h>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -9,6 +8,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <limits>
 
 #include "base/check.h"
@@ -412,6 +413,44 @@ void MeasureFaces(const Mesh& mesh, const std::vector<uint8_t>& usable, FloatRob
   }
 }
 
+// A box for CGAL's box search in floats, rounded outward from the double box it stands for:
+// 28 bytes against 64 for a double box with an id and an index. The search holds two copies
+// (CGAL's self-intersection copies the boxes), which at 2·10^6 faces were the float check's
+// peak of memory, and the coordinator's with it. It finds a superset of the double boxes'
+// pairs; the exact tests after it decide.
+class SearchBox {
+ public:
+  using NT = float;
+  using ID = std::size_t;
+  SearchBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int64_t index)
+      : index_(static_cast<uint32_t>(index)) {
+    MS_CHECK(index >= 0 && index <= UINT32_MAX) << "box index " << index;
+    for (int d = 0; d < 3; ++d) {
+      lo_[d] = RoundDown(lo[d]);
+      hi_[d] = RoundUp(hi[d]);
+    }
+  }
+  static int dimension() { return 3; }
+  float min_coord(int d) const { return lo_[d]; }
+  float max_coord(int d) const { return hi_[d]; }
+  ID id() const { return index_; }
+  int64_t info() const { return index_; }
+
+ private:
+  static float RoundDown(double x) {
+    const float f = static_cast<float>(x);
+    return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity())
+                                      : f;
+  }
+  static float RoundUp(double x) {
+    const float f = static_cast<float>(x);
+    return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity())
+                                      : f;
+  }
+  float lo_[3], hi_[3];
+  uint32_t index_;
+};
+
 // Calls callback(x, y) for every pair of intersecting boxes, or with `focus` (flags indexed by
 // the boxes' info) only for pairs with a flagged box; a pair of two flagged boxes may come twice
 // (callers deduplicate).
@@ -434,21 +473,21 @@ void ForIntersectingBoxes(std::vector<Box>& boxes, const std::vector<uint8_t>& f
 
 void FindNearVertices(const Mesh& mesh, const std::vector<uint8_t>& referenced,
                       const FloatRobustnessOptions& options, FloatRobustnessReport* r) {
-  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, int32_t>;
+  using Box = SearchBox;
   const double tol = r->tolerance;
   std::vector<Box> boxes;
+  const Eigen::Vector3d slack = Eigen::Vector3d::Constant(tol);
   for (size_t v = 0; v < mesh.vertices.size(); ++v) {
     if (!referenced[v]) continue;
     const Eigen::Vector3d& p = mesh.vertices[v];
     // Boxes a whole tolerance wide on each side: no pair within the tolerance is lost to
     // rounding; the distance below decides.
-    boxes.emplace_back(
-        CGAL::Bbox_3(p.x() - tol, p.y() - tol, p.z() - tol, p.x() + tol, p.y() + tol, p.z() + tol),
-        static_cast<int32_t>(v));
+    boxes.emplace_back(p - slack, p + slack, static_cast<int64_t>(v));
   }
   std::vector<std::pair<std::array<int32_t, 2>, double>> found;
   auto callback = [&](const Box& x, const Box& y) {
-    const int32_t a = std::min(x.info(), y.info()), b = std::max(x.info(), y.info());
+    const auto a = static_cast<int32_t>(std::min(x.info(), y.info()));
+    const auto b = static_cast<int32_t>(std::max(x.info(), y.info()));
     const double d = (mesh.vertices[a] - mesh.vertices[b]).norm();
     if (d > tol) return;
     found.push_back({{a, b}, d});
@@ -482,7 +521,7 @@ void FindNearVertices(const Mesh& mesh, const std::vector<uint8_t>& referenced,
 
 void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
                         const FloatRobustnessOptions& options, FloatRobustnessReport* r) {
-  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, int64_t>;
+  using Box = SearchBox;
   const double tol = r->tolerance;
   const auto nf = static_cast<int64_t>(mesh.faces.size());
   // The faces' own boxes (Open3D's pre-test: closed, not enlarged), computed where needed
@@ -499,9 +538,7 @@ void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
     if (!usable[f]) continue;
     Eigen::Vector3d lo, hi;
     box_of(f, &lo, &hi);
-    boxes.emplace_back(CGAL::Bbox_3(lo.x() - tol, lo.y() - tol, lo.z() - tol, hi.x() + tol,
-                                    hi.y() + tol, hi.z() + tol),
-                       f);
+    boxes.emplace_back(lo.array() - tol, hi.array() + tol, f);
   }
   const Timer timer;
   int64_t tested = 0;
