@@ -86,11 +86,16 @@ TEST(RayIndex, NeverMissesARayThatCrossesTheBox) {
   }
 }
 
-TEST(RayIndex, VisitsEveryRayOnceCameraByCameraInDirectionOrder) {
+// An 8x8 grid over [-1, 1]^2 of x/z, y/z for each.
+RayIndex TwoCamerasAtTheOriginLookingUpZ() {
   RayIndex::Camera cam;
   cam.R.setIdentity();
   cam.center.setZero();
-  RayIndex index({cam, cam}, 8);
+  return RayIndex({cam, cam}, 8);
+}
+
+TEST(RayIndex, VisitsEveryRayOnceCameraByCameraInDirectionOrder) {
+  RayIndex index = TwoCamerasAtTheOriginLookingUpZ();
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-2, 2);
   std::vector<RayRef> added;
@@ -120,10 +125,7 @@ TEST(RayIndex, VisitsEveryRayOnceCameraByCameraInDirectionOrder) {
 
 // The manifold keeps no camera list per point: the index answers whether a ray is there.
 TEST(RayIndex, ContainsAnswersForFiledPendingAndOverflowRays) {
-  RayIndex::Camera cam;
-  cam.R.setIdentity();
-  cam.center.setZero();
-  RayIndex index({cam, cam}, 8);
+  RayIndex index = TwoCamerasAtTheOriginLookingUpZ();
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-2, 2);
   std::vector<Eigen::Vector3d> points;
