@@ -300,6 +300,7 @@ void DelaunayManifold::Impl::InsertPart(const std::vector<RayPoint>& points) {
   InsertionStats& stats = open_stats_;
   InsertionBatch& batch = *open_batch_;
   stats.requested += static_cast<int64_t>(points.size());
+  MS_CHECK(parts_ < CellInfo::kMaxPart) << "insertion parts past " << CellInfo::kMaxPart;
   batch.part = ++parts_;
   batch.marked_in.emplace_back();
   batch.first_new_id = static_cast<int32_t>(positions_.size());

@@ -31,20 +31,24 @@ struct VertexInfo {
   uint32_t relabelled = 0;         // CellLabels::relabels() when a cell around it last flipped
 };
 
+// 20 bytes, which CGAL's cell (8 handles and a byte of its own) lays out in 88 bytes: at 5 cells
+// a point every 4 bytes here cost 20 bytes a point (docs/scalability.md, "Memory per point").
 struct CellInfo {
-  // A spread count at this value lives in CellLabels' overflow table: 16-bit counts keep the
-  // cell at 96 bytes instead of 104 (5 cells per point), and only cells beside the cameras
-  // of large scenes pass 65,534.
+  // A spread count at this value lives in CellLabels' overflow table: only cells beside the
+  // cameras of large scenes pass 65,534.
   static constexpr uint16_t kSpreadOverflow = UINT16_MAX;
+  // Parts an insertion may number (born's bits).
+  static constexpr uint32_t kMaxPart = (1u << 29) - 1;
+  CellInfo() : born(0), outside(0), queued(0), has_camera(0) {}
   int32_t crossings = 0;  // viewing rays whose open segment meets the open cell
   // Of those, the rays that spread w2 across face i to the neighbour there (see
   // CellLabels::Weight; read through CellLabels::Spread).
   uint16_t spread[4] = {0, 0, 0, 0};
   uint32_t stamp = 0;    // visit marker for walks and set building (RayWalker::NextStamp)
-  uint32_t born = 0;     // insertion part that created the cell (0: the initial build)
-  bool outside = false;  // in O
-  bool queued = false;   // in the growing queue
-  bool has_camera = false;
+  uint32_t born : 29;    // insertion part that created the cell (0: the initial build)
+  uint32_t outside : 1;  // in O
+  uint32_t queued : 1;   // in the growing queue
+  uint32_t has_camera : 1;
 };
 
 using Vb = CGAL::Triangulation_vertex_base_with_info_3<VertexInfo, Kernel>;
