@@ -99,8 +99,9 @@ class CellLabels {
   // memory may come back as a new cell).
   void ForgetCounts(const Cell_handle& c) {
     const uint16_t* spread = c->info().spread;
-    if (std::find(spread, spread + 4, CellInfo::kSpreadOverflow) != spread + 4)
+    if (std::find(spread, spread + 4, CellInfo::kSpreadOverflow) != spread + 4) {
       overflow_.erase(&*c);
+    }
   }
 
   // Puts c into O or takes it out, keeping |O| and the per-vertex counts (cells in O, surface

@@ -18,6 +18,7 @@
 
 namespace ms {
 
+using manifold_detail::BatchRays;
 using manifold_detail::CellInfo;
 using manifold_detail::Locate_type;
 using manifold_detail::SegmentMeetsBox;

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "manifold/batch_rays.h"
 #include "manifold/cell_labels.h"
 #include "manifold/delaunay_manifold.h"
 #include "manifold/grow_shrink.h"
@@ -96,61 +97,17 @@ class DelaunayManifold::Impl {
  private:
   friend struct ManifoldTestAccess;
 
-  // What an insertion batch knows of each ray in the index (by its id), stored only for the
-  // rays it touched: most rays are never marked in a batch, and three values for every ray
-  // were 120 bytes a point at 10 rays a point (docs/scalability.md, "Memory per point").
-  class BatchRays {
-   public:
-    struct State {
-      // The smallest parameter (0 at the camera, 1 at the point) where the ray may enter a
-      // cell born since its last walk; > 1: none (not pending).
-      float reach = 2.0f;
-      uint32_t counted = 0;  // it has been counted on every cell born in parts <= counted
-      uint32_t marked = 0;   // the last part that marked it
-    };
-    // `rays` rays, each counted on every cell born in parts <= `counted`, none pending.
-    void Reset(size_t rays, uint32_t counted) {
-      slot_.assign(rays, -1);
-      std::vector<State>().swap(states_);
-      counted_ = counted;
-    }
-    // The rays added to the index since, traced in `part` (so counted on every cell there is).
-    void AddTraced(size_t rays, uint32_t part) {
-      while (slot_.size() < rays) {
-        slot_.push_back(static_cast<int32_t>(states_.size()));
-        states_.push_back({2.0f, part, 0});
-      }
-    }
-    State Get(int32_t id) const {
-      const int32_t slot = slot_[id];
-      return slot < 0 ? State{2.0f, counted_, 0} : states_[slot];
-    }
-    State& Touch(int32_t id) {
-      int32_t& slot = slot_[id];
-      if (slot < 0) {
-        slot = static_cast<int32_t>(states_.size());
-        states_.push_back({2.0f, counted_, 0});
-      }
-      return states_[slot];
-    }
-
-   private:
-    std::vector<int32_t> slot_;  // -1: untouched (the defaults)
-    std::vector<State> states_;
-    uint32_t counted_ = 0;
-  };
-
   // One Insert call's state, shared by its steps. A batch is inserted in one or more parts
   // (InsertPart). The exact recount of the cells born in the batch is done ray by ray once no
   // part has marked the ray for kRecountLag parts, and for the rest at the end (FinishInsert):
   // a coordinator inserting parts while its sweep runs is left with little of it, and a ray
   // near the holes of several consecutive parts is walked once for all of them.
   struct InsertionBatch {
-    uint32_t number = 0;       // vertices changed in the batch carry it (for regrowing)
-    uint32_t first_part = 0;   // parts first_part, first_part + 1, ...: cells carry theirs
-    uint32_t part = 0;         // the current part (CellInfo::born of the cells it makes)
-    int32_t first_new_id = 0;  // id of the current part's first inserted point
-    BatchRays rays;            // what the batch knows of each ray in the index
+    uint32_t number = 0;              // vertices changed in the batch carry it (for regrowing)
+    uint32_t first_part = 0;          // parts first_part, first_part + 1, ...: cells carry theirs
+    uint32_t part = 0;                // the current part (CellInfo::born of the cells it makes)
+    int32_t first_new_id = 0;         // id of the current part's first inserted point
+    manifold_detail::BatchRays rays;  // what the batch knows of each ray in the index
     // The rays each part marked (by part - first_part); a ray is walked from the bucket of the
     // last part that marked it.
     std::vector<std::vector<RayRef>> marked_in;
