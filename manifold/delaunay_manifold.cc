@@ -574,12 +574,11 @@ void DelaunayManifold::Impl::GainCameras(const Vertex_handle& vertex,
   const int32_t id = vertex->info().id;
   if (id < 0) return;
   // A point of this part has its cameras in the batch until its rays join the index.
-  const bool in_part = id >= batch->first_new_id;
+  const std::vector<int32_t>* in_part =
+      id >= batch->first_new_id ? &batch->part_cameras[id - batch->first_new_id] : nullptr;
   for (int32_t c : cameras) {
-    const bool has =
-        in_part ? std::binary_search(batch->part_cameras[id - batch->first_new_id].begin(),
-                                     batch->part_cameras[id - batch->first_new_id].end(), c)
-                : ray_index_->Contains(c, id, positions_[id]);
+    const bool has = in_part != nullptr ? std::binary_search(in_part->begin(), in_part->end(), c)
+                                        : ray_index_->Contains(c, id, positions_[id]);
     if (!has) batch->gained_rays.emplace_back(id, c);
   }
 }

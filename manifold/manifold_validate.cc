@@ -102,8 +102,14 @@ std::string DelaunayManifold::Impl::ValidateWeights() {
     if (options_.w2_rule == W2Rule::kAllFaces) mask = 0xF;
     for (int k = 0; k < 4; ++k) entry[1 + k] += (mask >> k) & 1;
   };
+  // Rays come camera by camera: each camera is located afresh once.
+  int32_t located = -1;
+  CameraStart start;
   ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
-    const CameraStart start = walker_.Locate(ray.camera);
+    if (ray.camera != located) {
+      start = walker_.Locate(ray.camera);
+      located = ray.camera;
+    }
     walker_.Walk(start, walker_.camera_point(ray.camera), vertex_of_point_[ray.point], count);
   });
   int64_t wrong = 0;

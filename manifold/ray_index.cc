@@ -30,6 +30,22 @@ std::vector<uint32_t> MortonBuckets(int side) {
   return order;
 }
 
+// A direction's fixed-point step (Entry::qu, qv) for a value inside the grid's extent.
+uint16_t FixedPoint(double value, double min, double steps_per_unit) {
+  return static_cast<uint16_t>(
+      std::clamp(std::floor((value - min) * steps_per_unit), 0.0, 65535.0));
+}
+
+// The steps of [lo, hi], widened by one step on each side for rounding, clamped to 0..65535;
+// lo > hi when no step can be inside.
+std::pair<int32_t, int32_t> FixedPointRange(double lo, double hi, double min,
+                                            double steps_per_unit) {
+  const double a = std::floor((lo - min) * steps_per_unit) - 1;
+  const double b = std::floor((hi - min) * steps_per_unit) + 1;
+  return {static_cast<int32_t>(std::clamp(a, 0.0, 65536.0)),
+          static_cast<int32_t>(std::clamp(b, -1.0, 65535.0))};
+}
+
 }  // namespace
 
 RayIndex::RayIndex(std::vector<Camera> cameras, int grid) : grid_(std::clamp(grid, 1, kMaxGrid)) {
@@ -61,26 +77,6 @@ const std::vector<uint32_t>& RayIndex::MortonOrder(int side) const {
   MS_CHECK(false) << "no Morton order for side " << side;
   return morton_.front().second;
 }
-
-namespace {
-
-// A direction's fixed-point step (Entry::qu, qv) for a value inside the grid's extent.
-uint16_t FixedPoint(double value, double min, double steps_per_unit) {
-  return static_cast<uint16_t>(
-      std::clamp(std::floor((value - min) * steps_per_unit), 0.0, 65535.0));
-}
-
-// The steps of [lo, hi], widened by one step on each side for rounding, clamped to 0..65535;
-// lo > hi when no step can be inside.
-std::pair<int32_t, int32_t> FixedPointRange(double lo, double hi, double min,
-                                            double steps_per_unit) {
-  const double a = std::floor((lo - min) * steps_per_unit) - 1;
-  const double b = std::floor((hi - min) * steps_per_unit) + 1;
-  return {static_cast<int32_t>(std::clamp(a, 0.0, 65536.0)),
-          static_cast<int32_t>(std::clamp(b, -1.0, 65535.0))};
-}
-
-}  // namespace
 
 bool RayIndex::MakeEntry(const CameraBuckets& cb, int32_t point, int32_t id,
                          const Eigen::Vector3d& position, Entry* entry, OverflowEntry* overflow) {
@@ -141,17 +137,16 @@ bool RayIndex::Contains(int32_t camera, int32_t point, const Eigen::Vector3d& po
 
 void RayIndex::Refile(CameraBuckets* cb, size_t rays) const {
   cb->side = std::max(cb->side, SideFor(rays));
-  const auto bucket_of = [cb](const Entry& e) { return BucketOf(*cb, e); };
   // Counting sort of the filed entries (in bucket order) and then the pending ones.
   const size_t buckets = static_cast<size_t>(cb->side) * cb->side;
   std::vector<uint32_t> start(buckets + 1, 0);
-  for (const Entry& e : cb->entries) ++start[bucket_of(e) + 1];
-  for (const Entry& e : cb->pending) ++start[bucket_of(e) + 1];
+  for (const Entry& e : cb->entries) ++start[BucketOf(*cb, e) + 1];
+  for (const Entry& e : cb->pending) ++start[BucketOf(*cb, e) + 1];
   for (size_t b = 0; b < buckets; ++b) start[b + 1] += start[b];
   std::vector<Entry> entries(start[buckets]);
   std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-  for (const Entry& e : cb->entries) entries[fill[bucket_of(e)]++] = e;
-  for (const Entry& e : cb->pending) entries[fill[bucket_of(e)]++] = e;
+  for (const Entry& e : cb->entries) entries[fill[BucketOf(*cb, e)]++] = e;
+  for (const Entry& e : cb->pending) entries[fill[BucketOf(*cb, e)]++] = e;
   cb->entries = std::move(entries);
   cb->start = std::move(start);
   cb->pending.clear();

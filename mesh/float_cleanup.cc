@@ -250,9 +250,8 @@ class Cleaner {
   }
 
   // Drops dead faces and unreferenced vertices, renumbering `scaffold` along; the cleaner is
-  // spent after it.
-  // The last step: the search structures are freed first (at 10^6 vertices they were most of
-  // the cleanup's peak of memory, with the compacted copy on top).
+  // spent after it, so its search structures go first (at 10^6 vertices they and the compacted
+  // copy on top were the cleanup's peak of memory).
   void Compact() {
     std::vector<Box3>().swap(box_);
     tree_ = FaceTree();
@@ -746,17 +745,19 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
   const double max_collapse = options.max_collapse_fraction * report.diagonal;
   // Splits help only in numbers, and clusters of near vertices can defeat the collapses: a
   // cleanup that ends with no fewer problems leaves the mesh as it was.
-  MS_CHECK(unchanged == nullptr ||
-           (unchanged->vertices == mesh->vertices && unchanged->faces == mesh->faces))
-      << "the unchanged copy differs from the mesh";
-  Mesh own_copy;
-  if (unchanged == nullptr) {
-    own_copy = *mesh;
-    unchanged = &own_copy;
-  }
-  const std::vector<uint8_t> original_scaffold = *scaffold;
+  MS_CHECK(unchanged == nullptr || (unchanged->vertices.size() == mesh->vertices.size() &&
+                                    unchanged->faces.size() == mesh->faces.size()))
+      << "the unchanged copy is of another mesh";
   int64_t problems_left = stats.problems_before;
+  // Only a cleanup that ran can need undoing.
+  Mesh own_copy;
+  std::vector<uint8_t> original_scaffold;
   if (problems_left > 0) {
+    if (unchanged == nullptr) {
+      own_copy = *mesh;
+      unchanged = &own_copy;
+    }
+    original_scaffold = *scaffold;
     Cleaner cleaner(mesh, scaffold, stats.tolerance, max_collapse);
     while (problems_left > 0 && stats.rounds < options.max_rounds) {
       ++stats.rounds;

@@ -239,13 +239,9 @@ bool BeatsInSweepOrder(const TileWinner& a, const TileWinner& b) {
 }
 
 WinnerRule WinnerRule::For(const SweepOptions& options, int num_neighbours) {
-  WinnerRule rule;
-  rule.threshold = static_cast<float>(options.ncc_threshold);
-  rule.required_matches =
-      std::clamp(options.min_matching_neighbours, 1, std::max(1, num_neighbours));
-  rule.support = static_cast<float>(options.support_ncc);
-  rule.strict = options.strict_support;
-  return rule;
+  return WinnerRule{static_cast<float>(options.ncc_threshold),
+                    std::clamp(options.min_matching_neighbours, 1, std::max(1, num_neighbours)),
+                    static_cast<float>(options.support_ncc), options.strict_support};
 }
 
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,

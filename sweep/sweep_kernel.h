@@ -181,11 +181,12 @@ struct TileWinner {
 // neighbours at that pixel and offset (its own, and the others whose NCC there is above
 // `support`). Unless `strict`, fewer suffice where fewer neighbours see the pixel; strict, a
 // neighbour that does not see it cannot support it.
+// The values come from the options (For): no defaults of its own, so none can drift from them.
 struct WinnerRule {
-  float threshold = 0.98f;
-  int required_matches = 1;
-  float support = 0.8f;
-  bool strict = false;
+  float threshold;
+  int required_matches;
+  float support;
+  bool strict;
 
   // From the options; required_matches is min_matching_neighbours clamped to [1, the job's
   // neighbours].
