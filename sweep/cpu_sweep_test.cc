@@ -7,13 +7,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "base/error.h"
 #include "base/testing.h"
@@ -198,6 +201,67 @@ TEST(WindowedNcc, MatchesWeightedNcc) {
                 sigma, static_cast<long long>(defined), only_one, worst);
     EXPECT_LE(only_one, 0.002 * defined);
     EXPECT_LT(worst, 2e-3);
+  }
+}
+
+// The passes run over the rectangle around the valid pixels only. An image whose valid pixels
+// reach all four edges, placed in a larger image with nothing valid around it, must get the
+// same NCC bit for bit, and NaN everywhere around it.
+TEST(WindowedNcc, ValidRectangleAloneGivesTheWholeImagesValues) {
+  const int width = 75, height = 53;
+  const cv::Mat I = BlurredNoiseImage(width, height, 3);
+  const cv::Mat J = 0.6 * I + 0.3 + 0.05 * BlurredNoiseImage(width, height, 4);
+  cv::Mat valid(I.size(), CV_8U, cv::Scalar(255));
+  cv::circle(valid, {30, 20}, 7, cv::Scalar(0), -1);
+  valid(cv::Rect(0, 0, 9, 6)) = 0;  // a corner out, the edges still reached
+  for (int row = 0; row < height; ++row) valid.at<uint8_t>(row, 50 + row % 5) = 0;
+  const double sigma = 4.0;
+  const auto run = [&](int big_width, int big_height, int dx, int dy) {
+    const size_t n = static_cast<size_t>(big_width) * big_height;
+    std::vector<float> j(n, 0.0f), m(n, 0.0f), ncc(n);
+    cv::Mat big_i(big_height, big_width, CV_32F, cv::Scalar(0.5f));
+    I.copyTo(big_i(cv::Rect(dx, dy, width, height)));
+    for (int row = 0; row < height; ++row) {
+      for (int col = 0; col < width; ++col) {
+        if (valid.at<uint8_t>(row, col) == 0) continue;
+        const size_t i = static_cast<size_t>(row + dy) * big_width + col + dx;
+        j[i] = J.at<float>(row, col) - 0.5f;
+        m[i] = 1.0f;
+      }
+    }
+    WindowedNcc windowed(big_width, big_height, sigma, 1e-4, 0.5);
+    windowed.SetCamera(big_i);
+    const int64_t defined = windowed.Run(j.data(), m.data(), ncc.data());
+    return std::make_pair(defined, ncc);
+  };
+  const auto [defined, alone] = run(width, height, 0, 0);
+  ASSERT_GT(defined, width * height / 2);
+  // Offsets by whole groups of 8 columns, with and without columns to the right.
+  for (const auto& [dx, dy, right, below] : std::vector<std::array<int, 4>>{{8, 5, 0, 19},
+                                                                            {24, 13, 0, 0},
+                                                                            {0, 1, 0, 7},
+                                                                            {16, 0, 0, 33},
+                                                                            {8, 3, 5, 2},
+                                                                            {0, 0, 29, 0}}) {
+    SCOPED_TRACE(::testing::Message() << "placed at " << dx << "," << dy);
+    const int big_width = width + dx + right, big_height = height + dy + below;
+    const auto [big_defined, placed] = run(big_width, big_height, dx, dy);
+    EXPECT_EQ(big_defined, defined);
+    int64_t differ = 0, not_nan_outside = 0;
+    for (int row = 0; row < big_height; ++row) {
+      for (int col = 0; col < big_width; ++col) {
+        const float v = placed[static_cast<size_t>(row) * big_width + col];
+        const int r = row - dy, c = col - dx;
+        if (r < 0 || r >= height || c < 0 || c >= width) {
+          not_nan_outside += !std::isnan(v);
+          continue;
+        }
+        const float a = alone[static_cast<size_t>(r) * width + c];
+        differ += std::memcmp(&a, &v, sizeof a) != 0;
+      }
+    }
+    EXPECT_EQ(differ, 0);
+    EXPECT_EQ(not_nan_outside, 0);
   }
 }
 

@@ -312,10 +312,11 @@ MS_ALWAYS_INLINE ColumnNcc NccOfColumn(const float* __restrict s, size_t plane, 
 
 // NCC of up to 8 rows of a block from their six sums ([quantity][col][lane]): WeightedNcc's
 // formula, 8 rows at a time; 8 columns at a time are turned back into rows ([lane][col]) to be
-// masked and stored. Returns the number of defined pixels.
+// masked and stored (rows `stride` apart). Returns the number of defined pixels.
 MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
                                   const float* __restrict mask, float* __restrict ncc, int width,
-                                  int rows, double min_texture_variance, double min_window_weight) {
+                                  size_t stride, int rows, double min_texture_variance,
+                                  double min_window_weight) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float min_variance = static_cast<float>(min_texture_variance);
   const float min_weight = static_cast<float>(min_window_weight);
@@ -332,7 +333,7 @@ MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
     Transpose8x8(value);
     Transpose8x8(ok);
     for (int lane = 0; lane < rows; ++lane) {
-      const size_t index = static_cast<size_t>(lane) * width + col;
+      const size_t index = static_cast<size_t>(lane) * stride + col;
       const LaneMask valid = (LoadLanes(mask + index) > 0) & __builtin_bit_cast(LaneMask, ok[lane]);
       StoreLanes(ncc + index, valid ? value[lane] : Lanes{} + nan);
       for (int k = 0; k < kLanes; ++k) defined += valid[k] != 0;
@@ -342,7 +343,7 @@ MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
     const ColumnNcc c =
         NccOfColumn(sums + static_cast<size_t>(col) * kLanes, plane, min_variance, min_weight);
     for (int lane = 0; lane < rows; ++lane) {
-      const size_t index = static_cast<size_t>(lane) * width + col;
+      const size_t index = static_cast<size_t>(lane) * stride + col;
       const bool valid = mask[index] > 0 && c.ok[lane];
       ncc[index] = valid ? c.value[lane] : nan;
       defined += valid;
@@ -404,54 +405,105 @@ void WindowedNcc::SetCamera(const cv::Mat& image) {
 
 RowInputs WindowedNcc::Inputs(int row) const {
   if (row < 0 || row >= height_) {
-    const float* zeros = zeros_.data();
+    const float* zeros = zeros_.data() + window_.first_col;
     return {zeros, zeros, zeros, zeros};
   }
-  const size_t offset = static_cast<size_t>(row) * width_;
+  const size_t offset = static_cast<size_t>(row) * width_ + window_.first_col;
   return {mask_ + offset, i_.data() + offset, ii_.data() + offset, J_ + offset};
+}
+
+// The rectangle around the valid pixels, widened to whole blocks of 8 rows and groups of 8
+// columns (or the image's edge), so that every value computed in it is computed by the same
+// vector or scalar code as over the whole image.
+WindowedNcc::Window WindowedNcc::ValidWindow() const {
+  const size_t w = width_;
+  const auto row_of = [&](int row) { return mask_ + row * w; };
+  const auto empty_row = [&](int row) {
+    return std::all_of(row_of(row), row_of(row) + w, [](float m) { return m == 0; });
+  };
+  int first_row = 0, last_row = height_ - 1;
+  while (first_row < height_ && empty_row(first_row)) ++first_row;
+  if (first_row == height_) return {};
+  while (empty_row(last_row)) --last_row;
+  // Only the columns outside the rectangle so far need a look.
+  int first_col = width_, last_col = -1;
+  for (int row = first_row; row <= last_row; ++row) {
+    const float* m = row_of(row);
+    for (int c = 0; c < first_col; ++c) {
+      if (m[c] != 0) first_col = c;
+    }
+    for (int c = width_ - 1; c > last_col; --c) {
+      if (m[c] != 0) last_col = c;
+    }
+  }
+  Window window;
+  window.first_row = first_row / kLanes * kLanes;
+  window.last_row = std::min(height_ - 1, last_row / kLanes * kLanes + kLanes - 1);
+  window.first_col = first_col / kLanes * kLanes;
+  window.cols =
+      std::min(width_ - 1, last_col / kLanes * kLanes + kLanes - 1) - window.first_col + 1;
+  return window;
 }
 
 int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
   J_ = J;
   mask_ = mask;
+  window_ = ValidWindow();
+  const size_t w = width_;
+  // Outside the window every pixel is masked out.
+  for (int row = 0; row < height_; ++row) {
+    float* out = ncc + row * w;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    if (row < window_.first_row || row > window_.last_row) {
+      std::fill(out, out + w, nan);
+    } else {
+      std::fill(out, out + window_.first_col, nan);
+      std::fill(out + window_.first_col + window_.cols, out + w, nan);
+    }
+  }
+  if (window_.cols == 0) return 0;
+  // Every product is 0 outside the window (J and the mask are), so the recursions enter it
+  // with the state they would have had over the whole image: 0.
   const FloatGaussian g = ToFloat(gaussian_);
-  const int w = width_, r = gaussian_.radius;
-  float* state = state_.data();
+  const int r = gaussian_.radius, n = window_.cols;
+  float* state = state_.data() + Grouped(window_.first_col, 0, kStates);
   const size_t row_size = GroupedSize(w, kQuantities);
+  float* causal = causal_.data() + Grouped(window_.first_col, 0, kQuantities);
 
   // Pass 1: vertical causal, top to bottom.
   std::fill(state_.begin(), state_.end(), 0.0f);
-  for (int row = 0; row < height_; ++row) {
-    CausalRow(g, state, Inputs(row), Inputs(row - r - 1), causal_.data() + row * row_size, w);
+  for (int row = window_.first_row; row <= window_.last_row; ++row) {
+    CausalRow(g, state, Inputs(row), Inputs(row - r - 1), causal + row * row_size, n);
   }
 
   // Pass 2: vertical anticausal, bottom to top; horizontal and NCC every 8 rows.
   std::fill(state_.begin(), state_.end(), 0.0f);
   int64_t defined = 0;
-  for (int row = height_ - 1; row >= 0; --row) {
+  for (int row = window_.last_row; row >= window_.first_row; --row) {
     const int lane = row % kLanes;
-    AnticausalRow(g, state, Inputs(row + 1), Inputs(row + r + 1), causal_.data() + row * row_size,
-                  rows_.data() + RowsOffset(0, lane), RowsOffset(1, 0), w);
+    AnticausalRow(g, state, Inputs(row + 1), Inputs(row + r + 1), causal + row * row_size,
+                  rows_.data() + RowsOffset(0, lane) + window_.first_col, RowsOffset(1, 0), n);
     if (lane == 0) FinishBlock(row, ncc, &defined);
   }
   return defined;
 }
 
 void WindowedNcc::FinishBlock(int first_row, float* ncc, int64_t* defined) {
-  const int w = width_;
+  const int w = width_, n = window_.cols;
   const int rows = std::min(kLanes, height_ - first_row);
   const size_t plane = static_cast<size_t>(w) * kLanes;
   for (int q = 0; q < kQuantities; ++q) {
-    RowsToBlock(rows_.data() + RowsOffset(q, 0), w, block_.data() + q * plane, w);
+    RowsToBlock(rows_.data() + RowsOffset(q, 0) + window_.first_col, w, block_.data() + q * plane,
+                n);
   }
   constexpr int kSideBySide = 3;  // measured: 2 and 6 are slower
   for (int q = 0; q < kQuantities; q += kSideBySide) {
     HorizontalBlock<kSideBySide>(ToFloat(gaussian_), block_.data() + q * plane,
-                                 sums_.data() + q * plane, plane, w);
+                                 sums_.data() + q * plane, plane, n);
   }
-  const size_t offset = static_cast<size_t>(first_row) * w;
-  *defined += NccBlock(sums_.data(), static_cast<size_t>(w) * kLanes, mask_ + offset, ncc + offset,
-                       w, rows, min_texture_variance_, min_window_weight_);
+  const size_t offset = static_cast<size_t>(first_row) * w + window_.first_col;
+  *defined += NccBlock(sums_.data(), plane, mask_ + offset, ncc + offset, n, w, rows,
+                       min_texture_variance_, min_window_weight_);
 }
 
 }  // namespace ms

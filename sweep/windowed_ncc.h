@@ -27,14 +27,20 @@ class WindowedNcc {
   void SetCamera(const cv::Mat& image);
   // J: the reprojected neighbour minus 0.5 where valid, 0 elsewhere; mask: 1 where valid, 0
   // elsewhere (row-major, width x height). Writes NCC (NaN where undefined, as WeightedNcc)
-  // into `ncc` and returns the number of defined pixels.
+  // into `ncc` and returns the number of defined pixels. The passes run over the rectangle
+  // around the valid pixels only, with the same results as over the whole image.
   int64_t Run(const float* J, const float* mask, float* ncc);
 
   static constexpr int kQuantities = 6;  // m, mI, J, mI^2, J^2, IJ
   static constexpr int kLanes = 8;       // rows per horizontal block
 
  private:
-  // The rows behind the quantities at `row` (zeros outside the image).
+  // Where the passes run: whole blocks of rows and groups of columns (cols 0: no valid pixel).
+  struct Window {
+    int first_row = 0, last_row = -1, first_col = 0, cols = 0;
+  };
+  Window ValidWindow() const;
+  // The window's part of the rows behind the quantities at `row` (zeros outside the image).
   RowInputs Inputs(int row) const;
   void FinishBlock(int first_row, float* ncc, int64_t* defined);
 
@@ -43,6 +49,7 @@ class WindowedNcc {
   double min_texture_variance_, min_window_weight_;
   const float* J_ = nullptr;
   const float* mask_ = nullptr;
+  Window window_;
   LargeBuffer<float> i_, ii_;  // I - 0.5 and its square
   LargeBuffer<float> causal_;  // pass 1: [row][col / 8][quantity][col % 8]
   std::vector<float> state_;   // vertical recursions: [col / 8][quantity][4][col % 8]
