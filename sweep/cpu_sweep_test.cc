@@ -24,6 +24,7 @@
 #include "sweep/reference_sweep.h"
 #include "sweep/software_raster.h"
 #include "sweep/span_raster.h"
+#include "sweep/subnormals.h"
 #include "sweep/sweep_parity_testing.h"
 #include "sweep/sweep_test_scene.h"
 #include "sweep/windowed_ncc.h"
@@ -263,6 +264,30 @@ TEST(WindowedNcc, ValidRectangleAloneGivesTheWholeImagesValues) {
     EXPECT_EQ(differ, 0);
     EXPECT_EQ(not_nan_outside, 0);
   }
+}
+
+// The NCC flushes subnormals to zero while it runs, and leaves the thread's floating-point mode
+// as it found it.
+TEST(ScopedFlushSubnormals, FlushesInsideTheScopeOnly) {
+  volatile float tiny = 1e-30f, factor = 1e-10f;  // their product is subnormal
+  const float before = tiny * factor;
+  EXPECT_GT(before, 0.0f);
+  {
+    const ScopedFlushSubnormals flush;
+    const float inside = tiny * factor;
+#if defined(__x86_64__) || defined(__i386__)
+    EXPECT_EQ(inside, 0.0f);
+#else
+    EXPECT_EQ(inside, before);
+#endif
+  }
+  EXPECT_EQ(tiny * factor, before);
+  // Run keeps the mode too.
+  WindowedNcc ncc(16, 16, 2.0, 1e-4, 0.5);
+  ncc.SetCamera(BlurredNoiseImage(16, 16, 5));
+  std::vector<float> j(256, 0.1f), m(256, 1.0f), out(256);
+  ncc.Run(j.data(), m.data(), out.data());
+  EXPECT_EQ(tiny * factor, before);
 }
 
 // ---- The reprojection ----

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "base/check.h"
+#include "sweep/subnormals.h"
 #include "sweep/vector_clones.h"
 
 namespace ms {
@@ -446,6 +447,7 @@ WindowedNcc::Window WindowedNcc::ValidWindow() const {
 }
 
 int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
+  const ScopedFlushSubnormals flush;
   J_ = J;
   mask_ = mask;
   window_ = ValidWindow();
