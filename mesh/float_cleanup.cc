@@ -2,13 +2,17 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <set>
+#include <unordered_map>
 #include <utility>
 
 #include "base/check.h"
 #include "base/log.h"
+#include "mesh/float_robustness.h"
 
 namespace ms {
 namespace {
@@ -54,11 +58,43 @@ void SortUnique(std::vector<T>* v) {
   v->erase(std::unique(v->begin(), v->end()), v->end());
 }
 
+// A face's box in floats rounded outward (24 bytes against 48 in doubles: at 2·10^6 faces the
+// cleanup's per-face boxes were most of the coordinator's peak). Searches with them find a
+// superset of the faces whose double boxes overlap; the cleaner tests those exactly.
+struct FloatBox3 {
+  std::array<float, 3> lo, hi;
+  static FloatBox3 Around(const Box3& b) {
+    FloatBox3 f;
+    for (int d = 0; d < 3; ++d) {
+      f.lo[d] = float_robustness_internal::FloatAtOrBelow(b.lo[d]);
+      f.hi[d] = float_robustness_internal::FloatAtOrAbove(b.hi[d]);
+    }
+    return f;
+  }
+  static FloatBox3 Empty() {
+    constexpr float inf = std::numeric_limits<float>::infinity();
+    return {{inf, inf, inf}, {-inf, -inf, -inf}};
+  }
+  void Add(const FloatBox3& b) {
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], b.lo[d]);
+      hi[d] = std::max(hi[d], b.hi[d]);
+    }
+  }
+  bool Overlaps(const FloatBox3& b) const {
+    for (int d = 0; d < 3; ++d) {
+      if (lo[d] > b.hi[d] || b.lo[d] > hi[d]) return false;
+    }
+    return true;
+  }
+};
+
 // A bounding-volume hierarchy over the faces alive when it is built (median splits on the
-// longest axis); faces made later are scanned by the caller.
+// longest axis); faces made later are scanned by the caller. Its float boxes make it visit a
+// superset of the faces a double box overlaps: callers filter with the exact boxes.
 class FaceTree {
  public:
-  void Build(const std::vector<Box3>& boxes, std::vector<int32_t> faces) {
+  void Build(const std::vector<FloatBox3>& boxes, std::vector<int32_t> faces) {
     boxes_ = &boxes;
     order_ = std::move(faces);
     nodes_.clear();
@@ -66,7 +102,7 @@ class FaceTree {
   }
 
   template <typename Visit>
-  void Query(const Box3& box, Visit&& visit) const {
+  void Query(const FloatBox3& box, Visit&& visit) const {
     if (nodes_.empty()) return;
     std::vector<int32_t> stack{0};
     while (!stack.empty()) {
@@ -86,30 +122,34 @@ class FaceTree {
 
  private:
   struct Node {
-    Box3 box;
+    FloatBox3 box;
     int32_t begin = 0, end = 0, left = -1, right = -1;
   };
 
   int32_t BuildNode(int32_t begin, int32_t end) {
     const int32_t index = static_cast<int32_t>(nodes_.size());
     nodes_.push_back({});
-    Box3 box, centres;
+    FloatBox3 box = FloatBox3::Empty(), centres = FloatBox3::Empty();
     for (int32_t i = begin; i < end; ++i) {
-      const Box3& b = (*boxes_)[order_[i]];
+      const FloatBox3& b = (*boxes_)[order_[i]];
       box.Add(b);
-      centres.Add(Vector3d((b.lo + b.hi) / 2));
+      FloatBox3 centre;
+      for (int d = 0; d < 3; ++d) centre.lo[d] = centre.hi[d] = (b.lo[d] + b.hi[d]) / 2;
+      centres.Add(centre);
     }
     nodes_[index].box = box;
     nodes_[index].begin = begin;
     nodes_[index].end = end;
     if (end - begin <= 8) return index;
-    int axis;
-    (centres.hi - centres.lo).maxCoeff(&axis);
+    int axis = 0;
+    for (int d = 1; d < 3; ++d) {
+      if (centres.hi[d] - centres.lo[d] > centres.hi[axis] - centres.lo[axis]) axis = d;
+    }
     const int32_t mid = begin + (end - begin) / 2;
     std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
                      [&](int32_t a, int32_t b) {
-                       const Box3& x = (*boxes_)[a];
-                       const Box3& y = (*boxes_)[b];
+                       const FloatBox3& x = (*boxes_)[a];
+                       const FloatBox3& y = (*boxes_)[b];
                        return x.lo[axis] + x.hi[axis] < y.lo[axis] + y.hi[axis];
                      });
     const int32_t left = BuildNode(begin, mid);
@@ -119,9 +159,92 @@ class FaceTree {
     return index;
   }
 
-  const std::vector<Box3>* boxes_ = nullptr;
+  const std::vector<FloatBox3>* boxes_ = nullptr;
   std::vector<int32_t> order_;
   std::vector<Node> nodes_;
+};
+
+// Each vertex's alive faces, in the order one vector per vertex would keep them (faces appended,
+// a removal closing its gap), since the collapses depend on that order. One array holds every
+// vertex's initial faces, with the room they took; a list that outgrows its room, and those of
+// vertices made later, move to vectors of their own. At 10^6 vertices a vector per vertex took
+// about 72 bytes a vertex, this about 36.
+class VertexFaceLists {
+ public:
+  struct List {
+    const int32_t *first, *last;
+    const int32_t* begin() const { return first; }
+    const int32_t* end() const { return last; }
+    bool empty() const { return first == last; }
+  };
+
+  VertexFaceLists(const std::vector<Face>& faces, size_t vertices)
+      : start_(vertices + 1, 0), count_(vertices, 0) {
+    for (const Face& face : faces) {
+      for (int32_t v : face) ++start_[v + 1];
+    }
+    for (size_t v = 0; v < vertices; ++v) start_[v + 1] += start_[v];
+    MS_CHECK(start_.back() <= UINT32_MAX) << "too many faces for the cleanup";
+    faces_.resize(start_.back());
+    for (size_t f = 0; f < faces.size(); ++f) {
+      for (int32_t v : faces[f]) faces_[start_[v] + count_[v]++] = static_cast<int32_t>(f);
+    }
+  }
+
+  size_t size() const { return count_.size(); }
+
+  List operator[](int32_t v) const {
+    const auto moved = moved_.find(v);
+    if (moved != moved_.end()) {
+      return {moved->second.data(), moved->second.data() + moved->second.size()};
+    }
+    const int32_t* first = faces_.data() + start_[v];
+    return {first, first + count_[v]};
+  }
+
+  void Add(int32_t v, int32_t f) {
+    auto moved = moved_.find(v);
+    if (moved == moved_.end()) {
+      if (start_[v] + count_[v] < start_[v + 1]) {
+        faces_[start_[v] + count_[v]++] = f;
+        return;
+      }
+      const int32_t* first = faces_.data() + start_[v];
+      moved = moved_.emplace(v, std::vector<int32_t>(first, first + count_[v])).first;
+      count_[v] = 0;
+    }
+    moved->second.push_back(f);
+  }
+
+  // Removes every occurrence of f from v's list.
+  void Remove(int32_t v, int32_t f) {
+    const auto moved = moved_.find(v);
+    if (moved != moved_.end()) {
+      auto& list = moved->second;
+      list.erase(std::remove(list.begin(), list.end(), f), list.end());
+      return;
+    }
+    int32_t* first = faces_.data() + start_[v];
+    count_[v] = static_cast<uint32_t>(std::remove(first, first + count_[v], f) - first);
+  }
+
+  void Clear(int32_t v) {
+    const auto moved = moved_.find(v);
+    if (moved != moved_.end()) moved->second.clear();
+    count_[v] = 0;
+  }
+
+  // A new vertex, with no room of its own.
+  void AddVertex() {
+    start_.push_back(start_.back());
+    count_.push_back(0);
+  }
+
+ private:
+  std::vector<uint32_t> start_;  // room of vertex v: faces_[start_[v], start_[v + 1])
+  std::vector<uint32_t> count_;  // faces in the room
+  std::vector<int32_t> faces_;
+  std::unordered_map<int32_t, std::vector<int32_t>> moved_;  // lists out of their room
 };
 
 // The mesh under local edits, round after round: faces are never changed in place, only killed
@@ -134,14 +257,14 @@ class Cleaner {
         scaffold_(*scaffold),
         tolerance_(tolerance),
         max_collapse_(max_collapse),
-        faces_of_(mesh->vertices.size()),
+        faces_of_(mesh->faces, mesh->vertices.size()),
         first_made_face_(mesh->faces.size()) {
     alive_.assign(mesh_.faces.size(), 1);
-    for (size_t f = 0; f < mesh_.faces.size(); ++f) {
-      box_.push_back(FaceBox(mesh_.faces[f]));
-      for (int32_t v : mesh_.faces[f]) faces_of_[v].push_back(static_cast<int32_t>(f));
+    box_.reserve(mesh_.faces.size());
+    for (const Face& face : mesh_.faces) box_.push_back(FloatBox3::Around(FaceBox(face)));
+    for (size_t v = 0; v < faces_of_.size(); ++v) {
+      live_vertices_ += !faces_of_[static_cast<int32_t>(v)].empty();
     }
-    for (const auto& faces : faces_of_) live_vertices_ += !faces.empty();
     std::vector<int32_t> all(mesh_.faces.size());
     std::iota(all.begin(), all.end(), 0);
     tree_.Build(box_, std::move(all));
@@ -162,11 +285,12 @@ class Cleaner {
     made_now.Build(box_, recent_);
     const auto query = [&](const Box3& box, auto&& visit) {
       const auto alive_only = [&](int32_t f) {
-        if (alive_[f]) visit(f);
+        if (alive_[f] && FaceBox(mesh_.faces[f]).Overlaps(box)) visit(f);
       };
-      tree_.Query(box, alive_only);
-      made_tree_.Query(box, alive_only);
-      made_now.Query(box, alive_only);
+      const FloatBox3 search = FloatBox3::Around(box);
+      tree_.Query(search, alive_only);
+      made_tree_.Query(search, alive_only);
+      made_now.Query(search, alive_only);
     };
     ProblemPairs found;
     std::vector<int32_t> vertices;
@@ -174,11 +298,12 @@ class Cleaner {
       if (!alive_[f]) continue;
       vertices.insert(vertices.end(), mesh_.faces[f].begin(), mesh_.faces[f].end());
       const Face& a = mesh_.faces[f];
-      query(box_[f].Grown(2 * tolerance_), [&](int32_t g) {
+      query(FaceBox(a).Grown(2 * tolerance_), [&](int32_t g) {
         if (g == f || SharedVertices(a, mesh_.faces[g]) > 0) return;
         const int64_t lo = std::min(f, g), hi = std::max(f, g);
         const Triangle p = Corners(mesh_.faces[lo]), q = Corners(mesh_.faces[hi]);
-        if (box_[lo].Overlaps(box_[hi]) && TrianglesIntersectLikeOpen3d(p, q)) {
+        if (FaceBox(mesh_.faces[lo]).Overlaps(FaceBox(mesh_.faces[hi])) &&
+            TrianglesIntersectLikeOpen3d(p, q)) {
           found.crossing_faces.push_back({lo, hi});
         }
         if (TriangleDistance(p, q) <= tolerance_) found.close_faces.push_back({lo, hi});
@@ -253,10 +378,10 @@ class Cleaner {
   // spent after it, so its search structures go first (at 10^6 vertices they and the compacted
   // copy on top were the cleanup's peak of memory).
   void Compact() {
-    std::vector<Box3>().swap(box_);
+    std::vector<FloatBox3>().swap(box_);
     tree_ = FaceTree();
     made_tree_ = FaceTree();
-    std::vector<std::vector<int32_t>>().swap(faces_of_);
+    faces_of_ = VertexFaceLists({}, 0);
     std::vector<Face> faces;
     faces.reserve(static_cast<size_t>(std::count(alive_.begin(), alive_.end(), 1)));
     for (size_t f = 0; f < mesh_.faces.size(); ++f) {
@@ -426,7 +551,7 @@ class Cleaner {
     for (int32_t v : vertices) {
       if (mesh_.HasColors()) mesh_.vertex_colors.push_back(mesh_.vertex_colors[v]);
       scaffold_.push_back(scaffold_[v]);
-      faces_of_.emplace_back();
+      faces_of_.AddVertex();
     }
     Apply(removed, made);
     ++moves_;
@@ -455,7 +580,7 @@ class Cleaner {
     }
     if (!Improves(removed, made)) return false;
     Apply(removed, made);
-    faces_of_[u].clear();
+    faces_of_.Clear(u);
     --live_vertices_;
     ++collapses_;
     return true;
@@ -495,7 +620,7 @@ class Cleaner {
     mesh_.vertices.push_back((mesh_.vertices[a] + mesh_.vertices[b]) / 2);
     if (mesh_.HasColors()) mesh_.vertex_colors.push_back(mesh_.vertex_colors[a]);
     scaffold_.push_back(scaffold_[a] || scaffold_[b]);
-    faces_of_.emplace_back();
+    faces_of_.AddVertex();
     ++live_vertices_;
     Apply(removed, made);
     ++splits_;
@@ -589,15 +714,14 @@ class Cleaner {
       const Face* old_i = before != nullptr ? &(*before)[i] : nullptr;
       const Box3 box = FaceBox(faces[i]).Grown(tolerance_);
       auto visit = [&](int32_t f) {
-        if (forbidden || !alive_[f]) return;
+        if (forbidden || !alive_[f] || !FaceBox(mesh_.faces[f]).Overlaps(box)) return;
         if (std::find(skip.begin(), skip.end(), f) != skip.end()) return;
         add(faces[i], mesh_.faces[f], old_i, &mesh_.faces[f]);
       };
-      tree_.Query(box, visit);
-      made_tree_.Query(box, visit);
-      for (int32_t f : recent_) {
-        if (box_[f].Overlaps(box)) visit(f);
-      }
+      const FloatBox3 search = FloatBox3::Around(box);
+      tree_.Query(search, visit);
+      made_tree_.Query(search, visit);
+      for (int32_t f : recent_) visit(f);
       for (size_t j = 0; j < i && !forbidden; ++j) {
         add(faces[i], faces[j], old_i, before != nullptr ? &(*before)[j] : nullptr);
       }
@@ -628,35 +752,32 @@ class Cleaner {
     for (int32_t f : removed) {
       alive_[f] = 0;
       touched_[f] = 1;
-      for (int32_t v : mesh_.faces[f]) {
-        auto& list = faces_of_[v];
-        list.erase(std::remove(list.begin(), list.end(), f), list.end());
-      }
+      for (int32_t v : mesh_.faces[f]) faces_of_.Remove(v, f);
     }
     for (const Face& face : made) {
       const int32_t f = static_cast<int32_t>(mesh_.faces.size());
       mesh_.faces.push_back(face);
       alive_.push_back(1);
       touched_.push_back(1);
-      box_.push_back(FaceBox(face));
+      box_.push_back(FloatBox3::Around(FaceBox(face)));
       recent_.push_back(f);
-      for (int32_t v : face) faces_of_[v].push_back(f);
+      for (int32_t v : face) faces_of_.Add(v, f);
     }
   }
 
   Mesh& mesh_;
   std::vector<uint8_t>& scaffold_;
   const double tolerance_, max_collapse_;
-  std::vector<std::vector<int32_t>> faces_of_;  // per vertex: its alive faces
-  std::vector<uint8_t> alive_;                  // per face
-  std::vector<Box3> box_;                       // per face
-  std::vector<uint8_t> touched_;                // per face: removed or made this round
-  std::vector<int32_t> recent_;                 // faces made this round (in neither tree)
-  const size_t first_made_face_;                // faces from this index on were made
-  size_t round_start_faces_ = 0;                // ... from this one on, this round
-  FaceTree tree_;                               // the faces the cleanup started with
-  FaceTree made_tree_;                          // made in earlier rounds, alive at this one's start
-  int64_t live_vertices_ = 0;                   // vertices with a face
+  VertexFaceLists faces_of_;      // per vertex: its alive faces
+  std::vector<uint8_t> alive_;    // per face
+  std::vector<FloatBox3> box_;    // per face
+  std::vector<uint8_t> touched_;  // per face: removed or made this round
+  std::vector<int32_t> recent_;   // faces made this round (in neither tree)
+  const size_t first_made_face_;  // faces from this index on were made
+  size_t round_start_faces_ = 0;  // ... from this one on, this round
+  FaceTree tree_;                 // the faces the cleanup started with
+  FaceTree made_tree_;            // made in earlier rounds, alive at this one's start
+  int64_t live_vertices_ = 0;     // vertices with a face
   int64_t collapses_ = 0, splits_ = 0, moves_ = 0;
 };
 

@@ -426,8 +426,8 @@ class SearchBox {
       : index_(static_cast<uint32_t>(index)) {
     MS_CHECK(index >= 0 && index <= UINT32_MAX) << "box index " << index;
     for (int d = 0; d < 3; ++d) {
-      lo_[d] = RoundDown(lo[d]);
-      hi_[d] = RoundUp(hi[d]);
+      lo_[d] = float_robustness_internal::FloatAtOrBelow(lo[d]);
+      hi_[d] = float_robustness_internal::FloatAtOrAbove(hi[d]);
     }
   }
   static int dimension() { return 3; }
@@ -437,16 +437,6 @@ class SearchBox {
   int64_t info() const { return index_; }
 
  private:
-  static float RoundDown(double x) {
-    const float f = static_cast<float>(x);
-    return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity())
-                                      : f;
-  }
-  static float RoundUp(double x) {
-    const float f = static_cast<float>(x);
-    return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity())
-                                      : f;
-  }
   float lo_[3], hi_[3];
   uint32_t index_;
 };

@@ -9,7 +9,9 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -107,6 +109,19 @@ double TriangleDistance(const Triangle& p, const Triangle& q);
 // A point of p and a point of q at their smallest distance (the 6 point-triangle and 9
 // segment-segment candidates; meaningless when they cross): the direction that parts them.
 std::array<Eigen::Vector3d, 2> TriangleClosestPoints(const Triangle& p, const Triangle& q);
+
+// The nearest float at or below x, and at or above it: a box of floats rounded outward holds the
+// double box it stands for, so a search over such boxes finds a superset of the double boxes'
+// pairs (half the memory; exact tests decide after it).
+inline float FloatAtOrBelow(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity())
+                                    : f;
+}
+inline float FloatAtOrAbove(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
 
 }  // namespace float_robustness_internal
 
