@@ -29,6 +29,11 @@ RunLifecycle::RunLifecycle(const CoordinatorOptions& options, uint64_t session_i
 
 RunLifecycle::~RunLifecycle() {
   if (checkpoint_.valid()) checkpoint_.wait();
+  // A run that stopped before its first checkpoint leaves no stash behind.
+  if (record_.scene_copy_from == Path(kSceneStash)) {
+    std::error_code ec;
+    fs::remove(record_.scene_copy_from, ec);
+  }
 }
 
 std::string RunLifecycle::Path(const std::string& name) const {
@@ -103,8 +108,17 @@ void RunLifecycle::BuildOrReplay(bool resuming, const std::string& run_file) {
   const Scene& scene = record_.scene;
   manifold_ =
       std::make_unique<DelaunayManifold>(ManifoldCamerasFromScene(scene), options_.manifold);
+  // The points' rays only while the manifold is built: it keeps what it needs of them.
+  std::vector<RayPoint> rays = RayPointsFromScene(scene);
+  if (!resuming) {
+    // The first checkpoint copies the scene from the stash (at 10^6 points 190 MB less while the
+    // manifold is built and its meshes extracted, the coordinator's peak of memory).
+    StashScenePoints(Path(kSceneStash), &record_);
+    ReleaseFreeMemory();
+  }
   Timer build;
-  const BuildStats stats = manifold_->Build(RayPointsFromScene(scene));
+  const BuildStats stats = manifold_->Build(rays);
+  std::vector<RayPoint>().swap(rays);
   const double build_s = build.Seconds();
   spdlog::info("initial manifold: {} points ({} Steiner), {} cells, {} outside; {:.2f} s",
                stats.points, stats.steiner_points, stats.cells, stats.outside_cells, build_s);
@@ -339,6 +353,12 @@ void RunLifecycle::CheckCheckpoint() {
 // After the first checkpoint this process wrote (a resumed run's file may be the fallback
 // run.prev.h5, which the next checkpoint replaces), run.h5 holds the whole scene.
 void RunLifecycle::ReleaseScenePointsOnce() {
+  if (record_.scene_copy_from == Path(kSceneStash)) {  // released before the build
+    record_.scene_copy_from = Path("run.h5");
+    std::error_code ec;
+    fs::remove(Path(kSceneStash), ec);
+    return;
+  }
   if (!record_.scene_copy_from.empty() || record_.scene.points.empty()) return;
   ReleaseScenePoints(Path("run.h5"), &record_);
   ReleaseFreeMemory();

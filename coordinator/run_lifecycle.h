@@ -51,6 +51,10 @@ class RunLifecycle {
   // options.Check() must have passed; session_id goes into every job.
   RunLifecycle(const CoordinatorOptions& options, uint64_t session_id);
   ~RunLifecycle();
+
+  // Where a fresh run keeps the scene's points from its build to its first checkpoint (in the
+  // output directory).
+  static constexpr const char* kSceneStash = "run.scene.h5";
   RunLifecycle(const RunLifecycle&) = delete;
   RunLifecycle& operator=(const RunLifecycle&) = delete;
 
@@ -102,7 +106,8 @@ class RunLifecycle {
   // The same on a background thread; record_ must not change until WaitForCheckpoint.
   void CheckpointInBackground();
   void WriteCheckpoint();
-  // Once run.h5 holds the whole scene: frees the scene's points (run_store.h).
+  // Once run.h5 holds the whole scene: frees the scene's points (run_store.h), or, where they
+  // went to the stash before the build, removes the stash.
   void ReleaseScenePointsOnce();
   StepOutcome NextOrStop();
   void Finish(const std::string& reason);

@@ -110,6 +110,9 @@ TEST(RunLifecycle, ResumingReplaysTheCheckpointToTheSameMesh) {
   EXPECT_EQ(run.completed_iterations(), 0);
   EXPECT_TRUE(std::filesystem::exists(dir / "run/initial.ply"));
   EXPECT_TRUE(std::filesystem::exists(dir / "run/run.h5"));
+  // The scene's points waited in a stash during the build; run.h5 holds them now.
+  EXPECT_FALSE(
+      std::filesystem::exists(std::filesystem::path(dir / "run") / RunLifecycle::kSceneStash));
   const size_t initial_vertices = run.surface().NumVertices();
 
   SweepRound round;
@@ -143,6 +146,21 @@ TEST(RunLifecycle, ResumingReplaysTheCheckpointToTheSameMesh) {
   EXPECT_TRUE(resumed.final_result().final_is_closed_manifold);
   const MeshReport report = CheckMesh(ReadMesh(dir / "run/final.ply"));
   EXPECT_TRUE(report.is_closed_manifold);
+}
+
+// A run that stops before its first checkpoint (here: no cell is free space) says why and leaves
+// no stash of the scene's points behind.
+TEST(RunLifecycle, ARunStoppedBeforeItsFirstCheckpointLeavesNoStash) {
+  const TempDir dir("lifecycle");
+  CoordinatorOptions options = Options(WriteSphereScene(dir), dir / "run");
+  options.manifold.free_threshold = 1e9;
+  {
+    RunLifecycle run(options, 7);
+    ExpectInputError([&] { run.Prepare(); }, {"initial manifold is empty"});
+  }
+  EXPECT_FALSE(
+      std::filesystem::exists(std::filesystem::path(dir / "run") / RunLifecycle::kSceneStash));
+  EXPECT_FALSE(std::filesystem::exists(dir / "run/run.h5"));
 }
 
 // The coordinator inserts the points of cameras whose results are in while the sweep goes on:

@@ -179,6 +179,13 @@ void ReleaseScenePoints(const std::string& run_file, RunRecord* record) {
   std::vector<ScenePoint>().swap(record->scene.points);
 }
 
+void StashScenePoints(const std::string& path, RunRecord* record) {
+  H5File file = H5File::Create(path);
+  WriteSceneH5(record->scene, file, "/scene");
+  file.Commit();
+  ReleaseScenePoints(path, record);
+}
+
 void WriteRunFile(const RunRecord& record, const std::string& path) {
   H5File file = H5File::Create(path);
   if (record.scene_copy_from.empty()) {

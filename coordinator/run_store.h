@@ -95,6 +95,11 @@ struct RunRecord {
 // the whole scene (a run file written or read before the release).
 void ReleaseScenePoints(const std::string& run_file, RunRecord* record);
 
+// Writes record->scene to `path` (an HDF5 file with /scene) and frees its points: the first
+// checkpoint copies /scene from there, so the points need not stay in memory while the initial
+// manifold is built.
+void StashScenePoints(const std::string& path, RunRecord* record);
+
 // A stable hash of everything in the scene that the reconstruction uses.
 std::string SceneFingerprint(const Scene& scene);
 

@@ -145,6 +145,23 @@ TEST(RunStore, ReleasedScenePointsAreCopiedFromTheLastRunFile) {
   testing::ExpectInputError([&] { WriteRunFile(record, second); }, {first});
 }
 
+// A fresh run stashes the scene's points before its build; its first run file copies them.
+TEST(RunStore, StashedScenePointsReachTheFirstRunFile) {
+  const TempDir dir("run_store");
+  RunRecord record = RecordWithOneIteration(dir);
+  record.scene_points = static_cast<int64_t>(record.scene.points.size());
+  ASSERT_GT(record.scene_points, 0);
+  const std::string stash = (dir.path() / "run.scene.h5").string();
+  const std::string run = (dir.path() / "run.h5").string();
+  StashScenePoints(stash, &record);
+  EXPECT_TRUE(record.scene.points.empty());
+  EXPECT_EQ(record.scene_copy_from, stash);
+  WriteRunFile(record, run);
+  const RunRecord read = ReadRunFile(run);
+  EXPECT_EQ(SceneFingerprint(read.scene), record.scene_fingerprint);
+  EXPECT_EQ(static_cast<int64_t>(read.scene.points.size()), record.scene_points);
+}
+
 // Takes /stats/iterations/<column> out of a written run.h5 (the dataset and its name in the
 // table's 'columns' list), as a file of an older format lacks it.
 void DropStatsColumn(const std::string& path, const std::string& column) {
