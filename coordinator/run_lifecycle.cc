@@ -119,6 +119,7 @@ void RunLifecycle::BuildOrReplay(bool resuming, const std::string& run_file) {
   Timer build;
   const BuildStats stats = manifold_->Build(rays);
   std::vector<RayPoint>().swap(rays);
+  ReleaseFreeMemory();  // the build's own structures, gone: less resident for the steps to come
   const double build_s = build.Seconds();
   spdlog::info("initial manifold: {} points ({} Steiner), {} cells, {} outside; {:.2f} s",
                stats.points, stats.steiner_points, stats.cells, stats.outside_cells, build_s);
@@ -291,7 +292,10 @@ void RunLifecycle::Extract() {
 
 OutputMeshes RunLifecycle::WriteOutputMeshes(const std::string& name, bool with_surface,
                                              IterationStats* row) {
+  // The float cleanup is the coordinator's peak of memory: it starts from what the heap holds.
+  ReleaseFreeMemory();
   OutputMeshes out = MakeOutputMeshes(mesh_, surface_info_, options_.manifold.float_cleanup);
+  ReleaseFreeMemory();  // the cleaner's structures
   WriteMesh(out.closed, Path(name + ".ply"));
   if (with_surface) WriteMesh(out.surface, Path(name + "_surface.ply"));
   row->vertices = static_cast<int64_t>(out.closed.NumVertices());

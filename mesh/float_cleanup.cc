@@ -12,6 +12,7 @@
 
 #include "base/check.h"
 #include "base/log.h"
+#include "base/memory.h"
 #include "mesh/float_robustness.h"
 
 namespace ms {
@@ -879,6 +880,9 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
       unchanged = &own_copy;
     }
     original_scaffold = *scaffold;
+    // The whole check's boxes are gone: the cleaner starts from what the heap holds (at 10^6
+    // vertices the cleanup is the coordinator's peak of memory).
+    ReleaseFreeMemory();
     Cleaner cleaner(mesh, scaffold, stats.tolerance, max_collapse);
     while (problems_left > 0 && stats.rounds < options.max_rounds) {
       ++stats.rounds;
