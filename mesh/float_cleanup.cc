@@ -181,11 +181,11 @@ class VertexFaceLists {
 
   VertexFaceLists(const std::vector<Face>& faces, size_t vertices)
       : start_(vertices + 1, 0), count_(vertices, 0) {
+    MS_CHECK(3 * faces.size() <= UINT32_MAX) << "too many faces for the cleanup";
     for (const Face& face : faces) {
       for (int32_t v : face) ++start_[v + 1];
     }
     for (size_t v = 0; v < vertices; ++v) start_[v + 1] += start_[v];
-    MS_CHECK(start_.back() <= UINT32_MAX) << "too many faces for the cleanup";
     faces_.resize(start_.back());
     for (size_t f = 0; f < faces.size(); ++f) {
       for (int32_t v : faces[f]) faces_[start_[v] + count_[v]++] = static_cast<int32_t>(f);
