@@ -29,11 +29,14 @@ RunLifecycle::RunLifecycle(const CoordinatorOptions& options, uint64_t session_i
 
 RunLifecycle::~RunLifecycle() {
   if (checkpoint_.valid()) checkpoint_.wait();
-  // A run that stopped before its first checkpoint leaves no stash behind.
-  if (record_.scene_copy_from == Path(kSceneStash)) {
-    std::error_code ec;
-    fs::remove(record_.scene_copy_from, ec);
-  }
+  RemoveSceneStash();  // a run that stopped before its first checkpoint leaves none behind
+}
+
+void RunLifecycle::RemoveSceneStash() {
+  if (record_.scene_copy_from != Path(kSceneStash)) return;
+  std::error_code ec;
+  fs::remove(record_.scene_copy_from, ec);
+  record_.scene_copy_from.clear();
 }
 
 std::string RunLifecycle::Path(const std::string& name) const {
@@ -358,9 +361,8 @@ void RunLifecycle::CheckCheckpoint() {
 // run.prev.h5, which the next checkpoint replaces), run.h5 holds the whole scene.
 void RunLifecycle::ReleaseScenePointsOnce() {
   if (record_.scene_copy_from == Path(kSceneStash)) {  // released before the build
+    RemoveSceneStash();
     record_.scene_copy_from = Path("run.h5");
-    std::error_code ec;
-    fs::remove(Path(kSceneStash), ec);
     return;
   }
   if (!record_.scene_copy_from.empty() || record_.scene.points.empty()) return;

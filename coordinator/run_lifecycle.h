@@ -109,6 +109,8 @@ class RunLifecycle {
   // Once run.h5 holds the whole scene: frees the scene's points (run_store.h), or, where they
   // went to the stash before the build, removes the stash.
   void ReleaseScenePointsOnce();
+  // Removes the stash of the scene's points, if the record still copies from it.
+  void RemoveSceneStash();
   StepOutcome NextOrStop();
   void Finish(const std::string& reason);
   RunSummaryInfo SummaryInfo(const std::string& status) const;

@@ -284,16 +284,10 @@ class Cleaner {
   // trees: a query per made face or vertex instead of a box search over the whole mesh. The
   // queries reach twice the tolerance, and the tests are the check's own.
   ProblemPairs ProblemsOfMadeFaces(int64_t max_pairs) const {
-    FaceTree made_now;
+    FaceTree made_now;  // many queries: a tree over this round's faces, not a scan
     made_now.Build(box_, recent_);
     const auto query = [&](const Box3& box, auto&& visit) {
-      const auto alive_only = [&](int32_t f) {
-        if (alive_[f] && FaceBox(mesh_.faces[f]).Overlaps(box)) visit(f);
-      };
-      const FloatBox3 search = FloatBox3::Around(box);
-      tree_.Query(search, alive_only);
-      made_tree_.Query(search, alive_only);
-      made_now.Query(search, alive_only);
+      ForAliveFacesOverlapping(box, &made_now, visit);
     };
     ProblemPairs found;
     std::vector<int32_t> vertices;
@@ -729,20 +723,33 @@ class Cleaner {
     for (size_t i = 0; i < faces.size() && !forbidden; ++i) {
       const Face* old_i = before != nullptr ? &(*before)[i] : nullptr;
       const Box3 box = FaceBox(faces[i]).Grown(tolerance_);
-      auto visit = [&](int32_t f) {
-        if (forbidden || !alive_[f] || !FaceBox(mesh_.faces[f]).Overlaps(box)) return;
-        if (std::find(skip.begin(), skip.end(), f) != skip.end()) return;
+      ForAliveFacesOverlapping(box, nullptr, [&](int32_t f) {
+        if (forbidden || std::find(skip.begin(), skip.end(), f) != skip.end()) return;
         add(faces[i], mesh_.faces[f], old_i, &mesh_.faces[f]);
-      };
-      const FloatBox3 search = FloatBox3::Around(box);
-      tree_.Query(search, visit);
-      made_tree_.Query(search, visit);
-      for (int32_t f : recent_) visit(f);
+      });
       for (size_t j = 0; j < i && !forbidden; ++j) {
         add(faces[i], faces[j], old_i, before != nullptr ? &(*before)[j] : nullptr);
       }
     }
     return forbidden ? -1 : problems;
+  }
+
+  // Calls visit(f) for every alive face whose box overlaps `box`: the trees' float boxes find a
+  // superset, each face's exact double box decides. This round's faces come from `made_now`
+  // when given, else from a scan of them.
+  template <typename Visit>
+  void ForAliveFacesOverlapping(const Box3& box, const FaceTree* made_now, Visit&& visit) const {
+    const auto exact = [&](int32_t f) {
+      if (alive_[f] && FaceBox(mesh_.faces[f]).Overlaps(box)) visit(f);
+    };
+    const FloatBox3 search = FloatBox3::Around(box);
+    tree_.Query(search, exact);
+    made_tree_.Query(search, exact);
+    if (made_now != nullptr) {
+      made_now->Query(search, exact);
+    } else {
+      for (int32_t f : recent_) exact(f);
+    }
   }
 
   static int SharedVertices(const Face& a, const Face& b) {
