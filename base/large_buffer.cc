@@ -33,7 +33,8 @@ size_t Rounded(size_t bytes) { return (bytes + kHugePage - 1) / kHugePage * kHug
 
 void* Allocate(size_t bytes) {
   if (bytes < kMinHugeBytes) {
-    void* p = std::malloc(bytes == 0 ? 1 : bytes);
+    const size_t lines = (std::max<size_t>(bytes, 1) + kCacheLine - 1) / kCacheLine;
+    void* p = std::aligned_alloc(kCacheLine, lines * kCacheLine);
     if (p == nullptr) throw std::bad_alloc();
     return p;
   }

@@ -4,8 +4,9 @@
 // page faults, which cost a virtual machine about 2 s of system time per job (fountain-P11,
 // 3072x2048). Aligned to 2 MiB and advised MADV_HUGEPAGE (the kernel's default THP mode on
 // Debian is "madvise"), the same buffers take ~500 faults; freed ones are kept for the next
-// allocation of the same size (large_buffer.cc). Small allocations go to the usual allocator;
-// contents and results are the same either way.
+// allocation of the same size (large_buffer.cc). Small allocations go to the usual allocator,
+// aligned to a cache line (the NCC's streaming stores need 64 bytes); contents and results are
+// the same either way.
 #pragma once
 
 #include <cstddef>
@@ -15,8 +16,10 @@
 namespace ms {
 
 namespace large_buffer {
-// Allocations from this size up are huge-page aligned and advised.
+// Allocations from this size up are huge-page aligned and advised; smaller ones are aligned to
+// kCacheLine.
 constexpr size_t kMinHugeBytes = size_t{4} << 20;
+constexpr size_t kCacheLine = 64;
 void* Allocate(size_t bytes);
 void Free(void* p, size_t bytes);
 // Freed blocks kept for reuse, and giving them back to the system (base/memory.h's

@@ -266,6 +266,39 @@ TEST(WindowedNcc, ValidRectangleAloneGivesTheWholeImagesValues) {
   }
 }
 
+// Where the machine has AVX-512 the passes take 16 floats at a time; the values must be those
+// of the 8-float code bit for bit, at widths with and without a remainder of 8 and of 1-7
+// columns.
+TEST(WindowedNcc, SixteenFloatPassesGiveTheEightFloatValues) {
+  if (!WindowedNcc::MachineHasAvx512()) {
+    GTEST_SKIP() << "this machine has no AVX-512: only the 8-float passes run here";
+  }
+  for (const int width : {64, 75, 131, 200}) {
+    SCOPED_TRACE(width);
+    const int height = 41;
+    const cv::Mat I = BlurredNoiseImage(width, height, 6);
+    const cv::Mat J = 0.8 * I + 0.1 + 0.05 * BlurredNoiseImage(width, height, 7);
+    const size_t n = static_cast<size_t>(width) * height;
+    std::vector<float> j(n), m(n);
+    for (int row = 0; row < height; ++row) {
+      for (int col = 0; col < width; ++col) {
+        const bool valid = (row * 7 + col * 3) % 23 != 0 && col > 5;  // holes, an empty edge
+        j[row * width + col] = valid ? J.at<float>(row, col) - 0.5f : 0.0f;
+        m[row * width + col] = valid ? 1.0f : 0.0f;
+      }
+    }
+    std::vector<float> wide(n), narrow(n);
+    WindowedNcc sixteen(width, height, 3.0, 1e-4, 0.5, WindowedNcc::Vectors::kWidest);
+    WindowedNcc eight(width, height, 3.0, 1e-4, 0.5, WindowedNcc::Vectors::k8Floats);
+    sixteen.SetCamera(I);
+    eight.SetCamera(I);
+    const int64_t wide_defined = sixteen.Run(j.data(), m.data(), wide.data());
+    EXPECT_EQ(wide_defined, eight.Run(j.data(), m.data(), narrow.data()));
+    EXPECT_GT(wide_defined, static_cast<int64_t>(n / 2));
+    EXPECT_EQ(std::memcmp(wide.data(), narrow.data(), n * sizeof(float)), 0);
+  }
+}
+
 // The NCC flushes subnormals to zero while it runs, and leaves the thread's floating-point mode
 // as it found it.
 TEST(ScopedFlushSubnormals, FlushesInsideTheScopeOnly) {

@@ -16,3 +16,13 @@
 #else
 #define MS_HAVE_AVX2_DISPATCH 0
 #endif
+
+// MS_HAVE_AVX512_DISPATCH: MS_AVX512 functions (x86-64-v4: AVX-512 F, BW, CD, DQ, VL) may be
+// compiled, and called where __builtin_cpu_supports("x86-64-v4").
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define MS_HAVE_AVX512_DISPATCH 1
+#define MS_AVX512 __attribute__((target("arch=x86-64-v4")))
+#else
+#define MS_HAVE_AVX512_DISPATCH 0
+#define MS_AVX512
+#endif

@@ -8,6 +8,10 @@
 #include "sweep/subnormals.h"
 #include "sweep/vector_clones.h"
 
+#if MS_HAVE_AVX512_DISPATCH
+#include <immintrin.h>
+#endif
+
 namespace ms {
 
 // One row of the images behind the six quantities: m, I m (I is C's image minus 0.5, so I m is
@@ -48,6 +52,10 @@ FloatGaussian ToFloat(const RecursiveGaussian& g) {
 // so the AVX calling convention GCC warns about never crosses a library boundary.
 #pragma GCC diagnostic ignored "-Wpsabi"
 typedef float Lanes __attribute__((vector_size(32)));
+// Sixteen floats: the AVX-512 versions' vectors (two groups of 8 columns side by side, or two
+// quantities' 8 rows).
+typedef float WideLanes __attribute__((vector_size(64)));
+constexpr int kWideLanes = 2 * kLanes;
 
 inline Lanes LoadLanes(const float* p) {
   Lanes v;
@@ -61,23 +69,39 @@ inline void StoreLanes(float* p, Lanes v) { __builtin_memcpy(p, &v, sizeof v); }
 // they take that clone's instruction set (and its fused multiply-adds).
 #define MS_ALWAYS_INLINE inline __attribute__((always_inline))
 
-// Loads and stores of one float or of 8 (the vertical passes' remainder and body).
+// Loads and stores of one float, 8 or 16.
 template <typename V>
 MS_ALWAYS_INLINE V Load(const float* p) {
-  if constexpr (sizeof(V) == sizeof(float)) {
-    return *p;
-  } else {
-    return LoadLanes(p);
-  }
+  V v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
 }
 
 template <typename V>
 MS_ALWAYS_INLINE void Store(float* p, V v) {
-  if constexpr (sizeof(V) == sizeof(float)) {
-    *p = v;
-  } else {
-    StoreLanes(p, v);
+  __builtin_memcpy(p, &v, sizeof v);
+}
+
+// A store that bypasses the caches, for pass 1's output: it is read back only by pass 2, after
+// the whole image, so caching it only costs a read of each line before it is written.
+// p: aligned to the vector's size.
+template <typename V>
+MS_ALWAYS_INLINE void StoreStreaming(float* p, V v) {
+#if MS_HAVE_AVX512_DISPATCH
+  if constexpr (sizeof(V) == 64) {
+    __builtin_ia32_movntps512(p, reinterpret_cast<__m512>(v));
+    return;
   }
+  if constexpr (sizeof(V) == 32) {  // SSE's, which every x86-64 has
+    typedef float Half __attribute__((vector_size(16)));
+    Half halves[2];
+    __builtin_memcpy(halves, &v, sizeof v);
+    __builtin_ia32_movntps(p, halves[0]);
+    __builtin_ia32_movntps(p + 4, halves[1]);
+    return;
+  }
+#endif
+  Store(p, v);
 }
 
 // The six quantities m, mI, J, mI^2, J^2, IJ at column c of one row.
@@ -92,16 +116,19 @@ MS_ALWAYS_INLINE void Products(const RowInputs& r, size_t c, V out[kQuantities])
   out[5] = i * j;
 }
 
-// Where column c's values of the six quantities lie in a row interleaved by groups of 8 columns
-// ([col / 8][quantity][col % 8]): the vertical passes then stream one array instead of six, and
-// their many rows never compete for the same cache sets.
+// Where column c's values of the six quantities lie in a row interleaved by groups of 16 columns
+// ([col / 16][quantity][col % 16]): the vertical passes then stream one array instead of six, and
+// their many rows never compete for the same cache sets. A group is one 16-float vector or two
+// 8-float ones.
+constexpr int kGroup = WindowedNcc::kColumnGroup;
+
 MS_ALWAYS_INLINE size_t Grouped(size_t c, int q, int per_column) {
-  return (c / kLanes * per_column + q) * kLanes + c % kLanes;
+  return (c / kGroup * per_column + q) * kGroup + c % kGroup;
 }
 
 // The size of a grouped row of n columns.
 size_t GroupedSize(size_t n, int per_column) {
-  return (n + kLanes - 1) / kLanes * per_column * kLanes;
+  return (n + kGroup - 1) / kGroup * per_column * kGroup;
 }
 
 // The vertical recursions' state, 4 values per quantity: Grouped(c, 4 q + k, 24).
@@ -116,16 +143,16 @@ struct PoleStates {
 template <typename V>
 MS_ALWAYS_INLINE PoleStates<V> LoadPoles(const float* state, size_t c, int q) {
   const float* s = state + Grouped(c, 4 * q, kStates);
-  return {Load<V>(s), Load<V>(s + kLanes), Load<V>(s + 2 * kLanes), Load<V>(s + 3 * kLanes)};
+  return {Load<V>(s), Load<V>(s + kGroup), Load<V>(s + 2 * kGroup), Load<V>(s + 3 * kGroup)};
 }
 
 template <typename V>
 MS_ALWAYS_INLINE void StorePoles(float* state, size_t c, int q, const PoleStates<V>& a) {
   float* s = state + Grouped(c, 4 * q, kStates);
   Store(s, a.r0);
-  Store(s + kLanes, a.i0);
-  Store(s + 2 * kLanes, a.r1);
-  Store(s + 3 * kLanes, a.i1);
+  Store(s + kGroup, a.i0);
+  Store(s + 2 * kGroup, a.r1);
+  Store(s + 3 * kGroup, a.i1);
 }
 
 // One step of the causal recursion down column c for every quantity (see recursive_gaussian.h):
@@ -145,8 +172,8 @@ MS_ALWAYS_INLINE void CausalColumns(const FloatGaussian& g, float* __restrict st
     const V a1r = g.pr[1] * r1 - g.pi[1] * i1 + xv[q] - g.tr[1] * tv[q];
     const V a1i = g.pr[1] * i1 + g.pi[1] * r1 - g.ti[1] * tv[q];
     StorePoles<V>(state, c, q, {a0r, a0i, a1r, a1i});
-    Store(out + Grouped(c, q, kQuantities),
-          g.wr[0] * a0r - g.wi[0] * a0i + g.wr[1] * a1r - g.wi[1] * a1i);
+    StoreStreaming(out + Grouped(c, q, kQuantities),
+                   g.wr[0] * a0r - g.wi[0] * a0i + g.wr[1] * a1r - g.wi[1] * a1i);
   }
 }
 
@@ -175,9 +202,16 @@ MS_ALWAYS_INLINE void AnticausalColumns(const FloatGaussian& g, float* __restric
 }
 
 // The causal step of a whole row: all six quantities at once, so each input row is read once.
-MS_VECTOR_CLONES void CausalRow(const FloatGaussian& g, float* __restrict state, RowInputs x,
-                                RowInputs x_tail, float* __restrict out, int n) {
+// Wide: the body's vectors (Lanes, or WideLanes where AVX-512 is); every column gets the same
+// arithmetic whatever vector or scalar code takes it.
+template <typename Wide>
+MS_ALWAYS_INLINE void CausalRowWith(const FloatGaussian& g, float* __restrict state, RowInputs x,
+                                    RowInputs x_tail, float* __restrict out, int n) {
   size_t c = 0;
+  constexpr size_t kWide = sizeof(Wide) / sizeof(float);
+  for (; c + kWide <= static_cast<size_t>(n); c += kWide) {
+    CausalColumns<Wide>(g, state, x, x_tail, out, c);
+  }
   for (; c + kLanes <= static_cast<size_t>(n); c += kLanes) {
     CausalColumns<Lanes>(g, state, x, x_tail, out, c);
   }
@@ -185,11 +219,16 @@ MS_VECTOR_CLONES void CausalRow(const FloatGaussian& g, float* __restrict state,
 }
 
 // The anticausal step of a whole row, all six quantities at once.
-MS_VECTOR_CLONES void AnticausalRow(const FloatGaussian& g, float* __restrict state,
-                                    RowInputs x_next, RowInputs x_tail,
-                                    const float* __restrict causal, float* __restrict out,
-                                    size_t out_stride, int n) {
+template <typename Wide>
+MS_ALWAYS_INLINE void AnticausalRowWith(const FloatGaussian& g, float* __restrict state,
+                                        RowInputs x_next, RowInputs x_tail,
+                                        const float* __restrict causal, float* __restrict out,
+                                        size_t out_stride, int n) {
   size_t c = 0;
+  constexpr size_t kWide = sizeof(Wide) / sizeof(float);
+  for (; c + kWide <= static_cast<size_t>(n); c += kWide) {
+    AnticausalColumns<Wide>(g, state, x_next, x_tail, causal, out, out_stride, c);
+  }
   for (; c + kLanes <= static_cast<size_t>(n); c += kLanes) {
     AnticausalColumns<Lanes>(g, state, x_next, x_tail, causal, out, out_stride, c);
   }
@@ -198,57 +237,111 @@ MS_VECTOR_CLONES void AnticausalRow(const FloatGaussian& g, float* __restrict st
   }
 }
 
-// The horizontal recursions of Q quantities over a block of 8 rows ([quantity][col][lane], the
-// quantities `plane` apart). Each step's result waits on the step before it, so the quantities
-// run side by side to keep the multiply-add units busy.
-template <int Q>
-MS_VECTOR_CLONES void HorizontalBlock(const FloatGaussian& g, const float* __restrict in,
-                                      float* __restrict out, size_t plane, int n) {
-  static_assert(kLanes * sizeof(float) == sizeof(Lanes));
+MS_VECTOR_CLONES void CausalRow(const FloatGaussian& g, float* __restrict state, RowInputs x,
+                                RowInputs x_tail, float* __restrict out, int n) {
+  CausalRowWith<Lanes>(g, state, x, x_tail, out, n);
+}
+
+MS_VECTOR_CLONES void AnticausalRow(const FloatGaussian& g, float* __restrict state,
+                                    RowInputs x_next, RowInputs x_tail,
+                                    const float* __restrict causal, float* __restrict out,
+                                    size_t out_stride, int n) {
+  AnticausalRowWith<Lanes>(g, state, x_next, x_tail, causal, out, out_stride, n);
+}
+
+#if MS_HAVE_AVX512_DISPATCH
+MS_AVX512 void CausalRowAvx512(const FloatGaussian& g, float* __restrict state, RowInputs x,
+                               RowInputs x_tail, float* __restrict out, int n) {
+  CausalRowWith<WideLanes>(g, state, x, x_tail, out, n);
+}
+
+MS_AVX512 void AnticausalRowAvx512(const FloatGaussian& g, float* __restrict state,
+                                   RowInputs x_next, RowInputs x_tail,
+                                   const float* __restrict causal, float* __restrict out,
+                                   size_t out_stride, int n) {
+  AnticausalRowWith<WideLanes>(g, state, x_next, x_tail, causal, out, out_stride, n);
+}
+#endif
+
+// A block of 8 rows transposed for the horizontal recursions: [quantity / 2][col][quantity %
+// 2][lane], two quantities' 8 rows side by side, so that one 16-float vector holds a pair.
+// `pair_plane` = 16 x the image's width.
+MS_ALWAYS_INLINE size_t BlockIndex(int q, size_t col, size_t pair_plane) {
+  return q / 2 * pair_plane + col * kWideLanes + q % 2 * kLanes;
+}
+
+// The horizontal recursions of Q vectors of a block ([col] kWideLanes apart, the Q at `offset`):
+// 8 rows of one quantity (V = Lanes) or of a pair (V = WideLanes). Each step's result waits on
+// the step before it, so the Q run side by side to keep the multiply-add units busy.
+template <typename V, int Q>
+MS_ALWAYS_INLINE void HorizontalBlockWith(const FloatGaussian& g, const float* __restrict in,
+                                          float* __restrict out, const size_t offset[Q], int n) {
   const float p0r = g.pr[0], p0i = g.pi[0], p1r = g.pr[1], p1i = g.pi[1];
   const float t0r = g.tr[0], t0i = g.ti[0], t1r = g.tr[1], t1i = g.ti[1];
   const float w0r = g.wr[0], w0i = g.wi[0], w1r = g.wr[1], w1i = g.wi[1];
   const int r = g.radius;
-  Lanes s0r[Q] = {}, s0i[Q] = {}, s1r[Q] = {}, s1i[Q] = {};
+  constexpr size_t kStep = kWideLanes;
+  V s0r[Q] = {}, s0i[Q] = {}, s1r[Q] = {}, s1i[Q] = {};
   for (int col = 0; col < n; ++col) {
 #pragma GCC unroll 4
     for (int q = 0; q < Q; ++q) {
-      const float* x_in = in + q * plane;
-      const Lanes x = LoadLanes(x_in + col * kLanes);
-      const Lanes t = col > r ? LoadLanes(x_in + (col - r - 1) * kLanes) : Lanes{};
-      const Lanes a0r = p0r * s0r[q] - p0i * s0i[q] + x - t0r * t;
-      const Lanes a0i = p0r * s0i[q] + p0i * s0r[q] - t0i * t;
-      const Lanes a1r = p1r * s1r[q] - p1i * s1i[q] + x - t1r * t;
-      const Lanes a1i = p1r * s1i[q] + p1i * s1r[q] - t1i * t;
+      const float* x_in = in + offset[q];
+      const V x = Load<V>(x_in + col * kStep);
+      const V t = col > r ? Load<V>(x_in + (col - r - 1) * kStep) : V{};
+      const V a0r = p0r * s0r[q] - p0i * s0i[q] + x - t0r * t;
+      const V a0i = p0r * s0i[q] + p0i * s0r[q] - t0i * t;
+      const V a1r = p1r * s1r[q] - p1i * s1i[q] + x - t1r * t;
+      const V a1i = p1r * s1i[q] + p1i * s1r[q] - t1i * t;
       s0r[q] = a0r;
       s0i[q] = a0i;
       s1r[q] = a1r;
       s1i[q] = a1i;
-      StoreLanes(out + q * plane + col * kLanes, w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i);
+      Store(out + offset[q] + col * kStep, w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i);
     }
   }
 #pragma GCC unroll 4
-  for (int q = 0; q < Q; ++q) s0r[q] = s0i[q] = s1r[q] = s1i[q] = Lanes{};
+  for (int q = 0; q < Q; ++q) s0r[q] = s0i[q] = s1r[q] = s1i[q] = V{};
   for (int col = n - 1; col >= 0; --col) {
 #pragma GCC unroll 4
     for (int q = 0; q < Q; ++q) {
-      const float* x_in = in + q * plane;
-      const Lanes x = col + 1 < n ? LoadLanes(x_in + (col + 1) * kLanes) : Lanes{};
-      const Lanes t = col + r + 1 < n ? LoadLanes(x_in + (col + r + 1) * kLanes) : Lanes{};
-      const Lanes u0 = s0r[q] + x, u1 = s1r[q] + x;
-      const Lanes a0r = p0r * u0 - p0i * s0i[q] - t0r * t;
-      const Lanes a0i = p0r * s0i[q] + p0i * u0 - t0i * t;
-      const Lanes a1r = p1r * u1 - p1i * s1i[q] - t1r * t;
-      const Lanes a1i = p1r * s1i[q] + p1i * u1 - t1i * t;
+      const float* x_in = in + offset[q];
+      const V x = col + 1 < n ? Load<V>(x_in + (col + 1) * kStep) : V{};
+      const V t = col + r + 1 < n ? Load<V>(x_in + (col + r + 1) * kStep) : V{};
+      const V u0 = s0r[q] + x, u1 = s1r[q] + x;
+      const V a0r = p0r * u0 - p0i * s0i[q] - t0r * t;
+      const V a0i = p0r * s0i[q] + p0i * u0 - t0i * t;
+      const V a1r = p1r * u1 - p1i * s1i[q] - t1r * t;
+      const V a1i = p1r * s1i[q] + p1i * u1 - t1i * t;
       s0r[q] = a0r;
       s0i[q] = a0i;
       s1r[q] = a1r;
       s1i[q] = a1i;
-      float* y = out + q * plane + col * kLanes;
-      StoreLanes(y, LoadLanes(y) + w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i);
+      float* y = out + offset[q] + col * kStep;
+      Store(y, Load<V>(y) + w0r * a0r - w0i * a0i + w1r * a1r - w1i * a1i);
     }
   }
 }
+
+// The six quantities' horizontal recursions over a block, three at a time (measured: two and
+// six are slower).
+MS_VECTOR_CLONES void HorizontalBlock(const FloatGaussian& g, const float* __restrict in,
+                                      float* __restrict out, size_t pair_plane, int n) {
+  for (int first = 0; first < kQuantities; first += 3) {
+    const size_t offset[3] = {BlockIndex(first, 0, pair_plane),
+                              BlockIndex(first + 1, 0, pair_plane),
+                              BlockIndex(first + 2, 0, pair_plane)};
+    HorizontalBlockWith<Lanes, 3>(g, in, out, offset, n);
+  }
+}
+
+#if MS_HAVE_AVX512_DISPATCH
+// The same with the three pairs side by side in 16-float vectors.
+MS_AVX512 void HorizontalBlockAvx512(const FloatGaussian& g, const float* __restrict in,
+                                     float* __restrict out, size_t pair_plane, int n) {
+  const size_t offset[3] = {0, pair_plane, 2 * pair_plane};
+  HorizontalBlockWith<WideLanes, 3>(g, in, out, offset, n);
+}
+#endif
 
 // Lane-wise comparison results (all bits set where true), and shuffle indices.
 typedef int32_t LaneMask __attribute__((vector_size(32)));
@@ -278,23 +371,24 @@ MS_ALWAYS_INLINE void Transpose8x8(Lanes r[kLanes]) {
 }
 
 // WeightedNcc's formula for the 8 rows of one column of a block, from the six sums at `s`
-// ([quantity][col][lane], `plane` apart): the NCC, and where it is defined (all bits set) unless
-// the pixel is masked out.
+// (BlockIndex(0, col)): the NCC, and where it is defined (all bits set) unless the pixel is
+// masked out.
 struct ColumnNcc {
   Lanes value;
   LaneMask ok;
 };
 
-MS_ALWAYS_INLINE ColumnNcc NccOfColumn(const float* __restrict s, size_t plane, float min_variance,
-                                       float min_weight) {
+MS_ALWAYS_INLINE ColumnNcc NccOfColumn(const float* __restrict s, size_t pair_plane,
+                                       float min_variance, float min_weight) {
   const float floor = static_cast<float>(kVarianceFloor);
-  const Lanes w = LoadLanes(s);
+  const auto sum = [&](int q) { return LoadLanes(s + BlockIndex(q, 0, pair_plane)); };
+  const Lanes w = sum(0);
   const Lanes inv_w = 1.0f / w;
-  const Lanes mean_i = LoadLanes(s + plane) * inv_w;
-  const Lanes mean_j = LoadLanes(s + 2 * plane) * inv_w;
-  const Lanes ii = LoadLanes(s + 3 * plane) * inv_w;
-  const Lanes jj = LoadLanes(s + 4 * plane) * inv_w;
-  Lanes ij = LoadLanes(s + 5 * plane) * inv_w;
+  const Lanes mean_i = sum(1) * inv_w;
+  const Lanes mean_j = sum(2) * inv_w;
+  const Lanes ii = sum(3) * inv_w;
+  const Lanes jj = sum(4) * inv_w;
+  Lanes ij = sum(5) * inv_w;
   // Rounded before ij - mean_i mean_j, as the kernel has always done: which product a fused
   // multiply-add takes moves NCCs by an ulp, and with them tile winners and whole runs.
   __asm__("" : "+m"(ij));
@@ -311,10 +405,10 @@ MS_ALWAYS_INLINE ColumnNcc NccOfColumn(const float* __restrict s, size_t plane, 
   return {value, ok};
 }
 
-// NCC of up to 8 rows of a block from their six sums ([quantity][col][lane]): WeightedNcc's
-// formula, 8 rows at a time; 8 columns at a time are turned back into rows ([lane][col]) to be
-// masked and stored (rows `stride` apart). Returns the number of defined pixels.
-MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
+// NCC of up to 8 rows of a block from their six sums (BlockIndex): WeightedNcc's formula, 8 rows
+// at a time; 8 columns at a time are turned back into rows ([lane][col]) to be masked and stored
+// (rows `stride` apart). Returns the number of defined pixels.
+MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t pair_plane,
                                   const float* __restrict mask, float* __restrict ncc, int width,
                                   size_t stride, int rows, double min_texture_variance,
                                   double min_window_weight) {
@@ -326,7 +420,7 @@ MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
   for (; col + kLanes <= width; col += kLanes) {
     Lanes value[kLanes], ok[kLanes];  // [column][row], then [row][column]
     for (int k = 0; k < kLanes; ++k) {
-      const ColumnNcc c = NccOfColumn(sums + static_cast<size_t>(col + k) * kLanes, plane,
+      const ColumnNcc c = NccOfColumn(sums + static_cast<size_t>(col + k) * kWideLanes, pair_plane,
                                       min_variance, min_weight);
       value[k] = c.value;
       ok[k] = __builtin_bit_cast(Lanes, c.ok);
@@ -341,8 +435,8 @@ MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
     }
   }
   for (; col < width; ++col) {
-    const ColumnNcc c =
-        NccOfColumn(sums + static_cast<size_t>(col) * kLanes, plane, min_variance, min_weight);
+    const ColumnNcc c = NccOfColumn(sums + static_cast<size_t>(col) * kWideLanes, pair_plane,
+                                    min_variance, min_weight);
     for (int lane = 0; lane < rows; ++lane) {
       const size_t index = static_cast<size_t>(lane) * stride + col;
       const bool valid = mask[index] > 0 && c.ok[lane];
@@ -353,8 +447,8 @@ MS_VECTOR_CLONES int64_t NccBlock(const float* __restrict sums, size_t plane,
   return defined;
 }
 
-// Eight rows of one quantity ([lane][col], `stride` apart) into a block ([col][lane]), 8 x 8
-// tiles at a time.
+// Eight rows of one quantity ([lane][col], `stride` apart) into its place in a block ([col][lane],
+// columns kWideLanes apart), 8 x 8 tiles at a time.
 MS_VECTOR_CLONES void RowsToBlock(const float* __restrict rows, size_t stride,
                                   float* __restrict block, int n) {
   int c = 0;
@@ -362,27 +456,38 @@ MS_VECTOR_CLONES void RowsToBlock(const float* __restrict rows, size_t stride,
     Lanes r[kLanes];
     for (int l = 0; l < kLanes; ++l) r[l] = LoadLanes(rows + l * stride + c);
     Transpose8x8(r);
-    for (int k = 0; k < kLanes; ++k) StoreLanes(block + (c + k) * kLanes, r[k]);
+    for (int k = 0; k < kLanes; ++k) StoreLanes(block + (c + k) * kWideLanes, r[k]);
   }
   for (; c < n; ++c) {
-    for (int l = 0; l < kLanes; ++l) block[c * kLanes + l] = rows[l * stride + c];
+    for (int l = 0; l < kLanes; ++l) block[c * kWideLanes + l] = rows[l * stride + c];
   }
 }
 
 }  // namespace
 
+bool WindowedNcc::MachineHasAvx512() {
+#if MS_HAVE_AVX512_DISPATCH
+  static const bool has = __builtin_cpu_supports("x86-64-v4");
+  return has;
+#else
+  return false;
+#endif
+}
+
 WindowedNcc::WindowedNcc(int width, int height, double sigma_px, double min_texture_variance,
-                         double min_window_weight)
+                         double min_window_weight, Vectors vectors)
     : width_(width),
       height_(height),
       gaussian_(RecursiveGaussian::Make(sigma_px)),
       min_texture_variance_(min_texture_variance),
-      min_window_weight_(min_window_weight) {
+      min_window_weight_(min_window_weight),
+      avx512_(vectors == Vectors::kWidest && MachineHasAvx512()) {
   MS_CHECK(width > 0 && height > 0) << "bad NCC image size";
   const size_t n = static_cast<size_t>(width) * height;
   i_.resize(n);
   ii_.resize(n);
   causal_.resize(GroupedSize(width, kQuantities) * height);
+  MS_CHECK(reinterpret_cast<uintptr_t>(causal_.data()) % 64 == 0) << "NCC buffer not aligned";
   state_.resize(GroupedSize(width, kStates));
   zeros_.assign(width, 0.0f);
   block_.resize(static_cast<size_t>(kQuantities) * width * kLanes);
@@ -413,9 +518,9 @@ RowInputs WindowedNcc::Inputs(int row) const {
   return {mask_ + offset, i_.data() + offset, ii_.data() + offset, J_ + offset};
 }
 
-// The rectangle around the valid pixels, widened to whole blocks of 8 rows and groups of 8
-// columns (or the image's edge), so that every value computed in it is computed by the same
-// vector or scalar code as over the whole image.
+// The rectangle around the valid pixels, widened to whole blocks of 8 rows, to a whole group of
+// 16 columns on the left and 8 on the right (or the image's edge), so that every value computed
+// in it gets the same arithmetic as over the whole image.
 WindowedNcc::Window WindowedNcc::ValidWindow() const {
   const size_t w = width_;
   const auto row_of = [&](int row) { return mask_ + row * w; };
@@ -440,7 +545,7 @@ WindowedNcc::Window WindowedNcc::ValidWindow() const {
   Window window;
   window.first_row = first_row / kLanes * kLanes;
   window.last_row = std::min(height_ - 1, last_row / kLanes * kLanes + kLanes - 1);
-  window.first_col = first_col / kLanes * kLanes;
+  window.first_col = first_col / kGroup * kGroup;
   window.cols =
       std::min(width_ - 1, last_col / kLanes * kLanes + kLanes - 1) - window.first_col + 1;
   return window;
@@ -474,8 +579,16 @@ int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
 
   // Pass 1: vertical causal, top to bottom.
   std::fill(state_.begin(), state_.end(), 0.0f);
+  auto causal_row = CausalRow;
+  auto anticausal_row = AnticausalRow;
+#if MS_HAVE_AVX512_DISPATCH
+  if (avx512_) {
+    causal_row = CausalRowAvx512;
+    anticausal_row = AnticausalRowAvx512;
+  }
+#endif
   for (int row = window_.first_row; row <= window_.last_row; ++row) {
-    CausalRow(g, state, Inputs(row), Inputs(row - r - 1), causal + row * row_size, n);
+    causal_row(g, state, Inputs(row), Inputs(row - r - 1), causal + row * row_size, n);
   }
 
   // Pass 2: vertical anticausal, bottom to top; horizontal and NCC every 8 rows.
@@ -483,8 +596,8 @@ int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
   int64_t defined = 0;
   for (int row = window_.last_row; row >= window_.first_row; --row) {
     const int lane = row % kLanes;
-    AnticausalRow(g, state, Inputs(row + 1), Inputs(row + r + 1), causal + row * row_size,
-                  rows_.data() + RowsOffset(0, lane) + window_.first_col, RowsOffset(1, 0), n);
+    anticausal_row(g, state, Inputs(row + 1), Inputs(row + r + 1), causal + row * row_size,
+                   rows_.data() + RowsOffset(0, lane) + window_.first_col, RowsOffset(1, 0), n);
     if (lane == 0) FinishBlock(row, ncc, &defined);
   }
   return defined;
@@ -493,18 +606,18 @@ int64_t WindowedNcc::Run(const float* J, const float* mask, float* ncc) {
 void WindowedNcc::FinishBlock(int first_row, float* ncc, int64_t* defined) {
   const int w = width_, n = window_.cols;
   const int rows = std::min(kLanes, height_ - first_row);
-  const size_t plane = static_cast<size_t>(w) * kLanes;
+  const size_t pair_plane = static_cast<size_t>(w) * kWideLanes;
   for (int q = 0; q < kQuantities; ++q) {
-    RowsToBlock(rows_.data() + RowsOffset(q, 0) + window_.first_col, w, block_.data() + q * plane,
-                n);
+    RowsToBlock(rows_.data() + RowsOffset(q, 0) + window_.first_col, w,
+                block_.data() + BlockIndex(q, 0, pair_plane), n);
   }
-  constexpr int kSideBySide = 3;  // measured: 2 and 6 are slower
-  for (int q = 0; q < kQuantities; q += kSideBySide) {
-    HorizontalBlock<kSideBySide>(ToFloat(gaussian_), block_.data() + q * plane,
-                                 sums_.data() + q * plane, plane, n);
-  }
+  auto horizontal = HorizontalBlock;
+#if MS_HAVE_AVX512_DISPATCH
+  if (avx512_) horizontal = HorizontalBlockAvx512;
+#endif
+  horizontal(ToFloat(gaussian_), block_.data(), sums_.data(), pair_plane, n);
   const size_t offset = static_cast<size_t>(first_row) * w + window_.first_col;
-  *defined += NccBlock(sums_.data(), plane, mask_ + offset, ncc + offset, n, w, rows,
+  *defined += NccBlock(sums_.data(), pair_plane, mask_ + offset, ncc + offset, n, w, rows,
                        min_texture_variance_, min_window_weight_);
 }
 

@@ -4,6 +4,7 @@
 //   1. top to bottom: the vertical causal recursion of the products, stored;
 //   2. bottom to top: the vertical anticausal recursion, added to pass 1, and every 8 rows the
 //      horizontal recursions (8 rows in the SIMD lanes) and the NCC of those rows.
+// On a machine with AVX-512 the passes take 16 floats at a time (the same values bit for bit).
 // A workspace for one image size; reuse it across slabs (one per thread).
 #pragma once
 
@@ -20,8 +21,11 @@ struct RowInputs;  // windowed_ncc.cc
 
 class WindowedNcc {
  public:
+  // kWidest: the widest vectors the machine has; k8Floats: AVX2's width everywhere (for tests).
+  enum class Vectors { kWidest, k8Floats };
   WindowedNcc(int width, int height, double sigma_px, double min_texture_variance,
-              double min_window_weight);
+              double min_window_weight, Vectors vectors = Vectors::kWidest);
+  static bool MachineHasAvx512();
 
   // I: C's image (CV_32F, width x height).
   void SetCamera(const cv::Mat& image);
@@ -31,8 +35,9 @@ class WindowedNcc {
   // around the valid pixels only, with the same results as over the whole image.
   int64_t Run(const float* J, const float* mask, float* ncc);
 
-  static constexpr int kQuantities = 6;  // m, mI, J, mI^2, J^2, IJ
-  static constexpr int kLanes = 8;       // rows per horizontal block
+  static constexpr int kQuantities = 6;    // m, mI, J, mI^2, J^2, IJ
+  static constexpr int kLanes = 8;         // rows per block
+  static constexpr int kColumnGroup = 16;  // columns interleaved in the vertical passes' rows
 
  private:
   // Where the passes run: whole blocks of rows and groups of columns (cols 0: no valid pixel).
@@ -47,16 +52,18 @@ class WindowedNcc {
   int width_, height_;
   RecursiveGaussian gaussian_;
   double min_texture_variance_, min_window_weight_;
+  bool avx512_;
   const float* J_ = nullptr;
   const float* mask_ = nullptr;
   Window window_;
   LargeBuffer<float> i_, ii_;  // I - 0.5 and its square
-  LargeBuffer<float> causal_;  // pass 1: [row][col / 8][quantity][col % 8]
-  std::vector<float> state_;   // vertical recursions: [col / 8][quantity][4][col % 8]
+  LargeBuffer<float> causal_;  // pass 1: [row][col / 16][quantity][col % 16]
+  std::vector<float> state_;   // vertical recursions: [col / 16][quantity][4][col % 16]
   std::vector<float> zeros_;   // one row
   // The 8 rows of a block as pass 2 makes them ([quantity][lane][col], each quantity's rows 16
   // floats further on than a plain array, so that the six never share cache sets), then
-  // transposed for the horizontal recursions ([quantity][col][lane]) and their sums.
+  // transposed for the horizontal recursions ([quantity / 2][col][quantity % 2][lane]) and their
+  // sums.
   std::vector<float> rows_, block_, sums_;
   size_t RowsOffset(int q, int lane) const {
     return q * (static_cast<size_t>(kLanes) * width_ + 16) + static_cast<size_t>(lane) * width_;
