@@ -14,12 +14,11 @@
 
 namespace ms {
 
-// One row of the images behind the six quantities: m, I m (I is C's image minus 0.5, so I m is
-// I where valid), I^2, J (already 0 where m is). All zeros outside the image.
+// One row of the images behind the six quantities: m, I (C's image minus 0.5) and J (already 0
+// where m is). All zeros outside the image.
 struct RowInputs {
   const float* __restrict m;
   const float* __restrict i;
-  const float* __restrict ii;
   const float* __restrict j;
 };
 
@@ -111,7 +110,7 @@ MS_ALWAYS_INLINE void Products(const RowInputs& r, size_t c, V out[kQuantities])
   out[0] = m;
   out[1] = m * i;
   out[2] = j;
-  out[3] = m * Load<V>(r.ii + c);
+  out[3] = m * (i * i);  // I^2 taken here rather than stored: one stream less from memory
   out[4] = j * j;
   out[5] = i * j;
 }
@@ -485,7 +484,6 @@ WindowedNcc::WindowedNcc(int width, int height, double sigma_px, double min_text
   MS_CHECK(width > 0 && height > 0) << "bad NCC image size";
   const size_t n = static_cast<size_t>(width) * height;
   i_.resize(n);
-  ii_.resize(n);
   causal_.resize(GroupedSize(width, kQuantities) * height);
   MS_CHECK(reinterpret_cast<uintptr_t>(causal_.data()) % 64 == 0) << "NCC buffer not aligned";
   state_.resize(GroupedSize(width, kStates));
@@ -501,21 +499,17 @@ void WindowedNcc::SetCamera(const cv::Mat& image) {
   for (int row = 0; row < height_; ++row) {
     const float* in = image.ptr<float>(row);
     float* i = i_.data() + static_cast<size_t>(row) * width_;
-    float* ii = ii_.data() + static_cast<size_t>(row) * width_;
-    for (int c = 0; c < width_; ++c) {
-      i[c] = in[c] - 0.5f;
-      ii[c] = i[c] * i[c];
-    }
+    for (int c = 0; c < width_; ++c) i[c] = in[c] - 0.5f;
   }
 }
 
 RowInputs WindowedNcc::Inputs(int row) const {
   if (row < 0 || row >= height_) {
     const float* zeros = zeros_.data() + window_.first_col;
-    return {zeros, zeros, zeros, zeros};
+    return {zeros, zeros, zeros};
   }
   const size_t offset = static_cast<size_t>(row) * width_ + window_.first_col;
-  return {mask_ + offset, i_.data() + offset, ii_.data() + offset, J_ + offset};
+  return {mask_ + offset, i_.data() + offset, J_ + offset};
 }
 
 // The rectangle around the valid pixels, widened to whole blocks of 8 rows, to a whole group of

@@ -56,7 +56,7 @@ class WindowedNcc {
   const float* J_ = nullptr;
   const float* mask_ = nullptr;
   Window window_;
-  LargeBuffer<float> i_, ii_;  // I - 0.5 and its square
+  LargeBuffer<float> i_;       // I - 0.5
   LargeBuffer<float> causal_;  // pass 1: [row][col / 16][quantity][col % 16]
   std::vector<float> state_;   // vertical recursions: [col / 16][quantity][4][col % 16]
   std::vector<float> zeros_;   // one row
