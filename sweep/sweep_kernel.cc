@@ -260,6 +260,21 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
     return supporters >=
            (rule.strict ? rule.required_matches : std::min(rule.required_matches, defined));
   };
+  // Most rows of a tile hold no winner: their maxima tell (no pixel above both bars). They are
+  // taken first, a whole row of the image at a time: tile by tile, each row's piece of a large
+  // map lies on a page of its own and waits on memory.
+  thread_local std::vector<float> row_maxima;  // [neighbour][row][tile column]
+  const size_t per_map = static_cast<size_t>(tiles.height) * tiles.tiles_x;
+  row_maxima.resize(per_map * num_neighbours);
+  for (int j = 0; j < num_neighbours; ++j) {
+    for (int row = 0; row < tiles.height; ++row) {
+      const float* values = ncc[j] + static_cast<size_t>(row) * tiles.width;
+      float* maxima = row_maxima.data() + j * per_map + static_cast<size_t>(row) * tiles.tiles_x;
+      for (int tx = 0; tx < tiles.tiles_x; ++tx) {
+        maxima[tx] = RowMaximum(values + tiles.XBegin(tx), tiles.XBegin(tx + 1) - tiles.XBegin(tx));
+      }
+    }
+  }
   for (int ty = 0; ty < tiles.tiles_y; ++ty) {
     for (int tx = 0; tx < tiles.tiles_x; ++tx) {
       TileWinner& tile = (*best)[ty * tiles.tiles_x + tx];
@@ -267,10 +282,8 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
         for (int row = tiles.YBegin(ty); row < tiles.YBegin(ty + 1); ++row) {
           const size_t row_offset = static_cast<size_t>(row) * tiles.width;
           const float* values = ncc[j] + row_offset;
-          // Most rows hold no winner: one vectorised pass tells (no pixel above both bars).
           const float bar = std::max(rule.threshold, tile.ncc);
-          if (RowMaximum(values + tiles.XBegin(tx), tiles.XBegin(tx + 1) - tiles.XBegin(tx)) <=
-              bar) {
+          if (row_maxima[j * per_map + static_cast<size_t>(row) * tiles.tiles_x + tx] <= bar) {
             continue;
           }
           for (int col = tiles.XBegin(tx); col < tiles.XBegin(tx + 1); ++col) {
