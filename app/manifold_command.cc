@@ -39,14 +39,18 @@ void RunManifold(const ManifoldCommandOptions& options) {
   DelaunayManifold manifold(ManifoldCamerasFromScene(scene), options.manifold);
   const BuildStats stats = manifold.Build(RayPointsFromScene(scene));
   SurfaceInfo info;
-  const Mesh extracted = manifold.ExtractSurface(&info);
+  Mesh extracted = manifold.ExtractSurface(&info);
   if (extracted.faces.empty()) {
     throw InputError(options.input +
                      ": the manifold is empty: no cell reached the free-space "
                      "threshold (--manifold.free-threshold " +
                      std::to_string(options.manifold.free_threshold) + ") or none could grow");
   }
-  const OutputMeshes output = MakeOutputMeshes(extracted, info, options.manifold.float_cleanup);
+  const OutputMeshes output =
+      MakeOutputMeshes(std::move(extracted), info, options.manifold.float_cleanup, [&manifold] {
+        SurfaceInfo again;
+        return manifold.ExtractSurface(&again);
+      });
   const Mesh& mesh = output.closed;
   const double total = timer.Seconds();
   MeshWriteOptions write_options;

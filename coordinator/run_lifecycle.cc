@@ -295,9 +295,15 @@ void RunLifecycle::Extract() {
 
 OutputMeshes RunLifecycle::WriteOutputMeshes(const std::string& name, bool with_surface,
                                              IterationStats* row) {
-  // The float cleanup is the coordinator's peak of memory: it starts from what the heap holds.
+  // The float cleanup is the coordinator's peak of memory: it starts from what the heap holds,
+  // and takes mesh_ (not needed again until the next Extract) rather than a copy.
   ReleaseFreeMemory();
-  OutputMeshes out = MakeOutputMeshes(mesh_, surface_info_, options_.manifold.float_cleanup);
+  OutputMeshes out =
+      MakeOutputMeshes(std::move(mesh_), surface_info_, options_.manifold.float_cleanup, [this] {
+        SurfaceInfo info;
+        return manifold_->ExtractSurface(&info);
+      });
+  mesh_ = Mesh();
   ReleaseFreeMemory();  // the cleaner's structures
   WriteMesh(out.closed, Path(name + ".ply"));
   if (with_surface) WriteMesh(out.surface, Path(name + "_surface.ply"));

@@ -6,13 +6,14 @@
 
 namespace ms {
 
-OutputMeshes MakeOutputMeshes(const Mesh& surface, const SurfaceInfo& info, bool float_cleanup) {
+OutputMeshes MakeOutputMeshes(Mesh surface, const SurfaceInfo& info, bool float_cleanup,
+                              const std::function<Mesh()>& extract_again) {
   MS_CHECK(info.vertex_ids.size() == surface.vertices.size()) << "SurfaceInfo of another mesh";
   OutputMeshes out;
-  out.closed = surface;
+  out.closed = std::move(surface);
   std::vector<uint8_t> steiner = SteinerFlags(info);
-  if (float_cleanup && !surface.faces.empty()) {
-    out.cleanup = CleanForFloatingPoint(&out.closed, &steiner, {}, &surface);
+  if (float_cleanup && !out.closed.faces.empty()) {
+    out.cleanup = CleanForFloatingPoint(&out.closed, &steiner, {}, extract_again);
     const FloatCleanupStats& c = out.cleanup;
     if (c.problems_before > 0) {
       spdlog::log(c.problems_after > 0 ? spdlog::level::warn : spdlog::level::info,

@@ -4,6 +4,8 @@
 // 2-manifold with boundary).
 #pragma once
 
+#include <functional>
+
 #include "manifold/delaunay_manifold.h"
 #include "mesh/float_cleanup.h"
 #include "mesh/mesh.h"
@@ -16,7 +18,9 @@ struct OutputMeshes {
   FloatCleanupStats cleanup;  // all zero when not cleaned
 };
 
-// `surface` and `info` from DelaunayManifold::ExtractSurface.
-OutputMeshes MakeOutputMeshes(const Mesh& surface, const SurfaceInfo& info, bool float_cleanup);
+// `surface` and `info` from DelaunayManifold::ExtractSurface; `extract_again` makes `surface`
+// again, for a cleanup that must be undone (so that no copy of it is held meanwhile).
+OutputMeshes MakeOutputMeshes(Mesh surface, const SurfaceInfo& info, bool float_cleanup,
+                              const std::function<Mesh()>& extract_again);
 
 }  // namespace ms

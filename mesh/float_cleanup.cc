@@ -861,7 +861,8 @@ ProblemPairs CheckAfterRound(const Mesh& mesh, const Cleaner& cleaner, const Pro
 }  // namespace
 
 FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffold,
-                                        const FloatCleanupOptions& options, const Mesh* unchanged) {
+                                        const FloatCleanupOptions& options,
+                                        const std::function<Mesh()>& original) {
   Timer timer;
   options.check.Check();
   std::vector<uint8_t> no_scaffold;
@@ -889,18 +890,12 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
   const double max_collapse = options.max_collapse_fraction * report.diagonal;
   // Splits help only in numbers, and clusters of near vertices can defeat the collapses: a
   // cleanup that ends with no fewer problems leaves the mesh as it was.
-  MS_CHECK(unchanged == nullptr || (unchanged->vertices.size() == mesh->vertices.size() &&
-                                    unchanged->faces.size() == mesh->faces.size()))
-      << "the unchanged copy is of another mesh";
   int64_t problems_left = stats.problems_before;
   // Only a cleanup that ran can need undoing.
   Mesh own_copy;
   std::vector<uint8_t> original_scaffold;
   if (problems_left > 0) {
-    if (unchanged == nullptr) {
-      own_copy = *mesh;
-      unchanged = &own_copy;
-    }
+    if (!original) own_copy = *mesh;
     original_scaffold = *scaffold;
     // The whole check's boxes are gone: the cleaner starts from what the heap holds (at 10^6
     // vertices the cleanup is the coordinator's peak of memory).
@@ -927,7 +922,13 @@ FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffo
   }
   stats.problems_after = problems_left;
   if (stats.problems_after > 0 && stats.problems_after >= stats.problems_before) {
-    *mesh = *unchanged;
+    if (original) {
+      *mesh = original();
+      MS_CHECK(mesh->vertices.size() == original_scaffold.size())
+          << "float cleanup: `original` made another mesh";
+    } else {
+      *mesh = std::move(own_copy);
+    }
     *scaffold = original_scaffold;
     stats.problems_after = stats.problems_before;
     stats.collapses = stats.splits = stats.moves = 0;

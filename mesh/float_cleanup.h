@@ -25,6 +25,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "mesh/float_robustness.h"
@@ -64,11 +65,12 @@ struct FloatCleanupStats {
 // `scaffold`, when given, holds one flag per vertex (1: scaffolding such as a Steiner point,
 // whose faces are not the surface proper). A collapse keeps a non-scaffold vertex over a
 // scaffold one; a split vertex is scaffold when either end of its edge is. The mesh is
-// compacted (unreferenced vertices removed) and `scaffold` renumbered with it. `unchanged`,
-// when given, is a copy of *mesh the caller holds anyway: a cleanup that fails restores the
-// mesh from it instead of from a copy of its own (48 MB at 10^6 vertices, at the peak).
+// compacted (unreferenced vertices removed) and `scaffold` renumbered with it. `original`,
+// when given, makes *mesh again as it was (a run extracts it from its manifold again): a
+// cleanup that fails restores the mesh from it instead of from a copy of its own (48 MB at
+// 10^6 vertices, at the coordinator's peak of memory).
 FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffold = nullptr,
                                         const FloatCleanupOptions& options = {},
-                                        const Mesh* unchanged = nullptr);
+                                        const std::function<Mesh()>& original = nullptr);
 
 }  // namespace ms

@@ -137,9 +137,10 @@ TEST(FloatCleanup, WhatCannotBeCleanedIsLeftValidAndReported) {
   EXPECT_EQ(stats.collapses + stats.splits, 0);
   EXPECT_EQ(mesh.vertices, original.vertices);
   EXPECT_EQ(mesh.faces, original.faces);
-  // The same from the caller's copy of the mesh (the cleanup then keeps none of its own).
+  // The same restored by the caller (the cleanup then keeps no copy of its own).
   Mesh again = original;
-  const FloatCleanupStats from_copy = CleanForFloatingPoint(&again, nullptr, {}, &original);
+  const FloatCleanupStats from_copy =
+      CleanForFloatingPoint(&again, nullptr, {}, [&original] { return original; });
   EXPECT_EQ(from_copy.problems_after, stats.problems_before);
   EXPECT_EQ(again.vertices, original.vertices);
   EXPECT_EQ(again.faces, original.faces);

@@ -414,14 +414,13 @@ void MeasureFaces(const Mesh& mesh, const std::vector<uint8_t>& usable, FloatRob
 }
 
 // A box for CGAL's box search in floats, rounded outward from the double box it stands for:
-// 28 bytes against 64 for a double box with an id and an index. The search holds two copies
-// (CGAL's self-intersection copies the boxes), which at 2·10^6 faces were the float check's
-// peak of memory, and the coordinator's with it. It finds a superset of the double boxes'
-// pairs; the exact tests after it decide.
+// 28 bytes against 64 for a double box with an id and an index. It finds a superset of the
+// double boxes' pairs; the exact tests after it decide.
 class SearchBox {
  public:
   using NT = float;
   using ID = std::size_t;
+  SearchBox() = default;
   SearchBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int64_t index)
       : index_(static_cast<uint32_t>(index)) {
     MS_CHECK(index >= 0 && index <= UINT32_MAX) << "box index " << index;
@@ -437,43 +436,84 @@ class SearchBox {
   int64_t info() const { return index_; }
 
  private:
-  float lo_[3], hi_[3];
-  uint32_t index_;
+  float lo_[3] = {}, hi_[3] = {};
+  uint32_t index_ = 0;
 };
 
-// Calls callback(x, y) for every pair of intersecting boxes, or with `focus` (flags indexed by
-// the boxes' info) only for pairs with a flagged box; a pair of two flagged boxes may come twice
-// (callers deduplicate).
-template <typename Box, typename Callback>
-void ForIntersectingBoxes(std::vector<Box>& boxes, const std::vector<uint8_t>& focus,
-                          Callback&& callback) {
-  if (focus.empty()) {
-    CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), callback);
-    return;
+// Calls callback(x, y) for every pair of intersecting boxes among make_box(i, &box) for i in
+// [0, count) (false: no box for i), or with `focus` (flags indexed by the boxes' info) only for
+// pairs with a flagged box; a pair of two flagged boxes may come twice (callers deduplicate).
+//
+// The search runs slab by slab along x (about boxes_per_slab boxes each), each slab with only
+// the boxes that reach into it: CGAL copies the boxes it is given (box_self_intersection_d),
+// and at 2·10^6 faces two copies of all of them were the float check's peak of memory, and the
+// coordinator's with it. A pair is reported by the slab that holds the larger of its two boxes'
+// lower x (both boxes reach into it), so once, as by one search over all the boxes.
+template <typename MakeBox, typename Callback>
+void ForIntersectingBoxes(int64_t count, MakeBox&& make_box, const std::vector<uint8_t>& focus,
+                          int64_t boxes_per_slab, Callback&& callback) {
+  using Box = SearchBox;
+  // The slabs' bounds: quantiles of the boxes' lower x.
+  std::vector<float> bounds;
+  {
+    std::vector<float> lower;
+    Box box;
+    for (int64_t i = 0; i < count; ++i) {
+      if (make_box(i, &box)) lower.push_back(box.min_coord(0));
+    }
+    const int64_t n = static_cast<int64_t>(lower.size());
+    const int64_t slabs = std::max<int64_t>(1, n / boxes_per_slab);
+    for (int64_t k = 1; k < slabs; ++k) {
+      auto at = lower.begin() + k * n / slabs;
+      std::nth_element(lower.begin(), at, lower.end());
+      bounds.push_back(*at);
+    }
+    std::sort(bounds.begin(), bounds.end());
+    bounds.erase(std::unique(bounds.begin(), bounds.end()), bounds.end());
   }
-  std::vector<Box> flagged;
-  for (const Box& b : boxes) {
-    if (focus[b.info()]) flagged.push_back(b);
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<Box> boxes, flagged;
+  for (size_t k = 0; k <= bounds.size(); ++k) {
+    const float from = k == 0 ? -inf : bounds[k - 1];
+    const float to = k == bounds.size() ? inf : bounds[k];
+    boxes.clear();
+    flagged.clear();
+    Box box;
+    for (int64_t i = 0; i < count; ++i) {
+      if (!make_box(i, &box) || box.max_coord(0) < from || box.min_coord(0) >= to) continue;
+      boxes.push_back(box);
+      if (!focus.empty() && focus[box.info()]) flagged.push_back(box);
+    }
+    const auto in_slab = [&](const Box& x, const Box& y) {
+      const float lower = std::max(x.min_coord(0), y.min_coord(0));
+      return lower >= from && lower < to;
+    };
+    if (focus.empty()) {
+      CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), [&](const Box& x, const Box& y) {
+        if (in_slab(x, y)) callback(x, y);
+      });
+    } else {
+      CGAL::box_intersection_d(flagged.begin(), flagged.end(), boxes.begin(), boxes.end(),
+                               [&](const Box& x, const Box& y) {
+                                 if (x.info() != y.info() && in_slab(x, y)) callback(x, y);
+                               });
+    }
   }
-  CGAL::box_intersection_d(flagged.begin(), flagged.end(), boxes.begin(), boxes.end(),
-                           [&](const Box& x, const Box& y) {
-                             if (x.info() != y.info()) callback(x, y);
-                           });
 }
 
 void FindNearVertices(const Mesh& mesh, const std::vector<uint8_t>& referenced,
                       const FloatRobustnessOptions& options, FloatRobustnessReport* r) {
   using Box = SearchBox;
   const double tol = r->tolerance;
-  std::vector<Box> boxes;
   const Eigen::Vector3d slack = Eigen::Vector3d::Constant(tol);
-  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
-    if (!referenced[v]) continue;
+  // Boxes a whole tolerance wide on each side: no pair within the tolerance is lost to
+  // rounding; the distance below decides.
+  const auto make_box = [&](int64_t v, Box* box) {
+    if (!referenced[v]) return false;
     const Eigen::Vector3d& p = mesh.vertices[v];
-    // Boxes a whole tolerance wide on each side: no pair within the tolerance is lost to
-    // rounding; the distance below decides.
-    boxes.emplace_back(p - slack, p + slack, static_cast<int64_t>(v));
-  }
+    *box = Box(p - slack, p + slack, v);
+    return true;
+  };
   std::vector<std::pair<std::array<int32_t, 2>, double>> found;
   auto callback = [&](const Box& x, const Box& y) {
     const auto a = static_cast<int32_t>(std::min(x.info(), y.info()));
@@ -494,7 +534,8 @@ void FindNearVertices(const Mesh& mesh, const std::vector<uint8_t>& referenced,
     }
   }
   try {
-    ForIntersectingBoxes(boxes, focus, callback);
+    ForIntersectingBoxes(static_cast<int64_t>(mesh.vertices.size()), make_box, focus,
+                         options.boxes_per_slab, callback);
   } catch (const StopSearch&) {
     r->near_vertex_pairs_truncated = true;
   }
@@ -523,13 +564,13 @@ void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
     *lo = p0.array().min(p1.array().min(p2.array()));
     *hi = p0.array().max(p1.array().max(p2.array()));
   };
-  std::vector<Box> boxes;
-  for (int64_t f = 0; f < nf; ++f) {
-    if (!usable[f]) continue;
+  const auto make_box = [&](int64_t f, Box* box) {
+    if (!usable[f]) return false;
     Eigen::Vector3d lo, hi;
     box_of(f, &lo, &hi);
-    boxes.emplace_back(lo.array() - tol, hi.array() + tol, f);
-  }
+    *box = Box(lo.array() - tol, hi.array() + tol, f);
+    return true;
+  };
   const Timer timer;
   int64_t tested = 0;
   std::vector<std::pair<std::array<int64_t, 2>, double>> close;
@@ -586,7 +627,7 @@ void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
     if (batch.size() == kBatch) test_batch();
   };
   try {
-    ForIntersectingBoxes(boxes, options.focus_faces, callback);
+    ForIntersectingBoxes(nf, make_box, options.focus_faces, options.boxes_per_slab, callback);
     test_batch();
   } catch (const StopSearch&) {
   }
@@ -610,7 +651,8 @@ void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
     spdlog::info(
         "float robustness: {} faces, {} pairs sharing no vertex tested, {} closer than {:.3g}, "
         "{} intersecting in double precision, in {:.1f} s",
-        boxes.size(), tested, close.size(), tol, crossing.size(), seconds);
+        std::count_if(usable.begin(), usable.end(), [](uint8_t u) { return u != 0; }), tested,
+        close.size(), tol, crossing.size(), seconds);
   }
 }
 
@@ -625,6 +667,7 @@ void FloatRobustnessOptions::Check() const {
   }
   if (max_examples < 0) throw InputError("mesh check: max_examples must be >= 0");
   if (max_pairs < 1) throw InputError("mesh check: max_self_intersections must be >= 1");
+  if (boxes_per_slab < 1) throw InputError("mesh check: boxes_per_slab must be >= 1");
 }
 
 namespace {

@@ -32,6 +32,10 @@ struct FloatRobustnessOptions {
   // and vertex pairs with a vertex of one, are tested (a partial check, for code that changed
   // those faces of a mesh that passed before, e.g. refine/mesh_moves.h; not a verdict on the mesh).
   std::vector<uint8_t> focus_faces;
+  // The pair searches run slab by slab along x, with about this many boxes a slab: CGAL copies
+  // the boxes it searches, and a slab's copy is all that is held. The pairs found do not depend
+  // on it (nor their order, unless a search stops at max_pairs).
+  int64_t boxes_per_slab = int64_t{1} << 18;
   void Check() const;  // throws InputError naming the field
 };
 

@@ -134,6 +134,52 @@ TEST(FloatRobustness, NonAdjacentFacesTouchingOrCrossingFail) {
   EXPECT_FALSE(r.is_valid);
 }
 
+// The pair searches run slab by slab along x; slabs of a few boxes must find what one search
+// over all the boxes finds: the same pairs of near vertices, close faces and crossing faces, with
+// and without focus faces.
+TEST(FloatRobustness, SlabsFindWhatOneSearchFinds) {
+  Mesh soup;  // small triangles scattered in a box, many crossing or near one another
+  uint64_t state = 12345;
+  const auto next = [&state] {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) / static_cast<double>(1ULL << 53);
+  };
+  for (int t = 0; t < 400; ++t) {
+    const V corner(next() * 4, next(), next());
+    const auto base = static_cast<int32_t>(soup.vertices.size());
+    soup.vertices.push_back(corner);
+    soup.vertices.push_back(corner + V(next(), next(), next()) * 0.3);
+    soup.vertices.push_back(corner + V(next(), next(), next()) * 0.3);
+    soup.faces.push_back({base, base + 1, base + 2});
+  }
+  soup.vertices.push_back(soup.vertices[7] + V(1e-9, 0, 0));  // a near pair, the lone vertex
+  soup.faces.push_back({static_cast<int32_t>(soup.vertices.size()) - 1, 0, 4});
+  const std::vector<uint8_t> usable(soup.faces.size(), 1);
+  std::vector<uint8_t> some(soup.faces.size(), 0);
+  for (size_t f = 0; f < some.size(); f += 3) some[f] = 1;
+  some.back() = 1;  // the near pair's
+  for (const std::vector<uint8_t>& focus : {std::vector<uint8_t>{}, some}) {
+    SCOPED_TRACE(focus.empty() ? "whole" : "focus");
+    FloatRobustnessOptions one;
+    one.relative_tolerance = 1e-3;
+    one.max_examples = 1 << 20;
+    one.max_pairs = 1 << 20;
+    one.focus_faces = focus;
+    one.boxes_per_slab = 1 << 20;
+    FloatRobustnessOptions slabs = one;
+    slabs.boxes_per_slab = 7;
+    const FloatRobustnessReport a = CheckFloatRobustness(soup, usable, one);
+    const FloatRobustnessReport b = CheckFloatRobustness(soup, usable, slabs);
+    EXPECT_GT(a.num_float_intersections, focus.empty() ? 100 : 30);
+    EXPECT_GT(a.num_close_face_pairs, a.num_float_intersections);
+    EXPECT_GE(a.num_near_vertex_pairs, 1);
+    EXPECT_EQ(a.near_vertex_examples, b.near_vertex_examples);
+    EXPECT_EQ(a.close_face_pair_examples, b.close_face_pair_examples);
+    EXPECT_EQ(a.float_intersection_examples, b.float_intersection_examples);
+    EXPECT_EQ(a.num_close_face_pairs, b.num_close_face_pairs);
+  }
+}
+
 TEST(FloatRobustness, NeedleFacesReportTheShortestEdgeAndSmallestAngle) {
   const double needle = 1e-4;
   const Mesh m = Bipyramid(needle);
