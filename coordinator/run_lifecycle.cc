@@ -175,12 +175,15 @@ void RunLifecycle::WriteInitial(const BuildStats& stats, double build_s) {
   Checkpoint();
   IterationStats& initial = record_.iterations.back();
   Timer meshes;
-  const OutputMeshes written = WriteOutputMeshes("initial", true, &initial);
+  {
+    const OutputMeshes written = WriteOutputMeshes("initial", true, &initial);
+    spdlog::info("initial mesh: {} vertices, {} faces -> {}", written.closed.NumVertices(),
+                 written.closed.NumFaces(), Path("initial.ply"));
+  }
+  ExtractSweepSurface();
   initial.seconds_extract += meshes.Seconds();
   initial.seconds_total = build_s + initial.seconds_extract;
   Checkpoint();
-  spdlog::info("initial mesh: {} vertices, {} faces -> {}", written.closed.NumVertices(),
-               written.closed.NumFaces(), Path("initial.ply"));
   ReleaseFreeMemory();  // the float cleanup's structures, gone for good
   spdlog::info("memory after the initial meshes: {}", MemoryReport());
 }
@@ -227,6 +230,7 @@ StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const Swe
   row.faces = static_cast<int64_t>(mesh_.NumFaces());
   if (options_.run.save_iteration_meshes) {
     WriteOutputMeshes(fmt::format("iteration_{:02d}", iteration), false, &row);
+    ExtractSweepSurface();
   }
   row.outside_cells = s.outside_cells;
   row.cameras_in_matter = CountCamerasInMatter(iteration);
@@ -293,10 +297,19 @@ void RunLifecycle::Extract() {
   surface_ = std::make_shared<const Mesh>(SurfaceWithoutSteinerFaces(mesh_, surface_info_));
 }
 
+void RunLifecycle::ExtractSweepSurface() {
+  SurfaceInfo info;
+  const Mesh mesh = manifold_->ExtractSurface(&info);
+  surface_ = std::make_shared<const Mesh>(SurfaceWithoutSteinerFaces(mesh, info));
+}
+
 OutputMeshes RunLifecycle::WriteOutputMeshes(const std::string& name, bool with_surface,
                                              IterationStats* row) {
   // The float cleanup is the coordinator's peak of memory: it starts from what the heap holds,
-  // and takes mesh_ (not needed again until the next Extract) rather than a copy.
+  // takes mesh_ (not needed again until the next Extract) rather than a copy, and the sweep's
+  // surface is let go meanwhile and extracted again after (the same mesh: the manifold has not
+  // changed).
+  surface_.reset();
   ReleaseFreeMemory();
   OutputMeshes out =
       MakeOutputMeshes(std::move(mesh_), surface_info_, options_.manifold.float_cleanup, [this] {

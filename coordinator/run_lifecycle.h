@@ -97,8 +97,12 @@ class RunLifecycle {
   // Cameras inside the matter after an iteration, warned about by number (should be none).
   int64_t CountCamerasInMatter(int iteration);
   void Extract();
+  // The sweep's surface (surface_) of the manifold as it is.
+  void ExtractSweepSurface();
   // Writes NAME.ply (and NAME_surface.ply with `with_surface`): the meshes users get, made
-  // robust in floating point; their size and the cleanup's counts go into `row`.
+  // robust in floating point; their size and the cleanup's counts go into `row`. Takes mesh_
+  // and lets the sweep's surface go: ExtractSweepSurface makes it again, once the meshes
+  // returned are gone.
   OutputMeshes WriteOutputMeshes(const std::string& name, bool with_surface, IterationStats* row);
   RunRecord ReadCheckpoint(const std::string& run_file);
   // Writes run.h5 and summary.json now (after waiting for one in the background).

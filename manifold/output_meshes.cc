@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include "base/check.h"
+#include "base/memory.h"
 
 namespace ms {
 
@@ -14,6 +15,7 @@ OutputMeshes MakeOutputMeshes(Mesh surface, const SurfaceInfo& info, bool float_
   std::vector<uint8_t> steiner = SteinerFlags(info);
   if (float_cleanup && !out.closed.faces.empty()) {
     out.cleanup = CleanForFloatingPoint(&out.closed, &steiner, {}, extract_again);
+    ReleaseFreeMemory();  // the cleaner's structures, before the surface proper is made
     const FloatCleanupStats& c = out.cleanup;
     if (c.problems_before > 0) {
       spdlog::log(c.problems_after > 0 ? spdlog::level::warn : spdlog::level::info,
