@@ -310,6 +310,9 @@ OutputMeshes RunLifecycle::WriteOutputMeshes(const std::string& name, bool with_
   // surface is let go meanwhile and extracted again after (the same mesh: the manifold has not
   // changed).
   surface_.reset();
+  // An earlier call took mesh_ and no Extract came between (the final meshes of a run that
+  // stops before its first iteration): the same surface again.
+  if (mesh_.vertices.empty()) mesh_ = manifold_->ExtractSurface(&surface_info_);
   ReleaseFreeMemory();
   OutputMeshes out =
       MakeOutputMeshes(std::move(mesh_), surface_info_, options_.manifold.float_cleanup, [this] {

@@ -271,5 +271,21 @@ TEST(RunLifecycle, ABatchWithNothingNewEndsTheRun) {
   EXPECT_TRUE(std::filesystem::exists(dir / "run/final.ply"));
 }
 
+// A run that stops before its first iteration writes its final meshes from the manifold it
+// built: the initial meshes took the extracted surface, so it is extracted again, the same.
+TEST(RunLifecycle, ARunStoppedBeforeItsFirstIterationWritesTheInitialMeshAsFinal) {
+  const TempDir dir("lifecycle");
+  CoordinatorOptions options = Options(WriteSphereScene(dir), dir / "run");
+  options.run.max_iterations = 0;
+  RunLifecycle run(options, 1);
+  EXPECT_TRUE(run.Prepare().stop);
+  EXPECT_EQ(run.final_result().stop_reason, "reached --max-iterations 0");
+  const Mesh initial = ReadMesh(dir / "run/initial.ply");
+  const Mesh final_mesh = ReadMesh(dir / "run/final.ply");
+  EXPECT_GT(initial.NumFaces(), 0u);
+  EXPECT_EQ(final_mesh.vertices, initial.vertices);
+  EXPECT_EQ(final_mesh.faces, initial.faces);
+}
+
 }  // namespace
 }  // namespace ms
