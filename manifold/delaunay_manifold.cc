@@ -12,6 +12,7 @@
 #include "base/check.h"
 #include "base/error.h"
 #include "base/log.h"
+#include "base/memory.h"
 #include "manifold/cell_predicates.h"
 #include "manifold/manifold_impl.h"
 #include "manifold/steiner_sight.h"
@@ -55,7 +56,7 @@ DelaunayManifold::Impl::Impl(std::vector<ManifoldCamera> cameras, const Manifold
 // ---------------------------------------------------------------------------------------------
 // Build
 
-BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
+BuildStats DelaunayManifold::Impl::Build(std::vector<RayPoint> points) {
   if (built_) throw InternalError("DelaunayManifold::Build called twice");
   built_ = true;
   BuildStats stats;
@@ -79,6 +80,10 @@ BuildStats DelaunayManifold::Impl::Build(const std::vector<RayPoint>& points) {
   timer.Restart();
   TraceRays(points, &stats);
   stats.seconds_ray_tracing = timer.Seconds();
+  // What the manifold needs of the points is in it now; growing is the build's peak of memory
+  // (at 10^6 points the points with their cameras held about 100 MB more).
+  std::vector<RayPoint>().swap(points);
+  ReleaseFreeMemory();
   spdlog::info("manifold: traced {} rays ({} cell steps) in {:.2f} s ({:.0f} rays/s)", stats.rays,
                stats.ray_cell_steps, stats.seconds_ray_tracing,
                stats.seconds_ray_tracing > 0 ? stats.rays / stats.seconds_ray_tracing : 0.0);
@@ -847,8 +852,8 @@ DelaunayManifold::DelaunayManifold(std::vector<ManifoldCamera> cameras,
                                    const ManifoldOptions& options)
     : impl_(std::make_unique<Impl>(std::move(cameras), options)) {}
 DelaunayManifold::~DelaunayManifold() = default;
-BuildStats DelaunayManifold::Build(const std::vector<RayPoint>& points) {
-  return impl_->Build(points);
+BuildStats DelaunayManifold::Build(std::vector<RayPoint> points) {
+  return impl_->Build(std::move(points));
 }
 InsertionStats DelaunayManifold::Insert(const std::vector<RayPoint>& points) {
   return impl_->Insert(points);

@@ -104,9 +104,10 @@ class DelaunayManifold {
 
   // Steps (1)-(3) of the paper: Delaunay triangulation of the points and the Steiner points,
   // visibility ray tracing and weighting, growing of O from the heaviest free cell.
-  // Point ids are their indices in `points`. Throws InputError for a camera index out of
+  // Point ids are their indices in `points`, which are let go once their rays are traced (pass
+  // them with std::move where memory counts). Throws InputError for a camera index out of
   // range or non-finite input; may be called once.
-  BuildStats Build(const std::vector<RayPoint>& points);
+  BuildStats Build(std::vector<RayPoint> points);
 
   // Incremental refinement (section 2.3): for each point in order, shrink O around its
   // conflict region, discard it if the region still meets O, otherwise insert it and update

@@ -44,7 +44,7 @@ class DelaunayManifold::Impl {
 
   Impl(std::vector<ManifoldCamera> cameras, const ManifoldOptions& options);
 
-  BuildStats Build(const std::vector<RayPoint>& points);
+  BuildStats Build(std::vector<RayPoint> points);
   InsertionStats Insert(const std::vector<RayPoint>& points);
   void BeginInsert();
   void InsertPart(const std::vector<RayPoint>& points);
