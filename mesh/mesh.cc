@@ -26,32 +26,45 @@ double Mesh::SurfaceArea() const {
   return area;
 }
 
-void Mesh::RemoveUnreferencedVertices() {
-  std::vector<int32_t> remap(vertices.size(), -1);
-  std::vector<Eigen::Vector3d> kept;
-  std::vector<std::array<uint8_t, 3>> kept_colors;
-  for (auto& face : faces) {
+namespace {
+
+// out's faces index `from`'s vertices: renumbers them in order of first use and gives out those
+// vertices (and colours), each array allocated once at its size (at 10^6 vertices the output
+// meshes are the coordinator's peak of memory).
+void TakeReferencedVertices(const Mesh& from, Mesh* out) {
+  std::vector<int32_t> remap(from.vertices.size(), -1);
+  int32_t used = 0;
+  for (auto& face : out->faces) {
     for (int32_t& v : face) {
-      if (remap[v] < 0) {
-        remap[v] = static_cast<int32_t>(kept.size());
-        kept.push_back(vertices[v]);
-        if (HasColors()) kept_colors.push_back(vertex_colors[v]);
-      }
+      if (remap[v] < 0) remap[v] = used++;
       v = remap[v];
     }
   }
-  vertices = std::move(kept);
-  vertex_colors = std::move(kept_colors);
+  std::vector<Eigen::Vector3d> kept(used);
+  std::vector<std::array<uint8_t, 3>> kept_colors(from.HasColors() ? used : 0);
+  for (size_t v = 0; v < remap.size(); ++v) {
+    if (remap[v] < 0) continue;
+    kept[remap[v]] = from.vertices[v];
+    if (from.HasColors()) kept_colors[remap[v]] = from.vertex_colors[v];
+  }
+  out->vertices = std::move(kept);
+  out->vertex_colors = std::move(kept_colors);
 }
 
+}  // namespace
+
+void Mesh::RemoveUnreferencedVertices() { TakeReferencedVertices(*this, this); }
+
 Mesh FacesWithoutFlaggedVertices(const Mesh& mesh, const std::vector<uint8_t>& flagged) {
+  const auto kept = [&](const std::array<int32_t, 3>& f) {
+    return !flagged[f[0]] && !flagged[f[1]] && !flagged[f[2]];
+  };
   Mesh out;
-  out.vertices = mesh.vertices;
-  out.vertex_colors = mesh.vertex_colors;
+  out.faces.reserve(std::count_if(mesh.faces.begin(), mesh.faces.end(), kept));
   for (const auto& f : mesh.faces) {
-    if (!flagged[f[0]] && !flagged[f[1]] && !flagged[f[2]]) out.faces.push_back(f);
+    if (kept(f)) out.faces.push_back(f);
   }
-  out.RemoveUnreferencedVertices();
+  TakeReferencedVertices(mesh, &out);
   return out;
 }
 
@@ -145,19 +158,20 @@ int64_t KeepOneFanPerVertex(Mesh* mesh) {
     if (drop.empty()) break;
     std::sort(drop.begin(), drop.end());
     drop.erase(std::unique(drop.begin(), drop.end()), drop.end());
+    adjacency = VertexFaces();  // made again on the next pass; less held meanwhile
     std::fill(look.begin(), look.end(), 0);
-    std::vector<std::array<int32_t, 3>> kept;
-    kept.reserve(mesh->faces.size() - drop.size());
+    // The kept faces moved down in place, in their order.
+    size_t kept = 0;
     for (size_t f = 0, d = 0; f < mesh->faces.size(); ++f) {
       if (d < drop.size() && drop[d] == static_cast<int32_t>(f)) {
         ++d;
         for (int32_t v : mesh->faces[f]) look[v] = 1;
       } else {
-        kept.push_back(mesh->faces[f]);
+        mesh->faces[kept++] = mesh->faces[f];
       }
     }
     removed += static_cast<int64_t>(drop.size());
-    mesh->faces = std::move(kept);
+    mesh->faces.resize(kept);
   }
   mesh->RemoveUnreferencedVertices();
   return removed;

@@ -247,6 +247,33 @@ TEST(MeshChecker, TetrahedraSharingOnlyAVertexMakeANonManifoldVertex) {
   EXPECT_FALSE(Check(m, true).is_valid);
 }
 
+// Unreferenced vertices go, the others are renumbered in order of first use, colours follow;
+// FacesWithoutFlaggedVertices keeps the faces with no flagged vertex, in order, the same way.
+TEST(Mesh, UnreferencedVerticesGoAndTheRestKeepTheirFirstUseOrder) {
+  Mesh m;
+  for (int i = 0; i < 6; ++i) {
+    m.vertices.push_back(Eigen::Vector3d(i, 0, 0));
+    m.vertex_colors.push_back({static_cast<uint8_t>(i), 0, 0});
+  }
+  m.faces = {{4, 2, 5}, {5, 2, 0}};  // 1 and 3 unused
+  Mesh r = m;
+  r.RemoveUnreferencedVertices();
+  ASSERT_EQ(r.vertices.size(), 4u);
+  EXPECT_EQ(r.faces, (std::vector<std::array<int32_t, 3>>{{0, 1, 2}, {2, 1, 3}}));
+  EXPECT_EQ(r.vertices[0].x(), 4);
+  EXPECT_EQ(r.vertices[3].x(), 0);
+  EXPECT_EQ(r.vertex_colors[1][0], 2);
+  std::vector<uint8_t> flagged(6, 0);
+  flagged[4] = 1;
+  const Mesh without = FacesWithoutFlaggedVertices(m, flagged);
+  EXPECT_EQ(without.faces, (std::vector<std::array<int32_t, 3>>{{0, 1, 2}}));
+  ASSERT_EQ(without.vertices.size(), 3u);
+  EXPECT_EQ(without.vertices[0].x(), 5);
+  EXPECT_EQ(without.vertices[2].x(), 0);
+  EXPECT_EQ(without.vertex_colors[1][0], 2);
+  EXPECT_EQ(m.vertices.size(), 6u);  // the source is left as it was
+}
+
 // What FacesWithoutFlaggedVertices does where dropping faces leaves a bow-tie: the larger fan
 // stays (here equal: the first), and the result passes the checker with boundaries allowed.
 TEST(KeepOneFanPerVertex, SplitsABowTieLeavingAValidSurfaceWithBoundary) {
