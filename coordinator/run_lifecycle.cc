@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <utility>
 
 #include "base/error.h"
 #include "base/memory.h"
@@ -180,7 +181,6 @@ void RunLifecycle::WriteInitial(const BuildStats& stats, double build_s) {
     spdlog::info("initial mesh: {} vertices, {} faces -> {}", written.closed.NumVertices(),
                  written.closed.NumFaces(), Path("initial.ply"));
   }
-  ExtractSweepSurface();
   initial.seconds_extract += meshes.Seconds();
   initial.seconds_total = build_s + initial.seconds_extract;
   Checkpoint();
@@ -230,7 +230,6 @@ StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const Swe
   row.faces = static_cast<int64_t>(mesh_.NumFaces());
   if (options_.run.save_iteration_meshes) {
     WriteOutputMeshes(fmt::format("iteration_{:02d}", iteration), false, &row);
-    ExtractSweepSurface();
   }
   row.outside_cells = s.outside_cells;
   row.cameras_in_matter = CountCamerasInMatter(iteration);
@@ -294,32 +293,35 @@ int64_t RunLifecycle::CountCamerasInMatter(int iteration) {
 
 void RunLifecycle::Extract() {
   mesh_ = manifold_->ExtractSurface(&surface_info_);
-  surface_ = std::make_shared<const Mesh>(SurfaceWithoutSteinerFaces(mesh_, surface_info_));
+  surface_.reset();  // of the manifold before; made from mesh_ when the jobs need it
 }
 
-void RunLifecycle::ExtractSweepSurface() {
+Mesh RunLifecycle::TakeMesh(SurfaceInfo* info) {
+  if (mesh_.vertices.empty()) return manifold_->ExtractSurface(info);
+  *info = std::move(surface_info_);
+  surface_info_ = SurfaceInfo();
+  return std::exchange(mesh_, Mesh());
+}
+
+void RunLifecycle::MakeSweepSurface() {
   SurfaceInfo info;
-  const Mesh mesh = manifold_->ExtractSurface(&info);
+  const Mesh mesh = TakeMesh(&info);
   surface_ = std::make_shared<const Mesh>(SurfaceWithoutSteinerFaces(mesh, info));
 }
 
 OutputMeshes RunLifecycle::WriteOutputMeshes(const std::string& name, bool with_surface,
                                              IterationStats* row) {
   // The float cleanup is the coordinator's peak of memory: it starts from what the heap holds,
-  // takes mesh_ (not needed again until the next Extract) rather than a copy, and the sweep's
-  // surface is let go meanwhile and extracted again after (the same mesh: the manifold has not
-  // changed).
+  // takes mesh_ rather than a copy, and no sweep surface is held meanwhile (the jobs' is made
+  // again after: the same mesh, the manifold has not changed).
   surface_.reset();
-  // An earlier call took mesh_ and no Extract came between (the final meshes of a run that
-  // stops before its first iteration): the same surface again.
-  if (mesh_.vertices.empty()) mesh_ = manifold_->ExtractSurface(&surface_info_);
   ReleaseFreeMemory();
+  SurfaceInfo info;
   OutputMeshes out =
-      MakeOutputMeshes(std::move(mesh_), surface_info_, options_.manifold.float_cleanup, [this] {
-        SurfaceInfo info;
-        return manifold_->ExtractSurface(&info);
+      MakeOutputMeshes(TakeMesh(&info), info, options_.manifold.float_cleanup, [this] {
+        SurfaceInfo again;
+        return manifold_->ExtractSurface(&again);
       });
-  mesh_ = Mesh();
   ReleaseFreeMemory();  // the cleaner's structures
   WriteMesh(out.closed, Path(name + ".ply"));
   if (with_surface) WriteMesh(out.surface, Path(name + "_surface.ply"));
@@ -445,14 +447,14 @@ StepOutcome RunLifecycle::NextOrStop() {
   } else if (done >= options_.run.max_iterations) {
     reason = fmt::format("reached --max-iterations {}", options_.run.max_iterations);
   } else {
+    if (!surface_) MakeSweepSurface();
     outcome.jobs = std::make_unique<IterationJobSource>(record_.scene, neighbours_, surface_,
                                                         *catalog_, static_cast<uint32_t>(done + 1),
                                                         session_id_, job_options_);
     if (outcome.jobs->job_ids().empty()) reason = "no camera has a neighbour";
   }
   if (reason.empty()) {
-    mesh_ = Mesh();  // not needed until the next Extract: the sweep holds only the surface
-    ReleaseFreeMemory();
+    ReleaseFreeMemory();  // the sweep holds only its surface (MakeSweepSurface took mesh_)
     spdlog::info("memory at the start of iteration {}: {}", done + 1, MemoryReport());
     return outcome;
   }

@@ -96,13 +96,17 @@ class RunLifecycle {
   void WriteInitial(const BuildStats& stats, double build_s);
   // Cameras inside the matter after an iteration, warned about by number (should be none).
   int64_t CountCamerasInMatter(int iteration);
+  // mesh_ (and surface_info_) from the manifold as it is now; the sweep's surface is made from
+  // it when the next jobs need it (MakeSweepSurface).
   void Extract();
-  // The sweep's surface (surface_) of the manifold as it is.
-  void ExtractSweepSurface();
+  // mesh_, handed over (extracted again where an earlier step took it: the same mesh while the
+  // manifold does not change).
+  Mesh TakeMesh(SurfaceInfo* info);
+  // surface_, the surface proper the jobs are built from; takes mesh_.
+  void MakeSweepSurface();
   // Writes NAME.ply (and NAME_surface.ply with `with_surface`): the meshes users get, made
   // robust in floating point; their size and the cleanup's counts go into `row`. Takes mesh_
-  // and lets the sweep's surface go: ExtractSweepSurface makes it again, once the meshes
-  // returned are gone.
+  // and lets the sweep's surface go (MakeSweepSurface makes it again).
   OutputMeshes WriteOutputMeshes(const std::string& name, bool with_surface, IterationStats* row);
   RunRecord ReadCheckpoint(const std::string& run_file);
   // Writes run.h5 and summary.json now (after waiting for one in the background).
