@@ -191,6 +191,9 @@ void GlslSweepKernelOptions::Check() const {
 
 // ---------------------------------------------------------------------------------------------
 
+// Neighbours reprojected by one dispatch, at most.
+constexpr int kMaxReprojectGroup = 7;
+
 struct GlslSweepKernel::Impl {
   std::unique_ptr<gl::GlContext> owned_context;
   const gl::GlContext* context = nullptr;
@@ -199,10 +202,10 @@ struct GlslSweepKernel::Impl {
   int block = 1;
   int local_x = 64, local_y = 1;  // blur passes' work-group shape
   int max_array_layers = 0;
-  int max_group = 1;  // neighbours reprojected by one draw (colour attachments - 1)
+  int max_group = 1;  // neighbours reprojected by one dispatch (image units - 1)
 
-  std::unique_ptr<gl::ShaderProgram> raster_depth;
-  std::map<int, std::unique_ptr<gl::ShaderProgram>> raster_world;  // by neighbours per draw
+  std::unique_ptr<gl::ShaderProgram> raster_depth, raster_surface;
+  std::map<int, std::unique_ptr<gl::ShaderProgram>> reproject;  // by neighbours per dispatch
   struct BlurPrograms {
     gl::ShaderProgram rows, ncc;
   };
@@ -212,10 +215,10 @@ struct GlslSweepKernel::Impl {
   // Textures kept between jobs of the same shape (sizes, batch, radius, neighbours).
   struct Resources {
     std::vector<int> key;
-    std::unique_ptr<gl::Texture2DArray> world, world_depth, ncc;
+    std::unique_ptr<gl::Texture2DArray> surface, surface_depth, world, ncc;
     std::vector<std::unique_ptr<gl::Texture2DArray>> reprojected;  // per neighbour
     std::vector<std::unique_ptr<gl::Texture2DArray>> shadow, shadow_depth;
-    std::vector<std::unique_ptr<LayeredTarget>> world_targets;  // per group of neighbours
+    std::unique_ptr<LayeredTarget> surface_target;
     std::vector<std::unique_ptr<LayeredTarget>> shadow_targets;
     std::unique_ptr<gl::Texture2D> sums0, sums1;
   };
@@ -236,37 +239,44 @@ struct GlslSweepKernel::Impl {
     local_x = unrolled ? 8 : 64;
     local_y = unrolled ? 8 : 1;
     glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_array_layers);
-    GLint attachments = 0, draw_buffers = 0, units = 0;
-    glGetIntegerv(GL_MAX_COLOR_ATTACHMENTS, &attachments);
-    glGetIntegerv(GL_MAX_DRAW_BUFFERS, &draw_buffers);
-    glGetIntegerv(GL_MAX_TEXTURE_IMAGE_UNITS, &units);
-    max_group = std::max(1, std::min({attachments - 1, draw_buffers - 1, (units - 1) / 2}));
+    GLint image_units = 0, texture_units = 0;
+    glGetIntegerv(GL_MAX_COMPUTE_IMAGE_UNIFORMS, &image_units);
+    glGetIntegerv(GL_MAX_COMPUTE_TEXTURE_IMAGE_UNITS, &texture_units);
+    // The world image and one per neighbour; C's image, the surface, two per neighbour. At most
+    // kMaxReprojectGroup: llvmpipe loses reprojections in groups of 9 or more though it reports
+    // 32 image and texture units (GlslSweepTest.ManyNeighboursAndPyramidLevels).
+    max_group =
+        std::max(1, std::min({kMaxReprojectGroup, image_units - 1, (texture_units - 2) / 2}));
     raster_depth = std::make_unique<gl::ShaderProgram>(
         Program("sweep raster (shadow maps)",
                 {"sweep_raster.vert", "sweep_raster.geom", "sweep_raster_depth.frag"},
                 options.shader_defines));
+    raster_surface = std::make_unique<gl::ShaderProgram>(Program(
+        "sweep raster (C)", {"sweep_raster.vert", "sweep_raster.geom", "sweep_raster_surface.frag"},
+        options.shader_defines));
     // The default job's programs (sigma 8 px, two neighbours), so that a driver that cannot
     // compile them fails here rather than in the first job.
-    RasterWorld(std::min(2, max_group));
+    Reproject(std::min(2, max_group));
     const int radius = static_cast<int>(std::ceil(3 * SweepOptions().gaussian_sigma_px));
     Blur(radius);
     TileBest(radius, 1);
   }
 
-  gl::ShaderProgram& RasterWorld(int neighbours) {
-    auto& slot = raster_world[neighbours];
+  // Texture units: I_C 0, neighbour images 1..n, shadow maps n+1..2n, C's surface 2n+1.
+  // Image units: world 0, reprojections 1..n.
+  gl::ShaderProgram& Reproject(int neighbours) {
+    auto& slot = reproject[neighbours];
     if (!slot) {
       std::vector<std::string> defines = {fmt::format("NEIGHBOURS {}", neighbours)};
       defines.insert(defines.end(), options.shader_defines.begin(), options.shader_defines.end());
       slot = std::make_unique<gl::ShaderProgram>(
-          Program("sweep raster (C) + reprojection",
-                  {"sweep_raster.vert", "sweep_raster.geom", "sweep_raster_world.frag"}, defines));
-      // Texture units: I_C 0, neighbour images 1..n, shadow maps n+1..2n.
+          Program("sweep world + reprojection", {"sweep_reproject.comp"}, defines));
       slot->Set("u_image", 0);
       for (int j = 0; j < neighbours; ++j) {
         slot->Set(fmt::format("u_neighbour[{}]", j), 1 + j);
         slot->Set(fmt::format("u_shadow[{}]", j), 1 + neighbours + j);
       }
+      slot->Set("u_surface", 1 + 2 * neighbours);
     }
     return *slot;
   }
@@ -348,10 +358,14 @@ void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, 
   const int padded = PaddedWidth(width, radius);
   using gl::Texture2DArray;
   using gl::TextureFormat;
+  resources.surface =
+      std::make_unique<Texture2DArray>(padded, height, batch_size, TextureFormat::kRG32F);
+  resources.surface_depth =
+      std::make_unique<Texture2DArray>(padded, height, batch_size, TextureFormat::kDepth32F);
+  resources.surface_target = std::make_unique<LayeredTarget>(
+      std::vector<const Texture2DArray*>{resources.surface.get()}, *resources.surface_depth);
   resources.world =
       std::make_unique<Texture2DArray>(padded, height, batch_size, TextureFormat::kRGBA32F);
-  resources.world_depth =
-      std::make_unique<Texture2DArray>(padded, height, batch_size, TextureFormat::kDepth32F);
   for (int j = 0; j < num_neighbours; ++j) {
     resources.reprojected.push_back(
         std::make_unique<Texture2DArray>(padded, height, batch_size, TextureFormat::kRGBA32F));
@@ -363,14 +377,6 @@ void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, 
     resources.shadow_targets.push_back(std::make_unique<LayeredTarget>(
         std::vector<const Texture2DArray*>{resources.shadow.back().get()},
         *resources.shadow_depth.back()));
-  }
-  for (int first = 0; first < num_neighbours; first += max_group) {
-    std::vector<const Texture2DArray*> colors = {resources.world.get()};
-    for (int j = first; j < std::min(num_neighbours, first + max_group); ++j) {
-      colors.push_back(resources.reprojected[j].get());
-    }
-    resources.world_targets.push_back(
-        std::make_unique<LayeredTarget>(colors, *resources.world_depth));
   }
   resources.ncc = std::make_unique<Texture2DArray>(width, height, batch_size * num_neighbours,
                                                    TextureFormat::kR32F);
@@ -411,7 +417,8 @@ GlslSweepKernel::~GlslSweepKernel() {
   impl_->resources = Impl::Resources();
   impl_->blur.clear();
   impl_->tile_best.clear();
-  impl_->raster_world.clear();
+  impl_->reproject.clear();
+  impl_->raster_surface.reset();
   impl_->raster_depth.reset();
 }
 
@@ -427,8 +434,9 @@ GlslSweepKernel::MemoryPlan GlslSweepKernel::PlanMemory(const PreparedSweep& pre
   const int64_t padded = (width + 2 * radius + block) * height;
   const int64_t neighbours = static_cast<int64_t>(prep.neighbours.size());
   MemoryPlan plan;
-  // Per offset: C's world + depth and one reprojection per neighbour (padded), NCC maps.
-  plan.per_offset_bytes = padded * (16 + 4 + 16 * neighbours) + width * height * 4 * neighbours;
+  // Per offset: C's surface + depth, world and one reprojection per neighbour (padded), NCC
+  // maps.
+  plan.per_offset_bytes = padded * (8 + 4 + 16 + 16 * neighbours) + width * height * 4 * neighbours;
   // Per job: C's image, the row sums (RGBA32F + RG32F, padded).
   plan.fixed_bytes = width * height * 4 + (height + 2 * radius + block) * width * (16 + 8);
   for (const SweepCamera& n : prep.neighbours) {
@@ -471,31 +479,53 @@ SweepResult GlslSweepKernel::Run(const SweepJob& job, GlslSweepCapture* capture)
 
 namespace {
 
-// The stage times of SweepStats. With `wait_for_gpu` (GlslSweepKernelOptions::time_stages), Book
-// waits for the GPU and adds the time since the last stage boundary to a stage; without, it
-// books nothing (total and prepare times only).
+// The stage times of SweepStats, in GPU time: with `enabled` (GlslSweepKernelOptions::
+// time_stages) each boundary is a GPU timestamp (glQueryCounter), read once the job is done
+// (Resolve). Nothing waits between stages, so the GPU never idles for the timing.
 class StageClock {
  public:
-  explicit StageClock(bool wait_for_gpu) : wait_for_gpu_(wait_for_gpu) {}
-  // The time since the start, without waiting for the GPU; the first stage starts now.
+  explicit StageClock(bool enabled) : enabled_(enabled) {}
+  ~StageClock() {
+    if (!queries_.empty()) glDeleteQueries(static_cast<GLsizei>(queries_.size()), queries_.data());
+  }
+  StageClock(const StageClock&) = delete;
+  StageClock& operator=(const StageClock&) = delete;
+
+  // The CPU time since the start (preparation and uploads); the first stage starts now.
   double Prepared() {
-    const double seconds = stage_.Seconds();
-    stage_.Restart();
-    return seconds;
+    Mark(nullptr);
+    return total_.Seconds();
   }
-  void Book(double* stage_seconds) {
-    if (!wait_for_gpu_) return;
-    glFinish();
-    *stage_seconds += stage_.Seconds();
-    stage_.Restart();
-  }
+  // The GPU time since the last boundary goes to `*stage_seconds`.
+  void Book(double* stage_seconds) { Mark(stage_seconds); }
   // Leaves the time since the last boundary out of every stage (a capture's read-backs).
-  void Skip() { stage_.Restart(); }
+  void Skip() { Mark(nullptr); }
+  // Adds the intervals to their stages; waits for the GPU's last boundary.
+  void Resolve() {
+    GLuint64 last = 0;
+    for (size_t i = 0; i < queries_.size(); ++i) {
+      GLuint64 now = 0;
+      glGetQueryObjectui64v(queries_[i], GL_QUERY_RESULT, &now);
+      if (i > 0 && stages_[i] != nullptr) *stages_[i] += 1e-9 * static_cast<double>(now - last);
+      last = now;
+    }
+  }
   double Total() const { return total_.Seconds(); }
 
  private:
-  bool wait_for_gpu_;
-  Timer total_, stage_;
+  void Mark(double* stage_seconds) {
+    if (!enabled_) return;
+    GLuint query = 0;
+    glGenQueries(1, &query);
+    glQueryCounter(query, GL_TIMESTAMP);
+    queries_.push_back(query);
+    stages_.push_back(stage_seconds);
+  }
+
+  bool enabled_;
+  Timer total_;
+  std::vector<GLuint> queries_;
+  std::vector<double*> stages_;
 };
 
 // The tile records every batch reduces into (see sweep_tile_best.comp): per tile its column and
@@ -541,8 +571,8 @@ struct GlslSweepKernel::Impl::Batch {
   int first_offset = 0;  // k of layer 0
 };
 
-// One draw from C per group of neighbours (colour attachments are limited). Groups of the same
-// size share a program: GpuJob::SetGroup sets its uniforms before each draw.
+// One reprojection dispatch per group of neighbours (image units are limited). Groups of the
+// same size share a program: GpuJob::SetGroup sets its uniforms before each dispatch.
 struct GlslSweepKernel::Impl::Group {
   int first, count;
   gl::ShaderProgram* program;
@@ -555,7 +585,7 @@ struct GlslSweepKernel::Impl::GpuJob {
   GpuJob(const SweepJob& job, const PreparedSweep& prep, int batch_size, bool clip_control);
   // The uniforms of a raster program sweeping the mesh as seen from `view` (C or a neighbour).
   void SetSweep(const gl::ShaderProgram& program, const View& view, double far) const;
-  // Those of C's draw with a group of neighbours' reprojections.
+  // Those of the world + reprojection pass for a group of neighbours.
   void SetGroup(const Group& group) const;
 
   const SweepJob& job;
@@ -638,8 +668,15 @@ void GlslSweepKernel::Impl::GpuJob::SetSweep(const gl::ShaderProgram& program, c
 
 void GlslSweepKernel::Impl::GpuJob::SetGroup(const Group& group) const {
   const gl::ShaderProgram& p = *group.program;
-  SetSweep(p, prep.camera.view, far_c);
+  const View& c = prep.camera.view;
+  const Intrinsics& k = c.intrinsics;
+  Eigen::Matrix3d k_inverse;
+  k_inverse << 1 / k.fx, 0, -k.cx / k.fx, 0, 1 / k.fy, -k.cy / k.fy, 0, 0, 1;
   p.Set("u_pixel_offset", radius);
+  p.Set("u_image_width", width);
+  p.Set("u_center", center);
+  p.Set("u_pixel_to_ray", (c.R.transpose() * k_inverse).cast<float>().eval());
+  p.Set("u_write_world", group.first == 0 ? 1 : 0);
   p.Set("u_occlusion", static_cast<float>(1 + job.options.occlusion_tolerance));
   for (int i = 0; i < group.count; ++i) {
     const View& n = prep.neighbours[group.first + i].view;
@@ -764,7 +801,7 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
     clock.Book(&stats.reduce_s);
   }
   result.points = ReadBackWinners(*gpu, &stats);
-  clock.Book(&stats.reduce_s);
+  clock.Resolve();
   stats.total_s = clock.Total();
   return result;
 }
@@ -816,7 +853,7 @@ std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
   const int num_neighbours = gpu->num_neighbours;
   for (int first = 0; first < num_neighbours; first += max_group) {
     const int count = std::min(max_group, num_neighbours - first);
-    gpu->groups.push_back({first, count, &RasterWorld(count)});
+    gpu->groups.push_back({first, count, &Reproject(count)});
   }
 
   const int width = gpu->width, height = gpu->height;
@@ -888,30 +925,41 @@ void GlslSweepKernel::Impl::RenderShadowMaps(const GpuJob& gpu, const Batch& bat
   EndSweepRaster(gpu.clip_control, "sweep shadow maps");
 }
 
-// Every swept mesh of the batch seen from C: world position and face, and each neighbour's
-// image reprojected through it (one instanced draw per group of neighbours).
+// Every swept mesh of the batch seen from C: camera z and face of the surface it sees; then per
+// pixel its world position and each neighbour's image reprojected through it (one dispatch
+// per group of neighbours).
 void GlslSweepKernel::Impl::RenderCameraView(const GpuJob& gpu, const Batch& batch) {
   BeginSweepRaster(gpu.clip_control);
   gpu.mesh.vertex_array().Bind();
   const GLsizei index_count = static_cast<GLsizei>(3 * gpu.mesh.num_faces());
+  resources.surface_target->BindAndClear({Eigen::Vector4f(0, -1, 0, 0)}, gpu.clear_depth,
+                                         cv::Rect(gpu.radius, 0, gpu.width, gpu.height));
+  if (gpu.far_c > gpu.prep.near) {
+    gpu.SetSweep(*raster_surface, gpu.prep.camera.view, gpu.far_c);
+    raster_surface->Set("u_first_offset", batch.first_offset);
+    raster_surface->Use();
+    glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, batch.layers);
+  }
+  EndSweepRaster(gpu.clip_control, "sweep rasterization");
+  Barrier();
+
+  const int padded = PaddedWidth(gpu.width, gpu.radius);
   gpu.image.Bind(0);
-  for (size_t g = 0; g < gpu.groups.size(); ++g) {
-    const Group& group = gpu.groups[g];
-    std::vector<Eigen::Vector4f> clear(1 + group.count, Eigen::Vector4f::Zero());
-    clear[0] = Eigen::Vector4f(0, 0, 0, -1);  // no surface
-    resources.world_targets[g]->BindAndClear(clear, gpu.clear_depth,
-                                             cv::Rect(gpu.radius, 0, gpu.width, gpu.height));
-    if (!(gpu.far_c > gpu.prep.near)) continue;
+  for (const Group& group : gpu.groups) {
     for (int i = 0; i < group.count; ++i) {
       gpu.neighbour_images[group.first + i].Bind(1 + i);
       resources.shadow[group.first + i]->Bind(1 + group.count + i);
+      BindImageArray(*resources.reprojected[group.first + i], 1 + i, GL_WRITE_ONLY, GL_RGBA32F);
     }
+    resources.surface->Bind(1 + 2 * group.count);
+    BindImageArray(*resources.world, 0, GL_WRITE_ONLY, GL_RGBA32F);
     gpu.SetGroup(group);
-    group.program->Set("u_first_offset", batch.first_offset);
-    group.program->Use();
-    glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, batch.layers);
+    group.program->Set("u_size", Eigen::Vector2i(padded, gpu.height));
+    group.program->Set("u_layers", batch.layers);
+    group.program->Dispatch(DivUp(padded, 8), DivUp(gpu.height, 8), batch.layers);
   }
-  EndSweepRaster(gpu.clip_control, "sweep rasterization and reprojection");
+  Barrier();
+  gl::CheckGlError("sweep world + reprojection");
 }
 
 // Per offset and neighbour: the row sums, then the column sums and the NCC.

@@ -40,8 +40,8 @@ struct GlslSweepKernelOptions {
   int64_t max_batch_bytes = 0;
   // At most this many offsets per batch; 0 = as many as fit max_batch_bytes.
   int max_batch_offsets = 0;
-  // Wait for the GPU at stage boundaries so SweepStats has per-stage times (a few waits per
-  // batch); false leaves only total and prepare times.
+  // GPU timestamps at stage boundaries so SweepStats has per-stage GPU times (no waits);
+  // false leaves only total and prepare times.
   bool time_stages = true;
   // Extra "#define NAME VALUE" lines for every sweep shader (tuning experiments, tests).
   std::vector<std::string> shader_defines;
