@@ -12,7 +12,8 @@
 #
 #   bench/sweep_machine_bench.sh [RESULTS_FILE]      (default bench_results/sweep_HOST_DATE.txt)
 # Environment: ITERATIONS (2), WORKERS (worker counts, "1 2"), KERNEL (auto), SKIP_SETUP=1 (use
-# build/ as it is), DATA (../shared/data).
+# build/ as it is), BIN_DIR (run the programs there instead, no setup: e.g. the bin/ of a
+# deploy/bundle.sh folder on a node without Debian's packages), DATA (../shared/data).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
@@ -23,9 +24,14 @@ iterations=${ITERATIONS:-2}
 worker_counts=${WORKERS:-1 2}
 kernel=${KERNEL:-auto}
 data=${DATA:-$root/../shared/data}
-[[ -n ${SKIP_SETUP:-} ]] || deploy/setup.sh
-manisweep=$root/build/app/manisweep
-bench=$root/build/bench/sweep_kernels_bench
+if [[ -n ${BIN_DIR:-} ]]; then
+  manisweep=$BIN_DIR/manisweep
+  bench=$BIN_DIR/sweep_kernels_bench
+else
+  [[ -n ${SKIP_SETUP:-} ]] || deploy/setup.sh
+  manisweep=$root/build/app/manisweep
+  bench=$root/build/bench/sweep_kernels_bench
+fi
 for tool in "$manisweep" "$bench"; do
   [[ -x $tool ]] || { echo "error: $tool not built (run deploy/setup.sh)" >&2; exit 1; }
 done
@@ -60,12 +66,13 @@ for workers in $worker_counts; do
   python3 - "$run/summary.json" <<'PY'
 import json, sys
 summary = json.load(open(sys.argv[1]))
-print("iteration  sweep_s  kernel_s(sum over jobs)  insert_s  points_found  vertices")
+print("iteration  total_s  sweep_s  kernel_s(sum over jobs)  insert_s  points_found  vertices")
 for it in summary["iterations"]:
     if it["iteration"] == 0:
         continue
-    print(f'{it["iteration"]:9d}  {it["seconds_sweep"]:7.1f}  {it["seconds_kernel"]:23.1f}  '
-          f'{it["seconds_insert"]:8.2f}  {it["points_found"]:12d}  {it["vertices"]:8d}')
+    print(f'{it["iteration"]:9d}  {it["seconds_total"]:7.2f}  {it["seconds_sweep"]:7.2f}  '
+          f'{it["seconds_kernel"]:23.1f}  {it["seconds_insert"]:8.2f}  {it["points_found"]:12d}  '
+          f'{it["vertices"]:8d}')
 PY
 done
 done
