@@ -19,6 +19,7 @@ void Tap(inout Sums acc, float w, Sums s) {
 
 Sums ZeroSums() { return Sums(vec4(0.0), vec2(0.0)); }
 
+#if !TILED  // else the including pass stages its samples in shared memory
 void main() {
   if (!BeginLine()) return;
 #if UNROLLED
@@ -31,3 +32,4 @@ void main() {
   }
 #endif
 }
+#endif

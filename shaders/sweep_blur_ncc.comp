@@ -6,7 +6,11 @@
 // undefined (UNDEFINED_NCC) where m = 0 at the pixel, W < min_window_weight, or a variance is at
 // most max(min_texture_variance, 1e-5 x its mean square). Written to layer u_ncc_layer of the
 // batch's NCC array (not padded).
+#if TILED
+layout(local_size_x = TILE_X, local_size_y = TILE_Y) in;
+#else
 layout(local_size_x = LOCAL_X, local_size_y = LOCAL_Y) in;
+#endif
 
 struct Sums {
   vec4 a;
@@ -74,3 +78,33 @@ void FinishOutput(int o, Sums sums) {
 }
 
 #include "sweep_blur.glsl"
+
+#if TILED
+// One output per invocation, a work group per TILE_X x TILE_Y outputs: the TILE_Y + 2 RADIUS
+// rows of sums above them are loaded once into shared memory ((TILE_Y + 2 RADIUS) / TILE_Y
+// image loads per output instead of 2 RADIUS + 1). The same taps in the same order: the same
+// sums.
+shared vec4 s_a[(TILE_Y + 2 * RADIUS) * TILE_X];
+shared vec2 s_b[(TILE_Y + 2 * RADIUS) * TILE_X];
+
+void main() {
+  ivec2 group_first = ivec2(gl_WorkGroupID.xy) * ivec2(TILE_X, TILE_Y);
+  ivec2 local = ivec2(gl_LocalInvocationID.xy);
+  for (int i = local.y * TILE_X + local.x; i < (TILE_Y + 2 * RADIUS) * TILE_X;
+       i += TILE_X * TILE_Y) {
+    ivec2 at = group_first + ivec2(i % TILE_X, i / TILE_X);
+    s_a[i] = imageLoad(u_sums0, at);
+    s_b[i] = imageLoad(u_sums1, at).xy;
+  }
+  barrier();
+  g_column = group_first.x + local.x;
+  g_first = group_first.y + local.y;
+  if (g_column >= u_size.x || g_first >= u_size.y) return;
+  Sums acc = ZeroSums();
+  for (int i = 0; i <= 2 * RADIUS; ++i) {
+    int k = (local.y + i) * TILE_X + local.x;
+    Tap(acc, u_weights[i], Sums(s_a[k], s_b[k]));
+  }
+  FinishOutput(0, acc);
+}
+#endif

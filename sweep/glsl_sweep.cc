@@ -201,6 +201,7 @@ struct GlslSweepKernel::Impl {
   GlslBlurVariant variant = GlslBlurVariant::kLoops;
   int block = 1;
   int local_x = 64, local_y = 1;  // blur passes' work-group shape
+  int max_shared_bytes = 0;       // per work group
   int max_array_layers = 0;
   int max_group = 1;  // neighbours reprojected by one dispatch (image units - 1)
 
@@ -239,6 +240,7 @@ struct GlslSweepKernel::Impl {
     local_x = unrolled ? 8 : 64;
     local_y = unrolled ? 8 : 1;
     glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_array_layers);
+    glGetIntegerv(GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, &max_shared_bytes);
     GLint image_units = 0, texture_units = 0;
     glGetIntegerv(GL_MAX_COMPUTE_IMAGE_UNIFORMS, &image_units);
     glGetIntegerv(GL_MAX_COMPUTE_TEXTURE_IMAGE_UNITS, &texture_units);
@@ -281,8 +283,22 @@ struct GlslSweepKernel::Impl {
     return *slot;
   }
 
+  // The loops variant with one output per invocation stages the blur passes' samples in shared
+  // memory (sweep_blur_rows.comp, sweep_blur_ncc.comp): rows in groups of local_x, columns in
+  // tiles of NccTile() outputs.
+  bool Tiled() const { return variant == GlslBlurVariant::kLoops && block == 1; }
+  // 16 x 16 outputs, fewer columns where the 2 radius + 16 rows of sums (24 bytes a sample)
+  // would not fit the shared memory.
+  Eigen::Vector2i NccTile(int radius) const {
+    const int rows = 16;
+    int columns = 16;
+    while (columns > 1 && (rows + 2 * radius) * columns * 24 > max_shared_bytes) columns /= 2;
+    return {columns, rows};
+  }
+
   std::vector<std::string> ComputeDefines(int radius, int match_words) const {
     const bool unrolled = variant == GlslBlurVariant::kUnrolled;
+    const Eigen::Vector2i tile = NccTile(radius);
     std::vector<std::string> defines = {
         fmt::format("RADIUS {}", radius), fmt::format("BLOCK {}", block),
         fmt::format("UNROLLED {}", unrolled ? 1 : 0),
@@ -290,7 +306,8 @@ struct GlslSweepKernel::Impl {
         fmt::format("LOCAL_Y {}", local_y), fmt::format("UNDEFINED_NCC {:.1f}", kUndefinedNcc),
         // Tile-best work groups: 64 invocations for llvmpipe, 256 to fill a GPU's multiprocessors.
         fmt::format("REDUCE_THREADS {}", unrolled ? 64 : 256),
-        fmt::format("MATCH_WORDS {}", match_words)};
+        fmt::format("MATCH_WORDS {}", match_words), fmt::format("TILED {}", Tiled() ? 1 : 0),
+        fmt::format("TILE_X {}", tile.x()), fmt::format("TILE_Y {}", tile.y())};
     defines.insert(defines.end(), options.shader_defines.begin(), options.shader_defines.end());
     return defines;
   }
@@ -878,6 +895,11 @@ std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
   gpu->rows_groups_y = DivUp(height, local_y);
   gpu->ncc_groups_x = DivUp(transposed ? DivUp(height, block) : width, local_x);
   gpu->ncc_groups_y = DivUp(transposed ? width : DivUp(height, block), local_y);
+  if (Tiled()) {
+    const Eigen::Vector2i tile = NccTile(radius);
+    gpu->ncc_groups_x = DivUp(width, tile.x());
+    gpu->ncc_groups_y = DivUp(height, tile.y());
+  }
   return gpu;
 }
 
