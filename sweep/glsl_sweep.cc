@@ -285,10 +285,15 @@ struct GlslSweepKernel::Impl {
 
   // The loops variant with one output per invocation stages the blur passes' samples in shared
   // memory (sweep_blur_rows.comp, sweep_blur_ncc.comp): rows in groups of local_x, columns in
-  // tiles of NccTile() outputs.
-  bool Tiled() const { return variant == GlslBlurVariant::kLoops && block == 1; }
-  // 16 x 16 outputs, fewer columns where the 2 radius + 16 rows of sums (24 bytes a sample)
-  // would not fit the shared memory.
+  // tiles of NccTile() outputs; unless a window that wide (24 bytes a sample) would not fit
+  // the shared memory.
+  bool Tiled(int radius) const {
+    const Eigen::Vector2i tile = NccTile(radius);
+    return variant == GlslBlurVariant::kLoops && block == 1 &&
+           (local_x + 2 * radius) * 24 <= max_shared_bytes &&
+           (tile.y() + 2 * radius) * tile.x() * 24 <= max_shared_bytes;
+  }
+  // 16 x 16 outputs, fewer columns where the 2 radius + 16 rows of sums would not fit.
   Eigen::Vector2i NccTile(int radius) const {
     const int rows = 16;
     int columns = 16;
@@ -306,7 +311,7 @@ struct GlslSweepKernel::Impl {
         fmt::format("LOCAL_Y {}", local_y), fmt::format("UNDEFINED_NCC {:.1f}", kUndefinedNcc),
         // Tile-best work groups: 64 invocations for llvmpipe, 256 to fill a GPU's multiprocessors.
         fmt::format("REDUCE_THREADS {}", unrolled ? 64 : 256),
-        fmt::format("MATCH_WORDS {}", match_words), fmt::format("TILED {}", Tiled() ? 1 : 0),
+        fmt::format("MATCH_WORDS {}", match_words), fmt::format("TILED {}", Tiled(radius) ? 1 : 0),
         fmt::format("TILE_X {}", tile.x()), fmt::format("TILE_Y {}", tile.y())};
     defines.insert(defines.end(), options.shader_defines.begin(), options.shader_defines.end());
     return defines;
@@ -895,7 +900,7 @@ std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
   gpu->rows_groups_y = DivUp(height, local_y);
   gpu->ncc_groups_x = DivUp(transposed ? DivUp(height, block) : width, local_x);
   gpu->ncc_groups_y = DivUp(transposed ? width : DivUp(height, block), local_y);
-  if (Tiled()) {
+  if (Tiled(radius)) {
     const Eigen::Vector2i tile = NccTile(radius);
     gpu->ncc_groups_x = DivUp(width, tile.x());
     gpu->ncc_groups_y = DivUp(height, tile.y());
