@@ -13,11 +13,12 @@
 # their trees are 120 MB. They are replaced by stubs that define the symbols OpenCV imports from
 # them, so the folder stays near 70 MB.
 set -euo pipefail
-cd "$(dirname "$0")/.."
-out=${1:-build/bundle}
+root=$(cd "$(dirname "$0")/.." && pwd)
+out=${1:-$root/build/bundle}
 shift || true
 programs=("$@")
-[[ ${#programs[@]} -gt 0 ]] || programs=(build/app/manisweep build/bench/sweep_kernels_bench)
+[[ ${#programs[@]} -gt 0 ]] ||
+  programs=("$root/build/app/manisweep" "$root/build/bench/sweep_kernels_bench")
 for p in "${programs[@]}"; do
   [[ -x $p ]] || { echo "error: $p is not built (run deploy/setup.sh)" >&2; exit 1; }
 done
