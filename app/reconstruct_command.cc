@@ -171,8 +171,12 @@ void RunReconstruct(ReconstructCommandOptions& options) {
 
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const int workers = options.workers > 0 ? options.workers : cores;
-  const int threads =
-      options.worker_threads > 0 ? options.worker_threads : std::max(1, cores / workers);
+  // One thread more than the worker's share of the cores: the CPU kernel hands offsets out one
+  // at a time, so while every worker sweeps they share the cores, and a job left alone at the
+  // end of an iteration also takes the core its neighbour freed (docs/performance.md).
+  const int threads = options.worker_threads > 0
+                          ? options.worker_threads
+                          : std::min(cores, std::max(1, cores / workers) + 1);
   const spdlog::level::level_enum level = spdlog::get_level();
   const std::string worker_level = level <= spdlog::level::debug
                                        ? std::string(spdlog::level::to_string_view(level).data())
@@ -270,7 +274,7 @@ void RegisterReconstructCommand(CLI::App& app) {
   cmd->add_option("-w,--workers", options->workers, "worker processes (0 = one per core)")
       ->capture_default_str();
   cmd->add_option("--worker-threads", options->worker_threads,
-                  "kernel threads per worker (0 = cores / workers)")
+                  "kernel threads per worker (0 = cores / workers + 1, at most the cores)")
       ->capture_default_str();
   cmd->add_option("--kernel", options->kernel,
                   fmt::format("sweep kernel of the workers: {} (auto = the fastest available)",
