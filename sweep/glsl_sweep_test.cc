@@ -323,7 +323,7 @@ TEST_F(GlslSweepTest, BatchingAndVariantsGiveTheSameResult) {
 }
 
 TEST_F(GlslSweepTest, ManyNeighboursAndPyramidLevels) {
-  // 34 neighbours: several reprojection draws (colour attachments are limited) and two words
+  // 34 neighbours: several reprojection dispatches (at most 7 neighbours each) and two words
   // of matched-neighbour bits; at pyramid level 1.
   PyramidSceneOptions options;
   options.width = 96;
