@@ -200,21 +200,27 @@ MS_ALWAYS_INLINE void AnticausalColumns(const FloatGaussian& g, float* __restric
   }
 }
 
+// Calls step(V(), c) over the columns of a row of n: Wide vectors (Lanes, or WideLanes where
+// AVX-512 is), then 8 floats, then single floats; every column gets the same arithmetic
+// whichever takes it.
+template <typename Wide, typename Step>
+MS_ALWAYS_INLINE void ForEachColumnVector(int n, Step&& step) {
+  const size_t end = static_cast<size_t>(n);
+  constexpr size_t kWide = sizeof(Wide) / sizeof(float);
+  size_t c = 0;
+  for (; c + kWide <= end; c += kWide) step(Wide(), c);
+  for (; c + kLanes <= end; c += kLanes) step(Lanes(), c);
+  for (; c < end; ++c) step(float(), c);
+}
+
 // The causal step of a whole row: all six quantities at once, so each input row is read once.
-// Wide: the body's vectors (Lanes, or WideLanes where AVX-512 is); every column gets the same
-// arithmetic whatever vector or scalar code takes it.
 template <typename Wide>
 MS_ALWAYS_INLINE void CausalRowWith(const FloatGaussian& g, float* __restrict state, RowInputs x,
                                     RowInputs x_tail, float* __restrict out, int n) {
-  size_t c = 0;
-  constexpr size_t kWide = sizeof(Wide) / sizeof(float);
-  for (; c + kWide <= static_cast<size_t>(n); c += kWide) {
-    CausalColumns<Wide>(g, state, x, x_tail, out, c);
-  }
-  for (; c + kLanes <= static_cast<size_t>(n); c += kLanes) {
-    CausalColumns<Lanes>(g, state, x, x_tail, out, c);
-  }
-  for (; c < static_cast<size_t>(n); ++c) CausalColumns<float>(g, state, x, x_tail, out, c);
+  ForEachColumnVector<Wide>(
+      n, [&](auto v, size_t c) __attribute__((always_inline)) {
+        CausalColumns<decltype(v)>(g, state, x, x_tail, out, c);
+      });
 }
 
 // The anticausal step of a whole row, all six quantities at once.
@@ -223,17 +229,10 @@ MS_ALWAYS_INLINE void AnticausalRowWith(const FloatGaussian& g, float* __restric
                                         RowInputs x_next, RowInputs x_tail,
                                         const float* __restrict causal, float* __restrict out,
                                         size_t out_stride, int n) {
-  size_t c = 0;
-  constexpr size_t kWide = sizeof(Wide) / sizeof(float);
-  for (; c + kWide <= static_cast<size_t>(n); c += kWide) {
-    AnticausalColumns<Wide>(g, state, x_next, x_tail, causal, out, out_stride, c);
-  }
-  for (; c + kLanes <= static_cast<size_t>(n); c += kLanes) {
-    AnticausalColumns<Lanes>(g, state, x_next, x_tail, causal, out, out_stride, c);
-  }
-  for (; c < static_cast<size_t>(n); ++c) {
-    AnticausalColumns<float>(g, state, x_next, x_tail, causal, out, out_stride, c);
-  }
+  ForEachColumnVector<Wide>(
+      n, [&](auto v, size_t c) __attribute__((always_inline)) {
+        AnticausalColumns<decltype(v)>(g, state, x_next, x_tail, causal, out, out_stride, c);
+      });
 }
 
 MS_VECTOR_CLONES void CausalRow(const FloatGaussian& g, float* __restrict state, RowInputs x,
