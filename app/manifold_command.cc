@@ -47,10 +47,7 @@ void RunManifold(const ManifoldCommandOptions& options) {
                      std::to_string(options.manifold.free_threshold) + ") or none could grow");
   }
   const OutputMeshes output =
-      MakeOutputMeshes(std::move(extracted), info, options.manifold.float_cleanup, [&manifold] {
-        SurfaceInfo again;
-        return manifold.ExtractSurface(&again);
-      });
+      MakeOutputMeshes(manifold, std::move(extracted), info, options.manifold.float_cleanup);
   const Mesh& mesh = output.closed;
   const double total = timer.Seconds();
   MeshWriteOptions write_options;

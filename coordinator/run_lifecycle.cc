@@ -318,10 +318,7 @@ OutputMeshes RunLifecycle::WriteOutputMeshes(const std::string& name, bool with_
   ReleaseFreeMemory();
   SurfaceInfo info;
   OutputMeshes out =
-      MakeOutputMeshes(TakeMesh(&info), info, options_.manifold.float_cleanup, [this] {
-        SurfaceInfo again;
-        return manifold_->ExtractSurface(&again);
-      });
+      MakeOutputMeshes(*manifold_, TakeMesh(&info), info, options_.manifold.float_cleanup);
   ReleaseFreeMemory();  // the cleaner's structures
   WriteMesh(out.closed, Path(name + ".ply"));
   if (with_surface) WriteMesh(out.surface, Path(name + "_surface.ply"));

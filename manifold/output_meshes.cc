@@ -7,14 +7,16 @@
 
 namespace ms {
 
-OutputMeshes MakeOutputMeshes(Mesh surface, const SurfaceInfo& info, bool float_cleanup,
-                              const std::function<Mesh()>& extract_again) {
+OutputMeshes MakeOutputMeshes(const DelaunayManifold& manifold, Mesh surface,
+                              const SurfaceInfo& info, bool float_cleanup) {
   MS_CHECK(info.vertex_ids.size() == surface.vertices.size()) << "SurfaceInfo of another mesh";
   OutputMeshes out;
   out.closed = std::move(surface);
   std::vector<uint8_t> steiner = SteinerFlags(info);
   if (float_cleanup && !out.closed.faces.empty()) {
-    out.cleanup = CleanForFloatingPoint(&out.closed, &steiner, {}, extract_again);
+    // A cleanup that must be undone extracts the surface again: no copy is held meanwhile.
+    out.cleanup = CleanForFloatingPoint(&out.closed, &steiner, {},
+                                        [&manifold] { return manifold.ExtractSurface(); });
     ReleaseFreeMemory();  // the cleaner's structures, before the surface proper is made
     const FloatCleanupStats& c = out.cleanup;
     if (c.problems_before > 0) {

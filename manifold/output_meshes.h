@@ -4,8 +4,6 @@
 // 2-manifold with boundary).
 #pragma once
 
-#include <functional>
-
 #include "manifold/delaunay_manifold.h"
 #include "mesh/float_cleanup.h"
 #include "mesh/mesh.h"
@@ -18,9 +16,9 @@ struct OutputMeshes {
   FloatCleanupStats cleanup;  // all zero when not cleaned
 };
 
-// `surface` and `info` from DelaunayManifold::ExtractSurface; `extract_again` makes `surface`
-// again, for a cleanup that must be undone (so that no copy of it is held meanwhile).
-OutputMeshes MakeOutputMeshes(Mesh surface, const SurfaceInfo& info, bool float_cleanup,
-                              const std::function<Mesh()>& extract_again);
+// `surface` and `info` from manifold.ExtractSurface, the manifold unchanged since (a cleanup
+// that must be undone extracts the surface again rather than holding a copy of it).
+OutputMeshes MakeOutputMeshes(const DelaunayManifold& manifold, Mesh surface,
+                              const SurfaceInfo& info, bool float_cleanup);
 
 }  // namespace ms
