@@ -21,11 +21,14 @@ namespace ms {
 
 using manifold_detail::BatchRays;
 using manifold_detail::CellInfo;
+using manifold_detail::LocalMarks;
 using manifold_detail::Locate_type;
+using manifold_detail::ParallelWalks;
 using manifold_detail::SegmentMeetsBox;
 using manifold_detail::ToEigen;
 using manifold_detail::ToPoint;
 using manifold_detail::VertexInfo;
+using manifold_detail::WalkScratch;
 
 namespace {
 
@@ -255,12 +258,26 @@ void DelaunayManifold::Impl::TraceRays(const std::vector<RayPoint>& points, Buil
   ray_index_->Flush();
   Progress progress("manifold: ray tracing", static_cast<int64_t>(ray_index_->size()));
   const auto count = [&](const Cell_handle& c, unsigned mask) { labels_.CountCrossing(c, mask); };
-  // Walked straight from the index, in its order (no list of every ray: 12 bytes a ray).
-  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
-    stats->ray_cell_steps += walker_.WalkFromCamera(ray.camera, vertex_of_point_[ray.point], count);
-    ++stats->rays;
+  // Walked from the index, in its order, a chunk at a time (no list of every ray: 12 bytes a
+  // ray), on all cores.
+  std::vector<RayRef> chunk;
+  const auto walk_chunk = [&] {
+    stats->ray_cell_steps += walks_.Run(
+        chunk.size(),
+        [&](size_t i, LocalMarks& marks, WalkScratch& scratch, auto& record) {
+          return walker_.WalkFromCameraWith(chunk[i].camera, vertex_of_point_[chunk[i].point],
+                                            marks, scratch, record);
+        },
+        count);
+    stats->rays += static_cast<int64_t>(chunk.size());
     progress.Update(stats->rays);
+    chunk.clear();
+  };
+  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
+    chunk.push_back(ray);
+    if (chunk.size() == ParallelWalks::kChunk) walk_chunk();
   });
+  walk_chunk();
 }
 
 void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
@@ -535,40 +552,65 @@ void DelaunayManifold::Impl::RewalkMarked(InsertionBatch* batch, uint32_t last_m
     std::vector<RayRef>().swap(bucket);
   }
   std::sort(due.begin(), due.end());
+  std::vector<float> reach;
+  reach.reserve(due.size());
+  for (const RayRef& ray : due) reach.push_back(batch->rays.Get(ray.id).reach);
+  Rewalk(*batch, due, reach, stats);
   for (const RayRef& ray : due) {
     BatchRays::State& state = batch->rays.Touch(ray.id);
-    RewalkRay(batch, ray, state.reach, stats);
     state.counted = batch->part;
     state.reach = 2.0f;
   }
 }
 
-// Every ray from its camera on (a batch whose holes meet most rays).
+// Every ray from its camera on (a batch whose holes meet most rays), a chunk at a time.
 void DelaunayManifold::Impl::RewalkAll(InsertionBatch* batch, InsertionStats* stats) {
-  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) { RewalkRay(batch, ray, 0, stats); });
+  std::vector<RayRef> chunk;
+  const std::vector<float> from_camera(ParallelWalks::kChunk, 0.0f);
+  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
+    chunk.push_back(ray);
+    if (chunk.size() < ParallelWalks::kChunk) return;
+    Rewalk(*batch, chunk, from_camera, stats);
+    chunk.clear();
+  });
+  Rewalk(*batch, chunk, from_camera, stats);
   for (std::vector<RayRef>& bucket : batch->marked_in) std::vector<RayRef>().swap(bucket);
   batch->rays.Reset(ray_index_->size(), batch->part);  // every ray is counted now
 }
 
-// One ray, counted on the cells born since its last walk (the others have its crossing
-// already, or their geometry did not change). The caller records the walk in batch->rays.
-void DelaunayManifold::Impl::RewalkRay(InsertionBatch* batch, const RayRef& ray, float reach,
-                                       InsertionStats* stats) {
-  const uint32_t after = batch->rays.Get(ray.id).counted, upto = batch->part;
+void DelaunayManifold::Impl::Rewalk(const InsertionBatch& batch, const std::vector<RayRef>& rays,
+                                    const std::vector<float>& reach, InsertionStats* stats) {
+  walker_.LocateStarts();  // a ray whose walk back is degenerate walks from its camera
+  stats->rewalk_steps += walks_.Run(
+      rays.size(),
+      [&](size_t i, LocalMarks& marks, WalkScratch& scratch, auto& record) {
+        return RewalkRay(batch, rays[i], reach[i], marks, scratch, record);
+      },
+      [&](const Cell_handle& c, unsigned mask) { labels_.CountCrossing(c, mask); });
+  stats->rewalked_rays += static_cast<int64_t>(rays.size());
+}
+
+template <typename Record>
+int64_t DelaunayManifold::Impl::RewalkRay(const InsertionBatch& batch, const RayRef& ray,
+                                          float reach, LocalMarks& marks, WalkScratch& scratch,
+                                          Record& record) const {
+  const uint32_t after = batch.rays.Get(ray.id).counted, upto = batch.part;
   const auto is_new = [&](const Cell_handle& c) {
     return c->info().born > after && c->info().born <= upto;
   };
-  const auto count_new_cells = [&](const Cell_handle& c, unsigned mask) {
-    if (is_new(c)) labels_.CountCrossing(c, mask);
+  const auto record_new_cells = [&](const Cell_handle& c, unsigned mask) {
+    if (is_new(c)) record(c, mask);
   };
   const Vertex_handle target = vertex_of_point_[ray.point];
   // Only the part of the ray from its first hole box on can cross a new cell: walk that part
   // backwards from the point; where that is degenerate, the whole ray forwards.
-  if (reach <= 0 || !walker_.WalkBack(walker_.camera_point(ray.camera), target, reach, is_new,
-                                      count_new_cells, &stats->rewalk_steps)) {
-    stats->rewalk_steps += walker_.WalkFromCamera(ray.camera, target, count_new_cells);
+  int64_t steps = 0;
+  if (reach <= 0 ||
+      !walker_.WalkBackWith(walker_.camera_point(ray.camera), target, reach, is_new, marks,
+                            scratch, record_new_cells, &steps)) {
+    steps += walker_.WalkFromCameraWith(ray.camera, target, marks, scratch, record_new_cells);
   }
-  ++stats->rewalked_rays;
+  return steps;
 }
 
 // The cameras of a duplicate that `vertex` does not have yet, for TraceNewRays (Steiner vertices
@@ -596,9 +638,9 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
   std::vector<std::pair<int32_t, int32_t>>& gained = batch->gained_rays;
   std::sort(gained.begin(), gained.end());
   gained.erase(std::unique(gained.begin(), gained.end()), gained.end());
+  std::vector<RayRef> rays;  // to walk and file, in this order
   for (const auto& [id, c] : gained) {
-    const Vertex_handle target = vertex_of_point_[id];
-    target->info().changed = batch->number;  // growing looks at its cells again
+    vertex_of_point_[id]->info().changed = batch->number;  // growing looks at its cells again
     ++stats->gained_rays;
     // A point new in this part has its rays, the gained one included, traced below.
     if (id >= batch->first_new_id) {
@@ -606,18 +648,21 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
       cams.insert(std::upper_bound(cams.begin(), cams.end(), c), c);
       continue;
     }
-    walker_.WalkFromCamera(c, target, count);
-    ray_index_->Add(c, id, positions_[id]);
-    ++stats->new_rays;
+    rays.push_back({c, id});
   }
   for (int32_t id = batch->first_new_id; id < static_cast<int32_t>(positions_.size()); ++id) {
-    const Vertex_handle target = vertex_of_point_[id];
-    for (int32_t c : batch->part_cameras[id - batch->first_new_id]) {
-      walker_.WalkFromCamera(c, target, count);
-      ray_index_->Add(c, id, positions_[id]);
-      ++stats->new_rays;
-    }
+    for (int32_t c : batch->part_cameras[id - batch->first_new_id]) rays.push_back({c, id});
   }
+  walker_.LocateStarts();
+  walks_.Run(
+      rays.size(),
+      [&](size_t i, LocalMarks& marks, WalkScratch& scratch, auto& record) {
+        return walker_.WalkFromCameraWith(rays[i].camera, vertex_of_point_[rays[i].point], marks,
+                                          scratch, record);
+      },
+      count);
+  for (const RayRef& ray : rays) ray_index_->Add(ray.camera, ray.point, positions_[ray.point]);
+  stats->new_rays += static_cast<int64_t>(rays.size());
   gained.clear();
   batch->part_cameras.clear();
   ray_index_->Flush();

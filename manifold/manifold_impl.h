@@ -6,6 +6,7 @@
 //   cell_predicates.h  stateless exact predicates on a cell and a segment
 //   cell_labels.h      weights, free space, the set O and its per-vertex counts
 //   ray_walker.h       viewing rays through the triangulation (visit stamps, camera starts)
+//   parallel_walks.h   many rays walked on all cores, their crossings counted
 //   regularity.h       does the surface stay a 2-manifold when a cell flips?
 //   grow_shrink.h      growing and shrinking O
 // Build and Insert (delaunay_manifold.cc) are short lists of named steps over these;
@@ -24,6 +25,7 @@
 #include "manifold/delaunay_manifold.h"
 #include "manifold/grow_shrink.h"
 #include "manifold/manifold_options.h"
+#include "manifold/parallel_walks.h"
 #include "manifold/point_merging.h"
 #include "manifold/ray_index.h"
 #include "manifold/ray_walker.h"
@@ -168,7 +170,16 @@ class DelaunayManifold::Impl {
   void EndPart(InsertionBatch* batch, InsertionStats* stats);
   void RewalkMarked(InsertionBatch* batch, uint32_t last_marked_by, InsertionStats* stats);
   void RewalkAll(InsertionBatch* batch, InsertionStats* stats);
-  void RewalkRay(InsertionBatch* batch, const RayRef& ray, float reach, InsertionStats* stats);
+  // Walks `rays` again on all cores, each with its reach (RewalkRay), and counts them.
+  void Rewalk(const InsertionBatch& batch, const std::vector<RayRef>& rays,
+              const std::vector<float>& reach, InsertionStats* stats);
+  // One ray of Rewalk: records its crossings of the cells born since its last walk (the cells
+  // that have it counted already, or whose geometry did not change, are left out); returns the
+  // cells stepped through.
+  template <typename Record>
+  int64_t RewalkRay(const InsertionBatch& batch, const RayRef& ray, float reach,
+                    manifold_detail::LocalMarks& marks, manifold_detail::WalkScratch& scratch,
+                    Record& record) const;
   void TraceNewRays(InsertionBatch* batch, InsertionStats* stats);
   void GainCameras(const Vertex_handle& vertex, const std::vector<int32_t>& cameras,
                    InsertionBatch* batch);
@@ -189,6 +200,7 @@ class DelaunayManifold::Impl {
   manifold_detail::CellLabels labels_{dt_, options_};
   manifold_detail::Regularity regularity_{dt_};
   manifold_detail::RayWalker walker_;
+  manifold_detail::ParallelWalks walks_;  // one thread per core (tests set fewer)
   manifold_detail::GrowShrink grow_shrink_{dt_, options_, labels_, regularity_};
   std::unique_ptr<RayIndex> ray_index_;
   std::vector<Eigen::Vector3d> positions_;

@@ -22,6 +22,10 @@ const CameraStart& RayWalker::StartOf(int camera) {
   return start;
 }
 
+void RayWalker::LocateStarts() {
+  for (size_t c = 0; c < camera_cells_.size(); ++c) StartOf(static_cast<int>(c));
+}
+
 CameraStart RayWalker::Locate(int camera) const {
   CameraStart start;
   start.cell = dt_.locate(camera_points_[camera], start.type, start.li, start.lj);

@@ -4,9 +4,11 @@
 // insertion's recount), and an exhaustive fallback for degenerate segments. Internal to
 // manifold/.
 //
-// The walker reads the triangulation's structure and writes only CellInfo::stamp (visit
-// marks) and CellInfo::has_camera. It owns the stamp counter, its scratch buffers and the
-// cameras' start cells.
+// The walker reads the triangulation's structure and writes only CellInfo::has_camera (when it
+// locates a camera) and the visit marks of a walk. Those are CellInfo::stamp for the plain walks
+// (StampMarks); the *With walks take the marks and scratch buffers as arguments, so that several
+// threads can walk at once with a LocalMarks and a WalkScratch each (manifold/parallel_walks.h).
+// It owns the stamp counter, its own scratch buffers and the cameras' start cells.
 //
 // The walks are templates on the visitor, called once per crossed cell; they are defined at the
 // bottom of this header so that each caller's visitor is inlined into the walk loop.
@@ -27,6 +29,78 @@
 #include "manifold/triangulation.h"
 
 namespace ms::manifold_detail {
+
+class RayWalker;
+
+// A walk's visit marks in the cells themselves (CellInfo::stamp): one walk at a time.
+class StampMarks {
+ public:
+  explicit StampMarks(RayWalker* walker) : walker_(walker) {}
+  inline void Begin();  // forgets the marks of the walk before
+  void Mark(const Cell_handle& c) { c->info().stamp = stamp_; }
+  bool Marked(const Cell_handle& c) const { return c->info().stamp == stamp_; }
+
+ private:
+  RayWalker* walker_;
+  uint32_t stamp_ = 0;
+};
+
+// A walk's visit marks in a set of its own (open addressing on the cell's address), which
+// leaves the cells untouched: one per thread walking.
+class LocalMarks {
+ public:
+  LocalMarks() : slots_(kInitialSlots, nullptr) {}
+  void Begin() {
+    for (uint32_t s : used_) slots_[s] = nullptr;
+    used_.clear();
+  }
+  void Mark(const Cell_handle& c) {
+    if (2 * (used_.size() + 1) > slots_.size()) Grow();
+    const void* key = &*c;
+    uint32_t s = SlotOf(key);
+    while (slots_[s] != nullptr) {
+      if (slots_[s] == key) return;
+      s = (s + 1) & (slots_.size() - 1);
+    }
+    slots_[s] = key;
+    used_.push_back(s);
+  }
+  bool Marked(const Cell_handle& c) const {
+    const void* key = &*c;
+    for (uint32_t s = SlotOf(key); slots_[s] != nullptr; s = (s + 1) & (slots_.size() - 1)) {
+      if (slots_[s] == key) return true;
+    }
+    return false;
+  }
+
+ private:
+  static constexpr size_t kInitialSlots = 1024;  // a power of two; most walks cross < 100 cells
+  uint32_t SlotOf(const void* key) const {
+    // Cells are at least 64 bytes apart: the low bits carry nothing.
+    const uint64_t h = (reinterpret_cast<uintptr_t>(key) >> 6) * 0x9E3779B97F4A7C15ull;
+    return static_cast<uint32_t>(h >> 32) & (slots_.size() - 1);
+  }
+  void Grow() {
+    std::vector<const void*> keys;
+    for (uint32_t s : used_) keys.push_back(slots_[s]);
+    slots_.assign(2 * slots_.size(), nullptr);
+    used_.clear();
+    for (const void* key : keys) {
+      uint32_t s = SlotOf(key);
+      while (slots_[s] != nullptr) s = (s + 1) & (slots_.size() - 1);
+      slots_[s] = key;
+      used_.push_back(s);
+    }
+  }
+  std::vector<const void*> slots_;
+  std::vector<uint32_t> used_;  // the filled slots, to clear
+};
+
+// The buffers a walk reuses: one per thread walking.
+struct WalkScratch {
+  std::vector<Cell_handle> cells;                         // by Walk
+  std::vector<std::pair<Cell_handle, unsigned>> crossed;  // by WalkBack
+};
 
 // Where a camera's rays start: the simplex of the triangulation that holds the camera centre
 // (CGAL locate).
@@ -62,12 +136,31 @@ class RayWalker {
   // it). Returns the cells stepped through.
   template <typename Visit>
   int64_t Walk(const CameraStart& start, const Point& a, const Vertex_handle& target,
-               Visit&& visit);
+               Visit&& visit) {
+    StampMarks marks(this);
+    return WalkWith(start, a, target, marks, scratch_, visit);
+  }
   // The same from camera `camera`'s start.
   template <typename Visit>
   int64_t WalkFromCamera(int camera, const Vertex_handle& target, Visit&& visit) {
     return Walk(StartOf(camera), camera_points_[camera], target, visit);
   }
+  // Walk with the caller's marks and buffers; reads the triangulation only (safe on several
+  // threads at once with LocalMarks).
+  template <typename Marks, typename Visit>
+  int64_t WalkWith(const CameraStart& start, const Point& a, const Vertex_handle& target,
+                   Marks& marks, WalkScratch& scratch, Visit&& visit) const;
+  // The same from camera `camera`'s start, which must be located (LocateStarts).
+  template <typename Marks, typename Visit>
+  int64_t WalkFromCameraWith(int camera, const Vertex_handle& target, Marks& marks,
+                             WalkScratch& scratch, Visit&& visit) const {
+    const CameraStart& start = camera_cells_[camera];
+    MS_CHECK(start.valid) << "camera " << camera << " walked from before it is located";
+    return WalkWith(start, camera_points_[camera], target, marks, scratch, visit);
+  }
+  // Locates again every camera whose start an insertion destroyed, so that the *With walks can
+  // start from any camera.
+  void LocateStarts();
 
   // Walks the open segment a -> target backwards from the target and calls visit(cell, mask)
   // (masks as Walk's) for the cells it crosses at parameters >= reach (0 at a, 1 at the
@@ -76,22 +169,31 @@ class RayWalker {
   // then walk forwards. *steps is increased by the cells stepped through.
   template <typename Wants, typename Visit>
   bool WalkBack(const Point& a, const Vertex_handle& target, double reach, Wants&& wants,
-                Visit&& visit, int64_t* steps);
+                Visit&& visit, int64_t* steps) {
+    StampMarks marks(this);
+    return WalkBackWith(a, target, reach, wants, marks, scratch_, visit, steps);
+  }
+  // WalkBack with the caller's marks and buffers (as WalkWith).
+  template <typename Wants, typename Marks, typename Visit>
+  bool WalkBackWith(const Point& a, const Vertex_handle& target, double reach, Wants&& wants,
+                    Marks& marks, WalkScratch& scratch, Visit&& visit, int64_t* steps) const;
 
   // The cells around a camera located on a facet, an edge or a vertex (its one cell otherwise).
   std::vector<Cell_handle> StartCandidates(const CameraStart& start) const;
 
  private:
   // Exhaustive enumeration for degenerate segments (see the definition).
-  template <typename Visit>
-  void WalkFallback(Cell_handle from, const Point& a, const Point& b, uint32_t stamp, Visit& visit);
+  template <typename Marks, typename Visit>
+  void WalkFallback(Cell_handle from, const Point& a, const Point& b, Marks& marks,
+                    Visit& visit) const;
   const Delaunay& dt_;
   std::vector<Point> camera_points_;
   std::vector<CameraStart> camera_cells_;
   uint32_t stamp_ = 0;
-  std::vector<Cell_handle> scratch_cells_;                         // by Walk
-  std::vector<std::pair<Cell_handle, unsigned>> scratch_crossed_;  // by WalkBack
+  WalkScratch scratch_;  // of the plain walks
 };
+
+inline void StampMarks::Begin() { stamp_ = walker_->NextStamp(); }
 
 // ---------------------------------------------------------------------------------------------
 // The walks (templates)
@@ -103,11 +205,11 @@ inline void PrefetchCell(const Cell_handle& c) {
   __builtin_prefetch(bytes + 64);
 }
 
-template <typename Visit>
-int64_t RayWalker::Walk(const CameraStart& start, const Point& a, const Vertex_handle& target,
-                        Visit&& visit) {
+template <typename Marks, typename Visit>
+int64_t RayWalker::WalkWith(const CameraStart& start, const Point& a, const Vertex_handle& target,
+                            Marks& marks, WalkScratch& scratch, Visit&& visit) const {
   const Point& b = target->point();
-  const uint32_t stamp = NextStamp();
+  marks.Begin();
   int64_t steps = 0;
   Cell_handle current;
   if (start.type == Delaunay::CELL) {
@@ -122,7 +224,7 @@ int64_t RayWalker::Walk(const CameraStart& start, const Point& a, const Vertex_h
     }
     if (current == Cell_handle()) {
       // The segment leaves the camera along a face or edge: enumerate exhaustively.
-      WalkFallback(candidates.front(), a, b, stamp, visit);
+      WalkFallback(candidates.front(), a, b, marks, visit);
       return steps;
     }
   }
@@ -133,7 +235,7 @@ int64_t RayWalker::Walk(const CameraStart& start, const Point& a, const Vertex_h
     for (int i = 0; i < 4; ++i) {
       if (i != entry) PrefetchCell(current->neighbor(i));
     }
-    current->info().stamp = stamp;
+    marks.Mark(current);
     ++steps;
     Cell_handle next;
     int exit = -1;
@@ -161,7 +263,7 @@ int64_t RayWalker::Walk(const CameraStart& start, const Point& a, const Vertex_h
       if (num_ties > 1) {
         // Leaves through an edge (two faces tie) or a vertex (three): the next cell is the
         // one around that simplex that the segment enters.
-        std::vector<Cell_handle>& around = scratch_cells_;
+        std::vector<Cell_handle>& around = scratch.cells;
         around.clear();
         if (num_ties == 2) {
           int k, l;
@@ -175,14 +277,14 @@ int64_t RayWalker::Walk(const CameraStart& start, const Point& a, const Vertex_h
           dt_.incident_cells(current->vertex(vertex), std::back_inserter(around));
         }
         for (const Cell_handle& c : around) {
-          if (c->info().stamp != stamp && !dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
+          if (!marks.Marked(c) && !dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
             next = c;
             break;
           }
         }
         if (next == Cell_handle()) {
           // Degenerate: the segment runs inside a face or along an edge for a while.
-          WalkFallback(current, a, b, stamp, visit);
+          WalkFallback(current, a, b, marks, visit);
           return steps;
         }
         entry = -1;
@@ -192,8 +294,8 @@ int64_t RayWalker::Walk(const CameraStart& start, const Point& a, const Vertex_h
     }
     next = current->neighbor(exit);
     MS_CHECK(!dt_.is_infinite(next)) << "viewing ray leaves the triangulation";
-    if (next->info().stamp == stamp) {
-      WalkFallback(current, a, b, stamp, visit);
+    if (marks.Marked(next)) {
+      WalkFallback(current, a, b, marks, visit);
       return steps;
     }
     entry = next->index(current);
@@ -202,9 +304,10 @@ int64_t RayWalker::Walk(const CameraStart& start, const Point& a, const Vertex_h
   return steps;
 }
 
-template <typename Wants, typename Visit>
-bool RayWalker::WalkBack(const Point& a, const Vertex_handle& target, double reach, Wants&& wants,
-                         Visit&& visit, int64_t* steps) {
+template <typename Wants, typename Marks, typename Visit>
+bool RayWalker::WalkBackWith(const Point& a, const Vertex_handle& target, double reach,
+                             Wants&& wants, Marks& marks, WalkScratch& scratch, Visit&& visit,
+                             int64_t* steps) const {
   const Point& b = target->point();
   const Eigen::Vector3d origin(a.x(), a.y(), a.z());
   const Eigen::Vector3d d = Eigen::Vector3d(b.x(), b.y(), b.z()) - origin;
@@ -233,12 +336,12 @@ bool RayWalker::WalkBack(const Point& a, const Vertex_handle& target, double rea
   // a visibility walk in the target's star; a zero orientation means the segment runs along a
   // face or an edge there.
   Cell_handle current = target->cell();
-  uint32_t stamp = NextStamp();
+  marks.Begin();
   for (int star_steps = 0;; ++star_steps) {
-    if (dt_.is_infinite(current) || current->info().stamp == stamp || star_steps > 64) {
+    if (dt_.is_infinite(current) || marks.Marked(current) || star_steps > 64) {
       return false;  // not expected inside the Steiner box; the forward walk is exact
     }
-    current->info().stamp = stamp;
+    marks.Mark(current);
     const int at = current->index(target);
     int across = -1;
     bool on_face = false;
@@ -256,8 +359,8 @@ bool RayWalker::WalkBack(const Point& a, const Vertex_handle& target, double rea
     break;
   }
 
-  stamp = NextStamp();
-  std::vector<std::pair<Cell_handle, unsigned>>& crossed = scratch_crossed_;
+  marks.Begin();
+  std::vector<std::pair<Cell_handle, unsigned>>& crossed = scratch.crossed;
   crossed.clear();
   // The segment from the target towards a enters each cell through face `entry` (-1: the
   // first cell, left through the face opposite the target unless a is in it).
@@ -272,7 +375,7 @@ bool RayWalker::WalkBack(const Point& a, const Vertex_handle& target, double rea
     // cell's exit face, which has a vertex at or past it (checked below).
     if (entry < 0 && before_reach_except(-1)) break;
     const double lowest = std::min(std::min(t[0], t[1]), std::min(t[2], t[3]));
-    current->info().stamp = stamp;
+    marks.Mark(current);
     ++walked;
     int exit = -1;
     if (entry < 0) {
@@ -312,7 +415,7 @@ bool RayWalker::WalkBack(const Point& a, const Vertex_handle& target, double rea
     }
     if (before_reach_except(exit)) break;
     const Cell_handle next = current->neighbor(exit);
-    if (dt_.is_infinite(next) || next->info().stamp == stamp) return false;
+    if (dt_.is_infinite(next) || marks.Marked(next)) return false;
     entry = next->index(current);
     current = next;
   }
@@ -324,9 +427,9 @@ bool RayWalker::WalkBack(const Point& a, const Vertex_handle& target, double rea
 // Exhaustive enumeration for degenerate segments: flood over cells whose closure meets the
 // closed segment (exact predicate), connected through shared vertices, and visit the unvisited
 // ones that the open segment crosses.
-template <typename Visit>
-void RayWalker::WalkFallback(Cell_handle from, const Point& a, const Point& b, uint32_t stamp,
-                             Visit& visit) {
+template <typename Marks, typename Visit>
+void RayWalker::WalkFallback(Cell_handle from, const Point& a, const Point& b, Marks& marks,
+                             Visit& visit) const {
   const Kernel::Segment_3 segment(a, b);
   std::vector<Cell_handle> stack{from};
   std::unordered_set<const void*> seen{&*from};
@@ -339,8 +442,8 @@ void RayWalker::WalkFallback(Cell_handle from, const Point& a, const Point& b, u
                                     c->vertex(2)->point(), c->vertex(3)->point());
     if (c != from && !CGAL::do_intersect(segment, tet)) continue;
     const FaceSides sides = ComputeFaceSides(c, a, b);
-    if (c->info().stamp != stamp && SegmentCrossesCell(c, a, b, sides)) {
-      c->info().stamp = stamp;
+    if (!marks.Marked(c) && SegmentCrossesCell(c, a, b, sides)) {
+      marks.Mark(c);
       visit(c, CameraSideMask(sides.a));
     }
     for (int i = 0; i < 4; ++i) {
