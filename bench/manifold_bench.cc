@@ -1,7 +1,7 @@
 // Throughput of the manifold reconstruction steps (docs/performance.md):
 //   manifold_bench [points ...] [--insert=N] [--export=DIR] [--graded-steiner=hidden|on|off]
 //                  [--steiner-grid=N] [--steiner-min-spacing=X] [--steiner-clearance=X]
-//                  [--regrow-seeds=boundary|changed] [--join-pockets=on|off]
+//                  [--regrow-seeds=boundary|changed] [--join-pockets=on|off] [--threads=N]
 //   default Steiner mode: the library's (hidden graded points, at every size)
 //   default sizes: 10^4 10^5 10^6
 // For each size: Delaunay insertion, ray tracing (rays/s), growing (cells/s), peak memory per
@@ -28,12 +28,14 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::warn);
   std::vector<int64_t> sizes;
   int64_t insert_count = 10000;
+  int walk_threads = 0;  // one per core
   std::string export_dir;
   ms::ManifoldOptions options;
   const char* usage =
       "usage: manifold_bench [points ...] [--insert=N] [--export=DIR] "
       "[--graded-steiner=hidden|on|off] [--steiner-grid=N] [--steiner-min-spacing=X] "
-      "[--steiner-clearance=X] [--regrow-seeds=boundary|changed] [--join-pockets=on|off]\n";
+      "[--steiner-clearance=X] [--regrow-seeds=boundary|changed] [--join-pockets=on|off] "
+      "[--threads=N]\n";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
@@ -47,6 +49,8 @@ int main(int argc, char** argv) {
     try {
       if (arg.rfind("--insert=", 0) == 0) {
         insert_count = std::stoll(arg.substr(9));
+      } else if (arg.rfind("--threads=", 0) == 0) {
+        walk_threads = std::stoi(arg.substr(10));
       } else if (arg.rfind("--export=", 0) == 0) {
         export_dir = arg.substr(9);
       } else if (arg.rfind("--steiner-min-spacing=", 0) == 0) {
@@ -98,6 +102,7 @@ int main(int argc, char** argv) {
     const ms::bench::ManifoldBenchScene scene = ms::bench::MakeBlobScene(n, 48, 5, 42);
     const int64_t rss_before = ms::PeakRssBytes();
     ms::DelaunayManifold manifold(scene.cameras, options);
+    manifold.set_walk_threads(walk_threads);
     ms::Timer timer;
     const ms::BuildStats stats = manifold.Build(scene.points);
     const double total = timer.Seconds();

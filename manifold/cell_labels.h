@@ -95,6 +95,46 @@ class CellLabels {
     }
   }
 
+  // Spread counts that passed the packed range during concurrent counting, per cell and face:
+  // one tally per thread, added to the overflow table by MergeOverflow once the threads are done.
+  using OverflowTally = std::unordered_map<const void*, std::array<int64_t, 4>>;
+
+  // CountCrossing for several threads at once (ParallelWalks): atomic increments, and what
+  // passes the packed range goes to the thread's tally (the thread whose increment reaches
+  // kSpreadOverflow records that value, the later ones one each), as CountCrossing puts it in
+  // the table. The same counts as CountCrossing once the tallies are merged.
+  void CountCrossingConcurrently(const Cell_handle& c, unsigned spread_mask,
+                                 OverflowTally* tally) const {
+    CellInfo& info = c->info();
+    __atomic_fetch_add(&info.crossings, 1, __ATOMIC_RELAXED);
+    if (w2_rule_ == W2Rule::kAllFaces) spread_mask = 0xF;
+    for (int i = 0; i < 4; ++i) {
+      if (((spread_mask >> i) & 1) == 0) continue;
+      uint16_t* packed = &info.spread[i];
+      uint16_t seen = __atomic_load_n(packed, __ATOMIC_RELAXED);
+      for (;;) {
+        if (seen == CellInfo::kSpreadOverflow) {
+          ++(*tally)[&*c][i];
+          break;
+        }
+        const uint16_t next = seen + 1;
+        if (__atomic_compare_exchange_n(packed, &seen, next, /*weak=*/true, __ATOMIC_RELAXED,
+                                        __ATOMIC_RELAXED)) {
+          if (next == CellInfo::kSpreadOverflow) {
+            (*tally)[&*c][i] += static_cast<int64_t>(CellInfo::kSpreadOverflow);
+          }
+          break;
+        }
+      }
+    }
+  }
+  void MergeOverflow(const OverflowTally& tally) {
+    for (const auto& [cell, counts] : tally) {
+      std::array<int64_t, 4>& total = overflow_[cell];
+      for (int i = 0; i < 4; ++i) total[i] += counts[i];
+    }
+  }
+
   // Drops what the overflow table holds for c, a cell an insertion is about to destroy (its
   // memory may come back as a new cell).
   void ForgetCounts(const Cell_handle& c) {

@@ -21,7 +21,6 @@ namespace ms {
 
 using manifold_detail::BatchRays;
 using manifold_detail::CellInfo;
-using manifold_detail::LocalMarks;
 using manifold_detail::Locate_type;
 using manifold_detail::ParallelWalks;
 using manifold_detail::SegmentMeetsBox;
@@ -257,18 +256,15 @@ void DelaunayManifold::Impl::TraceRays(const std::vector<RayPoint>& points, Buil
   }
   ray_index_->Flush();
   Progress progress("manifold: ray tracing", static_cast<int64_t>(ray_index_->size()));
-  const auto count = [&](const Cell_handle& c, unsigned mask) { labels_.CountCrossing(c, mask); };
   // Walked from the index, in its order, a chunk at a time (no list of every ray: 12 bytes a
   // ray), on all cores.
   std::vector<RayRef> chunk;
   const auto walk_chunk = [&] {
-    stats->ray_cell_steps += walks_.Run(
-        chunk.size(),
-        [&](size_t i, LocalMarks& marks, WalkScratch& scratch, auto& record) {
+    stats->ray_cell_steps +=
+        walks_.Run(chunk.size(), [&](size_t i, auto& marks, WalkScratch& scratch, auto& count) {
           return walker_.WalkFromCameraWith(chunk[i].camera, vertex_of_point_[chunk[i].point],
-                                            marks, scratch, record);
-        },
-        count);
+                                            marks, scratch, count);
+        });
     stats->rays += static_cast<int64_t>(chunk.size());
     progress.Update(stats->rays);
     chunk.clear();
@@ -581,18 +577,16 @@ void DelaunayManifold::Impl::RewalkAll(InsertionBatch* batch, InsertionStats* st
 void DelaunayManifold::Impl::Rewalk(const InsertionBatch& batch, const std::vector<RayRef>& rays,
                                     const std::vector<float>& reach, InsertionStats* stats) {
   walker_.LocateStarts();  // a ray whose walk back is degenerate walks from its camera
-  stats->rewalk_steps += walks_.Run(
-      rays.size(),
-      [&](size_t i, LocalMarks& marks, WalkScratch& scratch, auto& record) {
-        return RewalkRay(batch, rays[i], reach[i], marks, scratch, record);
-      },
-      [&](const Cell_handle& c, unsigned mask) { labels_.CountCrossing(c, mask); });
+  stats->rewalk_steps +=
+      walks_.Run(rays.size(), [&](size_t i, auto& marks, WalkScratch& scratch, auto& count) {
+        return RewalkRay(batch, rays[i], reach[i], marks, scratch, count);
+      });
   stats->rewalked_rays += static_cast<int64_t>(rays.size());
 }
 
-template <typename Record>
+template <typename Marks, typename Record>
 int64_t DelaunayManifold::Impl::RewalkRay(const InsertionBatch& batch, const RayRef& ray,
-                                          float reach, LocalMarks& marks, WalkScratch& scratch,
+                                          float reach, Marks& marks, WalkScratch& scratch,
                                           Record& record) const {
   const uint32_t after = batch.rays.Get(ray.id).counted, upto = batch.part;
   const auto is_new = [&](const Cell_handle& c) {
@@ -605,9 +599,8 @@ int64_t DelaunayManifold::Impl::RewalkRay(const InsertionBatch& batch, const Ray
   // Only the part of the ray from its first hole box on can cross a new cell: walk that part
   // backwards from the point; where that is degenerate, the whole ray forwards.
   int64_t steps = 0;
-  if (reach <= 0 ||
-      !walker_.WalkBackWith(walker_.camera_point(ray.camera), target, reach, is_new, marks,
-                            scratch, record_new_cells, &steps)) {
+  if (reach <= 0 || !walker_.WalkBackWith(walker_.camera_point(ray.camera), target, reach, is_new,
+                                          marks, scratch, record_new_cells, &steps)) {
     steps += walker_.WalkFromCameraWith(ray.camera, target, marks, scratch, record_new_cells);
   }
   return steps;
@@ -633,7 +626,6 @@ void DelaunayManifold::Impl::GainCameras(const Vertex_handle& vertex,
 // The new points' rays, and the rays existing vertices gained from duplicates, are walked and
 // counted everywhere, then join the index.
 void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats* stats) {
-  const auto count = [&](const Cell_handle& c, unsigned mask) { labels_.CountCrossing(c, mask); };
   // Several duplicates of one vertex may bring the same camera: each ray once.
   std::vector<std::pair<int32_t, int32_t>>& gained = batch->gained_rays;
   std::sort(gained.begin(), gained.end());
@@ -654,13 +646,10 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
     for (int32_t c : batch->part_cameras[id - batch->first_new_id]) rays.push_back({c, id});
   }
   walker_.LocateStarts();
-  walks_.Run(
-      rays.size(),
-      [&](size_t i, LocalMarks& marks, WalkScratch& scratch, auto& record) {
-        return walker_.WalkFromCameraWith(rays[i].camera, vertex_of_point_[rays[i].point], marks,
-                                          scratch, record);
-      },
-      count);
+  walks_.Run(rays.size(), [&](size_t i, auto& marks, WalkScratch& scratch, auto& count) {
+    return walker_.WalkFromCameraWith(rays[i].camera, vertex_of_point_[rays[i].point], marks,
+                                      scratch, count);
+  });
   for (const RayRef& ray : rays) ray_index_->Add(ray.camera, ray.point, positions_[ray.point]);
   stats->new_rays += static_cast<int64_t>(rays.size());
   gained.clear();
@@ -914,6 +903,7 @@ Mesh DelaunayManifold::ExtractSurface(SurfaceInfo* info) const {
 std::string DelaunayManifold::Validate(bool check_weights) const {
   return impl_->Validate(check_weights);
 }
+void DelaunayManifold::set_walk_threads(int threads) { impl_->set_walk_threads(threads); }
 int64_t DelaunayManifold::num_points() const { return impl_->num_points(); }
 int64_t DelaunayManifold::num_vertices() const { return impl_->num_vertices(); }
 int64_t DelaunayManifold::num_cells() const { return impl_->num_cells(); }

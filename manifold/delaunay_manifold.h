@@ -124,6 +124,10 @@ class DelaunayManifold {
   void InsertPart(const std::vector<RayPoint>& points);
   InsertionStats FinishInsert();
 
+  // Threads that walk viewing rays in Build and Insert (0, the default: one per core). The
+  // results do not depend on it.
+  void set_walk_threads(int threads);
+
   // The surface between O and the rest, normals towards O (free space). Deterministic:
   // vertices ordered by point id, faces sorted.
   Mesh ExtractSurface(SurfaceInfo* info = nullptr) const;

@@ -134,6 +134,16 @@ TEST(CellLabels, SpreadCountsPastSixteenBitsAreExact) {
   }
 }
 
+// The same on several threads at once: the count that reaches the packed range's end and the
+// later ones, racing, must still add up.
+TEST(CellLabels, SpreadCountsOnSeveralThreadsAreExact) {
+  for (int64_t rays : {int64_t{65534}, int64_t{65535}, int64_t{65536}, int64_t{200000}}) {
+    const manifold_internal::SpreadCounts counts = manifold_internal::CountSpreads(rays, 4);
+    EXPECT_EQ(counts.spread, rays);
+    EXPECT_DOUBLE_EQ(counts.neighbour_weight, static_cast<double>(rays));
+  }
+}
+
 TEST(VertexRegularity, PaperFigureOneCases) {
   // An octahedron around the origin: eight cells share vertex 0.
   const std::vector<Eigen::Vector3d> points = {{0, 0, 0},  {1, 0, 0}, {-1, 0, 0}, {0, 1, 0},
@@ -383,6 +393,43 @@ TEST(DelaunayManifold, IsDeterministic) {
   const Mesh ma = a.ExtractSurface(), mb = b.ExtractSurface();
   ASSERT_EQ(ma.faces, mb.faces);
   ASSERT_EQ(ma.vertices, mb.vertices);
+}
+
+// Rays walked on several threads (the build's tracing, the insertion's re-walks and new rays,
+// in parts) give exactly the counts, labels and surfaces of one thread.
+TEST(DelaunayManifold, WalkingOnSeveralThreadsEqualsOneThread) {
+  const RandomScene scene = SphereScene(3000, 12, 21);
+  DelaunayManifold one(scene.cameras, ManifoldOptions{}), four(scene.cameras, ManifoldOptions{});
+  one.set_walk_threads(1);
+  four.set_walk_threads(4);
+  const BuildStats built_one = one.Build(scene.points), built_four = four.Build(scene.points);
+  ASSERT_GT(built_four.rays, 4 * 256);  // more than a block of rays per thread
+  EXPECT_EQ(built_four.ray_cell_steps, built_one.ray_cell_steps);
+  EXPECT_EQ(built_four.outside_cells, built_one.outside_cells);
+  ASSERT_EQ(four.Validate(true), "");
+  for (int batch = 0; batch < 2; ++batch) {
+    const RandomScene more = SphereScene(1500, 12, 400 + batch, 1.0 + 0.01 * (batch + 1));
+    const size_t half = more.points.size() / 2;
+    const std::vector<RayPoint> first(more.points.begin(), more.points.begin() + half);
+    const std::vector<RayPoint> second(more.points.begin() + half, more.points.end());
+    InsertionStats got[2];
+    DelaunayManifold* manifolds[2] = {&one, &four};
+    for (int m = 0; m < 2; ++m) {
+      manifolds[m]->BeginInsert();
+      manifolds[m]->InsertPart(first);
+      manifolds[m]->InsertPart(second);
+      got[m] = manifolds[m]->FinishInsert();
+    }
+    ASSERT_GT(got[1].rewalked_rays, 4 * 256) << "batch " << batch;
+    EXPECT_EQ(got[1].inserted, got[0].inserted) << "batch " << batch;
+    EXPECT_EQ(got[1].rewalked_rays, got[0].rewalked_rays) << "batch " << batch;
+    EXPECT_EQ(got[1].rewalk_steps, got[0].rewalk_steps) << "batch " << batch;
+    EXPECT_EQ(got[1].outside_cells, got[0].outside_cells) << "batch " << batch;
+    const Mesh a = one.ExtractSurface(), b = four.ExtractSurface();
+    ASSERT_EQ(a.faces, b.faces) << "batch " << batch;
+    ASSERT_EQ(a.vertices, b.vertices) << "batch " << batch;
+    ASSERT_EQ(four.Validate(true), "") << "batch " << batch;
+  }
 }
 
 // The paper's pyramids start from the four coplanar base corners seen by every camera: the

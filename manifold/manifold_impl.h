@@ -57,6 +57,7 @@ class DelaunayManifold::Impl {
   std::string Validate(bool check_weights);
 
   int64_t num_points() const { return static_cast<int64_t>(positions_.size()); }
+  void set_walk_threads(int threads) { walks_.set_threads(threads); }
   int64_t num_vertices() const { return static_cast<int64_t>(dt_.number_of_vertices()); }
   int64_t num_cells() const { return static_cast<int64_t>(dt_.number_of_finite_cells()); }
   int64_t num_outside_cells() const { return labels_.outside_count(); }
@@ -176,10 +177,9 @@ class DelaunayManifold::Impl {
   // One ray of Rewalk: records its crossings of the cells born since its last walk (the cells
   // that have it counted already, or whose geometry did not change, are left out); returns the
   // cells stepped through.
-  template <typename Record>
-  int64_t RewalkRay(const InsertionBatch& batch, const RayRef& ray, float reach,
-                    manifold_detail::LocalMarks& marks, manifold_detail::WalkScratch& scratch,
-                    Record& record) const;
+  template <typename Marks, typename Record>
+  int64_t RewalkRay(const InsertionBatch& batch, const RayRef& ray, float reach, Marks& marks,
+                    manifold_detail::WalkScratch& scratch, Record& record) const;
   void TraceNewRays(InsertionBatch* batch, InsertionStats* stats);
   void GainCameras(const Vertex_handle& vertex, const std::vector<int32_t>& cameras,
                    InsertionBatch* batch);
@@ -200,7 +200,7 @@ class DelaunayManifold::Impl {
   manifold_detail::CellLabels labels_{dt_, options_};
   manifold_detail::Regularity regularity_{dt_};
   manifold_detail::RayWalker walker_;
-  manifold_detail::ParallelWalks walks_;  // one thread per core (tests set fewer)
+  manifold_detail::ParallelWalks walks_{&walker_, &labels_};  // one thread per core
   manifold_detail::GrowShrink grow_shrink_{dt_, options_, labels_, regularity_};
   std::unique_ptr<RayIndex> ray_index_;
   std::vector<Eigen::Vector3d> positions_;

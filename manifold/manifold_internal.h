@@ -48,12 +48,14 @@ void CrossedCells(const std::vector<Eigen::Vector3d>& points, const Eigen::Vecto
                   std::vector<CellVertices>* brute_force);
 
 // Counts `rays` crossings of one cell spreading across its face 0 (the neighbour there finite),
-// then one more cell of the same triangulation destroyed and rebuilt: what the labels read back.
+// on `threads` threads at once (CountCrossingConcurrently, tallies merged) or with CountCrossing
+// for 1, then one more cell of the same triangulation destroyed and rebuilt: what the labels
+// read back.
 struct SpreadCounts {
   int64_t spread = 0;           // CellLabels::Spread of the cell's face 0
   double neighbour_weight = 0;  // CellLabels::Weight of the neighbour across it (w1 = 1, w2 = 1)
   int64_t after_forget = 0;     // Spread of face 0 once its counts were forgotten and reset
 };
-SpreadCounts CountSpreads(int64_t rays);
+SpreadCounts CountSpreads(int64_t rays, int threads = 1);
 
 }  // namespace ms::manifold_internal

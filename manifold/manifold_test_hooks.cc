@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <functional>
 #include <iterator>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -54,7 +55,7 @@ std::vector<CellVertices> DelaunayCells(const std::vector<Eigen::Vector3d>& poin
   return cells;
 }
 
-SpreadCounts CountSpreads(int64_t rays) {
+SpreadCounts CountSpreads(int64_t rays, int threads) {
   Delaunay dt =
       Triangulate({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}, {0.9, 0.8, -0.3}});
   ManifoldOptions options;
@@ -66,7 +67,21 @@ SpreadCounts CountSpreads(int64_t rays) {
     if (!dt.is_infinite(c->neighbor(0))) cell = c;
   }
   MS_CHECK(cell != Cell_handle()) << "no finite cell with a finite neighbour";
-  for (int64_t k = 0; k < rays; ++k) labels.CountCrossing(cell, 0x1);
+  if (threads <= 1) {
+    for (int64_t k = 0; k < rays; ++k) labels.CountCrossing(cell, 0x1);
+  } else {
+    std::vector<manifold_detail::CellLabels::OverflowTally> tallies(threads);
+    std::vector<std::thread> pool;
+    for (int t = 0; t < threads; ++t) {
+      pool.emplace_back([&, t] {
+        for (int64_t k = t; k < rays; k += threads) {
+          labels.CountCrossingConcurrently(cell, 0x1, &tallies[t]);
+        }
+      });
+    }
+    for (std::thread& t : pool) t.join();
+    for (const auto& tally : tallies) labels.MergeOverflow(tally);
+  }
   SpreadCounts counts;
   counts.spread = labels.Spread(cell, 0);
   counts.neighbour_weight = labels.Weight(cell->neighbor(0));
