@@ -21,6 +21,7 @@ namespace ms {
 
 using manifold_detail::BatchRays;
 using manifold_detail::CellInfo;
+using manifold_detail::GrowShrink;
 using manifold_detail::Locate_type;
 using manifold_detail::ParallelWalks;
 using manifold_detail::SegmentMeetsBox;
@@ -282,7 +283,7 @@ void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
   }
   grow_shrink_.GrowFromHeaviest();
   const int64_t slivers_before = grow_shrink_.slivers_joined();
-  stats->camera_stars_completed = FreeEnclosedCameras();
+  stats->camera_stars_completed = FreeEnclosedCameras(nullptr);
   stats->pockets_joined = JoinFreePockets(RegrowSeeds::kBoundary, 0);
   stats->slivers_joined = grow_shrink_.slivers_joined() - slivers_before;
   stats->outside_cells = labels_.outside_count();
@@ -662,10 +663,17 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
 // growing refused it.
 void DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, InsertionStats* stats) {
   if (stats->inserted == 0 && stats->shrunk_cells == 0 && stats->gained_rays == 0) return;
-  grow_shrink_.Grow(grow_shrink_.BoundarySeeds(options_.regrow_seeds, batch.number));
-  if (labels_.outside_count() == 0) grow_shrink_.GrowFromHeaviest();
+  // From every free cell next to O (the default), Grow leaves them all in `boundary`.
+  GrowShrink::Refusals boundary;
+  grow_shrink_.Grow(grow_shrink_.BoundarySeeds(options_.regrow_seeds, batch.number), nullptr,
+                    &boundary);
+  bool whole_boundary = options_.regrow_seeds == RegrowSeeds::kBoundary;
+  if (labels_.outside_count() == 0) {
+    grow_shrink_.GrowFromHeaviest();
+    whole_boundary = false;
+  }
   const int64_t slivers_before = grow_shrink_.slivers_joined();
-  stats->camera_stars_completed = FreeEnclosedCameras();
+  stats->camera_stars_completed = FreeEnclosedCameras(whole_boundary ? &boundary : nullptr);
   stats->pockets_joined = JoinFreePockets(options_.regrow_seeds, batch.number);
   stats->slivers_joined = grow_shrink_.slivers_joined() - slivers_before;
 }
@@ -683,22 +691,35 @@ void DelaunayManifold::Impl::LogCameraStars(int64_t completed) const {
 // an insertion re-triangulated the space in front of a camera). Completing the star of a vertex
 // where the pocket touches O adds several cells at once (the whole pocket at once is tried
 // first); growing then goes on from there.
-int64_t DelaunayManifold::Impl::FreeEnclosedCameras() {
+int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* boundary) {
   constexpr size_t kMaxPocketCells = 1 << 16;
   for (int64_t completed = 0;; ++completed) {
-    bool flipped = false;
+    std::vector<Cell_handle> joined;
     for (const int32_t camera : CamerasInMatter()) {
       for (const Cell_handle& start : walker_.StartCandidates(walker_.StartOf(camera))) {
         const std::vector<Cell_handle> pocket =
             grow_shrink_.Pocket(start, kMaxPocketCells, walker_.NextStamp());
         std::unordered_set<const void*> tried;
-        flipped = !grow_shrink_.JoinPocket(pocket, /*star_min_weight=*/0, &tried).empty();
-        if (flipped) break;
+        joined = grow_shrink_.JoinPocket(pocket, /*star_min_weight=*/0, &tried);
+        if (!joined.empty()) break;
       }
-      if (flipped) break;
+      if (!joined.empty()) break;
     }
-    if (!flipped) return completed;
-    grow_shrink_.Grow(grow_shrink_.BoundarySeeds(RegrowSeeds::kBoundary, 0));
+    if (joined.empty()) return completed;
+    if (boundary == nullptr) {
+      grow_shrink_.Grow(grow_shrink_.BoundarySeeds(RegrowSeeds::kBoundary, 0));
+      continue;
+    }
+    // The free cells next to O now: those next to it before (in `boundary`) and the face
+    // neighbours of what joined. The same growing as from a scan of every cell, without the
+    // scan, and without testing again the cells around which nothing has flipped.
+    std::vector<Cell_handle> beside;
+    for (const Cell_handle& c : joined) {
+      for (int i = 0; i < 4; ++i) {
+        if (grow_shrink_.NextToO(c->neighbor(i))) beside.push_back(c->neighbor(i));
+      }
+    }
+    grow_shrink_.Grow(beside, nullptr, boundary);
   }
 }
 

@@ -50,8 +50,8 @@ void FaceConnectedPieces(const std::vector<Cell_handle>& cells, std::vector<int>
 
 }  // namespace
 
-void GrowShrink::Grow(const std::vector<Cell_handle>& seeds,
-                      std::vector<Cell_handle>* added_cells) {
+void GrowShrink::Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_handle>* added_cells,
+                      Refusals* refusals) {
   std::priority_queue<QueueEntry> queue;
   const auto push = [&](const Cell_handle& c, uint32_t refused_after) {
     if (c->info().queued || !labels_.FreeOutsideO(c)) return;
@@ -69,8 +69,11 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds,
     }
     return true;
   };
+  if (refusals != nullptr) {
+    for (const auto& [c, after] : *refusals) push(c, after);
+  }
   for (const Cell_handle& c : seeds) push(c, 0);
-  std::vector<std::pair<Cell_handle, uint32_t>> refused;
+  Refusals refused;
   for (;;) {
     int64_t added = 0;
     while (!queue.empty()) {
@@ -92,11 +95,12 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds,
     // A cell refused earlier may be accepted now that O has changed around it: retry until
     // a round adds nothing.
     if (added == 0 || refused.empty()) break;
-    std::vector<std::pair<Cell_handle, uint32_t>> retry;
+    Refusals retry;
     retry.swap(refused);
     for (const auto& [c, after] : retry) push(c, after);
   }
   for (const auto& [c, after] : refused) c->info().queued = false;
+  if (refusals != nullptr) refusals->swap(refused);
 }
 
 int64_t GrowShrink::GrowFromHeaviest() {

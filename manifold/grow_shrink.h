@@ -22,10 +22,19 @@ class GrowShrink {
              Regularity& regularity)
       : dt_(dt), options_(options), labels_(labels), regularity_(regularity) {}
 
+  // Cells a Grow refused, each with CellLabels::relabels() at its refusal + 1: a later Grow
+  // need not test one again while no cell around its vertices flips. Valid while no cell is
+  // made or destroyed and no weight changes (within one regrowing).
+  using Refusals = std::vector<std::pair<Cell_handle, uint32_t>>;
+
   // Grows O from `seeds` through free cells, heaviest first (ties: smaller CellKey), retrying
   // refused cells until a round adds nothing.
-  // The cells added are appended to `added` when it is not null.
-  void Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_handle>* added = nullptr);
+  // The cells added are appended to `added` when it is not null. With `refusals`, its cells
+  // are queued too (tested only where a cell around them has flipped since), and on return it
+  // holds the cells refused at the end: every free cell next to O that is not in it, if the
+  // seeds and refusals held all those there were.
+  void Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_handle>* added = nullptr,
+            Refusals* refusals = nullptr);
 
   // Grows O from the heaviest free cell (with options.grow_all_components, then from the
   // heaviest free cell of every further component). Returns the cells added.

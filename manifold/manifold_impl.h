@@ -72,8 +72,10 @@ class DelaunayManifold::Impl {
     return n;
   }
   // Completes vertex stars until no camera with a free start cell is left in the matter;
-  // returns how many.
-  int64_t FreeEnclosedCameras();
+  // returns how many. `boundary`: every free cell next to O with its refusal, as a Grow from
+  // all of them leaves it (GrowShrink::Refusals), so that growing on after a star costs what
+  // the star changed; null: growing on starts from a scan of all cells.
+  int64_t FreeEnclosedCameras(manifold_detail::GrowShrink::Refusals* boundary);
   // Joins the pockets of free space next to O (from the cells BoundarySeeds(which, changed_in)
   // gives) that growing could not enter, and grows on from them; returns the joins.
   int64_t JoinFreePockets(RegrowSeeds which, uint32_t changed_in);
