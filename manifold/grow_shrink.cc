@@ -163,7 +163,8 @@ int64_t GrowShrink::CountJoinableCells(std::vector<Cell_handle>* first, size_t m
 
 bool GrowShrink::FlipAllIfRegular(const std::vector<Cell_handle>& cells,
                                   const std::vector<Cell_handle>& matter) {
-  const std::vector<Cell_handle> missing = FlipIntoO(cells, matter);
+  const TrialFlips trial = FlipIntoO(cells, matter);
+  const std::vector<Cell_handle>& missing = trial.cells;
   if (missing.empty()) return false;
   // A vertex's link depends only on the labels of its own cells: the vertices of the flipped
   // cells are tested, each with the flipped cells around it.
@@ -184,25 +185,35 @@ bool GrowShrink::FlipAllIfRegular(const std::vector<Cell_handle>& cells,
     regular = w->info().cells > kLargeStar ? regularity_.VertexRegularByLinkWalk(w, near)
                                            : regularity_.VertexRegular(w, Cell_handle());
   }
-  if (!regular) UndoFlips(missing);
+  if (!regular) UndoFlips(trial);
   return regular;
 }
 
-std::vector<Cell_handle> GrowShrink::FlipIntoO(const std::vector<Cell_handle>& cells,
-                                               const std::vector<Cell_handle>& matter) {
-  std::vector<Cell_handle> flipped;
+GrowShrink::TrialFlips GrowShrink::FlipIntoO(const std::vector<Cell_handle>& cells,
+                                             const std::vector<Cell_handle>& matter) {
+  TrialFlips trial;
+  std::vector<Cell_handle>& flipped = trial.cells;
   for (const Cell_handle& c : cells) {
     if (labels_.FreeOutsideO(c)) flipped.push_back(c);
   }
   for (const Cell_handle& c : matter) {
     if (!dt_.is_infinite(c) && !c->info().outside && !labels_.IsFree(c)) flipped.push_back(c);
   }
-  for (const Cell_handle& c : flipped) labels_.SetOutside(c, true);
-  return flipped;
+  for (const Cell_handle& c : flipped) {
+    for (int i = 0; i < 4; ++i)
+      trial.marks.emplace_back(c->vertex(i), c->vertex(i)->info().relabelled);
+    labels_.SetOutside(c, true);
+  }
+  return trial;
 }
 
-void GrowShrink::UndoFlips(const std::vector<Cell_handle>& flipped) {
+void GrowShrink::UndoFlips(const TrialFlips& trial) {
+  const std::vector<Cell_handle>& flipped = trial.cells;
   for (auto c = flipped.rbegin(); c != flipped.rend(); ++c) labels_.SetOutside(*c, false);
+  // Last saved first: a vertex of several cells ends with the mark it had before the trial.
+  for (auto m = trial.marks.rbegin(); m != trial.marks.rend(); ++m) {
+    m->first->info().relabelled = m->second;
+  }
 }
 
 bool GrowShrink::CompleteFreeStar(const Vertex_handle& v, double min_weight) {
@@ -222,7 +233,8 @@ std::vector<Cell_handle> GrowShrink::PinchingSlivers(const std::vector<Cell_hand
   // cost the square of the star to find.
   constexpr int32_t kMaxStar = 256;
   // The pinches are those of the pocket in O: it goes in for the search and out again.
-  const std::vector<Cell_handle> joined = FlipIntoO(pocket);
+  const TrialFlips trial = FlipIntoO(pocket);
+  const std::vector<Cell_handle>& joined = trial.cells;
   std::unordered_set<const void*> seen_vertices, seen_slivers;
   std::vector<Cell_handle> slivers, star, rest;
   std::vector<int> piece;
@@ -249,7 +261,7 @@ std::vector<Cell_handle> GrowShrink::PinchingSlivers(const std::vector<Cell_hand
       }
     }
   }
-  UndoFlips(joined);
+  UndoFlips(trial);
   return slivers;
 }
 

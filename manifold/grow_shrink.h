@@ -91,12 +91,20 @@ class GrowShrink {
                     int64_t* shrunk);
 
  private:
+  // Cells flipped into O on trial, and the last-flip marks (VertexInfo::relabelled) their
+  // vertices had before.
+  struct TrialFlips {
+    std::vector<Cell_handle> cells;
+    std::vector<std::pair<Vertex_handle, uint32_t>> marks;
+  };
   // Puts into O, in this order, the free cells of `cells` and the matter cells of `matter` that
   // are not in O yet, and returns them for UndoFlips.
-  std::vector<Cell_handle> FlipIntoO(const std::vector<Cell_handle>& cells,
-                                     const std::vector<Cell_handle>& matter = {});
-  // Takes the cells FlipIntoO returned out of O again, last first.
-  void UndoFlips(const std::vector<Cell_handle>& flipped);
+  TrialFlips FlipIntoO(const std::vector<Cell_handle>& cells,
+                       const std::vector<Cell_handle>& matter = {});
+  // Takes the cells FlipIntoO put into O out again, last first, and gives their vertices back
+  // their last-flip marks: a trial that is undone is no change around them, so growing and the
+  // pocket joins do not test again what it touched (most of their tests on a street).
+  void UndoFlips(const TrialFlips& trial);
 
   const Delaunay& dt_;
   const ManifoldOptions& options_;
