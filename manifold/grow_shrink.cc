@@ -5,21 +5,10 @@
 #include <queue>
 
 namespace ms::manifold_detail {
-namespace {
 
-struct QueueEntry {
-  double weight;
-  CellKey key;
-  Cell_handle cell;
-  // For a cell refused earlier in this growing: CellLabels::relabels() at its refusal + 1
-  // (0: never refused).
-  uint32_t refused_after = 0;
-  // Max-heap: heavier first; among equal weights the smaller key first (determinism).
-  bool operator<(const QueueEntry& o) const {
-    if (weight != o.weight) return weight < o.weight;
-    return key > o.key;
-  }
-};
+using QueueEntry = GrowShrink::QueueEntry;
+
+namespace {
 
 // Splits `cells` into pieces connected through shared faces: (*piece)[k] is the piece of
 // cells[k], (*sizes)[p] the number of cells in piece p. Quadratic: for the few cells of a star.
@@ -58,6 +47,14 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_ha
     c->info().queued = true;
     queue.push({labels_.Weight(c), KeyOf(c), c, refused_after});
   };
+  // A refused cell again, its weight and key as they were: it is still free (no weight changes
+  // while refusals are kept), so only whether it joined O since is asked.
+  const auto push_again = [&](const QueueEntry& entry) {
+    const Cell_handle& c = entry.cell;
+    if (c->info().queued || c->info().outside) return;
+    c->info().queued = true;
+    queue.push(entry);
+  };
   // Whether a cell joins depends only on the labels of the cells around its vertices
   // (Regularity::FlipKeepsManifold): one refused when no cell around them has flipped since is
   // refused again without the test. The same cells join in the same order as when every retry
@@ -70,7 +67,7 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_ha
     return true;
   };
   if (refusals != nullptr) {
-    for (const auto& [c, after] : *refusals) push(c, after);
+    for (const QueueEntry& entry : *refusals) push_again(entry);
   }
   for (const Cell_handle& c : seeds) push(c, 0);
   Refusals refused;
@@ -89,7 +86,8 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_ha
         if (added_cells != nullptr) added_cells->push_back(c);
         for (int i = 0; i < 4; ++i) push(c->neighbor(i), 0);
       } else {
-        refused.push_back({c, refused_again ? entry.refused_after : labels_.relabels() + 1});
+        refused.push_back(entry);
+        if (!refused_again) refused.back().refused_after = labels_.relabels() + 1;
       }
     }
     // A cell refused earlier may be accepted now that O has changed around it: retry until
@@ -97,9 +95,9 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_ha
     if (added == 0 || refused.empty()) break;
     Refusals retry;
     retry.swap(refused);
-    for (const auto& [c, after] : retry) push(c, after);
+    for (const QueueEntry& entry : retry) push_again(entry);
   }
-  for (const auto& [c, after] : refused) c->info().queued = false;
+  for (const QueueEntry& entry : refused) entry.cell->info().queued = false;
   if (refusals != nullptr) refusals->swap(refused);
 }
 

@@ -22,10 +22,23 @@ class GrowShrink {
              Regularity& regularity)
       : dt_(dt), options_(options), labels_(labels), regularity_(regularity) {}
 
+  // A cell in the growing queue.
+  struct QueueEntry {
+    double weight;
+    CellKey key;
+    Cell_handle cell;
+    // For a cell refused earlier: CellLabels::relabels() at its refusal + 1 (0: never refused).
+    uint32_t refused_after = 0;
+    // Max-heap: heavier first; among equal weights the smaller key first (determinism).
+    bool operator<(const QueueEntry& o) const {
+      if (weight != o.weight) return weight < o.weight;
+      return key > o.key;
+    }
+  };
   // Cells a Grow refused, each with CellLabels::relabels() at its refusal + 1: a later Grow
   // need not test one again while no cell around its vertices flips. Valid while no cell is
   // made or destroyed and no weight changes (within one regrowing).
-  using Refusals = std::vector<std::pair<Cell_handle, uint32_t>>;
+  using Refusals = std::vector<QueueEntry>;
 
   // Grows O from `seeds` through free cells, heaviest first (ties: smaller CellKey), retrying
   // refused cells until a round adds nothing.
