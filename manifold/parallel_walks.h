@@ -55,8 +55,8 @@ class ParallelWalks {
     }
     // Each thread walks the blocks of its own stretch of the rays, then helps the others with
     // theirs: threads far apart in the rays' order (camera by camera) rarely count on the same
-    // cells at once. Counting where another thread just did costs 1.5x the whole walk here
-    // (interleaved blocks: 0.92 -> 0.72 s on 2 threads; stretches: 0.59 s).
+    // cells at once. Alternate blocks of one camera's rays had both threads counting on the
+    // cells beside it, whose cache lines then pass between the cores (docs/manifold.md).
     std::vector<Stretch> stretches(threads);
     for (size_t t = 0; t < threads; ++t) {
       stretches[t].next = blocks * t / threads;
