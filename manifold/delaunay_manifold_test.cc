@@ -432,6 +432,39 @@ TEST(DelaunayManifold, WalkingOnSeveralThreadsEqualsOneThread) {
   }
 }
 
+// The same where the rays pass through vertices and edges (a grid seen from cameras on its
+// lines): the threads then take the walks' degenerate steps and exhaustive fallback at once.
+TEST(DelaunayManifold, DegenerateWalksOnSeveralThreadsEqualOneThread) {
+  RandomScene scene;
+  const Eigen::Vector3d centre(3.5, 3.5, 3.5);
+  for (const Eigen::Vector3d& c :
+       {Eigen::Vector3d(1, 1, 12), Eigen::Vector3d(0, 0, -5), Eigen::Vector3d(3.5, 3.5, 12),
+        Eigen::Vector3d(4, 4, -6), Eigen::Vector3d(-5, 4, 4), Eigen::Vector3d(12, 3, 3)}) {
+    scene.cameras.push_back(LookAt(c, centre));
+  }
+  for (int i = 0; i < 8; ++i) {
+    for (int j = 0; j < 8; ++j) {
+      for (int k = 0; k < 8; ++k) {
+        RayPoint p;
+        p.position = Eigen::Vector3d(i, j, k);
+        p.cameras = {0, 1, 2, 3, 4, 5};
+        scene.points.push_back(p);
+      }
+    }
+  }
+  DelaunayManifold one(scene.cameras, ManifoldOptions{}), four(scene.cameras, ManifoldOptions{});
+  one.set_walk_threads(1);
+  four.set_walk_threads(4);
+  const BuildStats built_one = one.Build(scene.points), built_four = four.Build(scene.points);
+  ASSERT_GT(built_four.rays, 4 * 256);
+  EXPECT_EQ(built_four.ray_cell_steps, built_one.ray_cell_steps);
+  EXPECT_EQ(built_four.outside_cells, built_one.outside_cells);
+  const Mesh a = one.ExtractSurface(), b = four.ExtractSurface();
+  EXPECT_EQ(a.faces, b.faces);
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(four.Validate(true), "");
+}
+
 // The paper's pyramids start from the four coplanar base corners seen by every camera: the
 // initial surface must contain the base square, facing the cameras.
 TEST(DelaunayManifold, FourCoplanarCornersGiveTheBaseSquare) {

@@ -47,7 +47,8 @@ uint32_t RayWalker::NextStamp() {
   return stamp_;
 }
 
-std::vector<Cell_handle> RayWalker::StartCandidates(const CameraStart& start) const {
+std::vector<Cell_handle> RayWalker::StartCandidates(const CameraStart& start,
+                                                    bool concurrent) const {
   std::vector<Cell_handle> cells;
   switch (start.type) {
     case Delaunay::CELL:
@@ -65,7 +66,11 @@ std::vector<Cell_handle> RayWalker::StartCandidates(const CameraStart& start) co
       break;
     }
     case Delaunay::VERTEX:
-      dt_.incident_cells(start.cell->vertex(start.li), std::back_inserter(cells));
+      if (concurrent) {
+        IncidentCells<LocalMarks>(start.cell->vertex(start.li), &cells);
+      } else {
+        IncidentCells<StampMarks>(start.cell->vertex(start.li), &cells);
+      }
       break;
     default:
       MS_CHECK(false) << "camera outside the triangulation (locate type " << start.type << ")";

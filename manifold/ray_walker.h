@@ -35,6 +35,9 @@ class RayWalker;
 // A walk's visit marks in the cells themselves (CellInfo::stamp): one walk at a time.
 class StampMarks {
  public:
+  // Walks with these marks run one at a time: CGAL's incident_cells, which marks cells as it
+  // goes, may serve them.
+  static constexpr bool kConcurrent = false;
   explicit StampMarks(RayWalker* walker) : walker_(walker) {}
   inline void Begin();  // forgets the marks of the walk before
   void Mark(const Cell_handle& c) { c->info().stamp = stamp_; }
@@ -49,6 +52,8 @@ class StampMarks {
 // leaves the cells untouched: one per thread walking.
 class LocalMarks {
  public:
+  // Walks with these marks may run at once: stars are found without CGAL's cell marks.
+  static constexpr bool kConcurrent = true;
   LocalMarks() : slots_(kInitialSlots, nullptr) {}
   void Begin() {
     for (uint32_t s : used_) slots_[s] = nullptr;
@@ -179,13 +184,24 @@ class RayWalker {
                     Marks& marks, WalkScratch& scratch, Visit&& visit, int64_t* steps) const;
 
   // The cells around a camera located on a facet, an edge or a vertex (its one cell otherwise).
-  std::vector<Cell_handle> StartCandidates(const CameraStart& start) const;
+  // concurrent: safe while other threads walk (IncidentCells), in another order.
+  std::vector<Cell_handle> StartCandidates(const CameraStart& start, bool concurrent = false) const;
 
  private:
   // Exhaustive enumeration for degenerate segments (see the definition).
   template <typename Marks, typename Visit>
   void WalkFallback(Cell_handle from, const Point& a, const Point& b, Marks& marks,
                     Visit& visit) const;
+  // The cells around v, appended to *cells. CGAL's incident_cells marks the cells it finds
+  // (tds_data) and clears them after: two threads at once would break each other's search.
+  template <typename Marks>
+  void IncidentCells(const Vertex_handle& v, std::vector<Cell_handle>* cells) const {
+    if constexpr (Marks::kConcurrent) {
+      dt_.incident_cells_threadsafe(v, std::back_inserter(*cells));
+    } else {
+      dt_.incident_cells(v, std::back_inserter(*cells));
+    }
+  }
   const Delaunay& dt_;
   std::vector<Point> camera_points_;
   std::vector<CameraStart> camera_cells_;
@@ -215,7 +231,7 @@ int64_t RayWalker::WalkWith(const CameraStart& start, const Point& a, const Vert
   if (start.type == Delaunay::CELL) {
     current = start.cell;  // the camera is strictly inside: the segment starts in this cell
   } else {
-    const std::vector<Cell_handle> candidates = StartCandidates(start);
+    const std::vector<Cell_handle> candidates = StartCandidates(start, Marks::kConcurrent);
     for (const Cell_handle& c : candidates) {
       if (!dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
         current = c;
@@ -274,7 +290,7 @@ int64_t RayWalker::WalkWith(const CameraStart& start, const Point& a, const Vert
           } while (++circ != done);
         } else {
           const int vertex = 6 - ties[0] - ties[1] - ties[2];
-          dt_.incident_cells(current->vertex(vertex), std::back_inserter(around));
+          IncidentCells<Marks>(current->vertex(vertex), &around);
         }
         for (const Cell_handle& c : around) {
           if (!marks.Marked(c) && !dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
@@ -448,7 +464,7 @@ void RayWalker::WalkFallback(Cell_handle from, const Point& a, const Point& b, M
     }
     for (int i = 0; i < 4; ++i) {
       around.clear();
-      dt_.incident_cells(c->vertex(i), std::back_inserter(around));
+      IncidentCells<Marks>(c->vertex(i), &around);
       for (const Cell_handle& n : around) {
         if (seen.insert(&*n).second) stack.push_back(n);
       }
