@@ -80,7 +80,7 @@ class CellLabels {
   void CountCrossing(const Cell_handle& c, unsigned spread_mask) {
     CellInfo& info = c->info();
     ++info.crossings;
-    if (w2_rule_ == W2Rule::kAllFaces) spread_mask = 0xF;
+    spread_mask = SpreadMask(spread_mask);
     for (int i = 0; i < 4; ++i) {
       if (((spread_mask >> i) & 1) == 0) continue;
       uint16_t& packed = info.spread[i];
@@ -107,7 +107,7 @@ class CellLabels {
                                  OverflowTally* tally) const {
     CellInfo& info = c->info();
     __atomic_fetch_add(&info.crossings, 1, __ATOMIC_RELAXED);
-    if (w2_rule_ == W2Rule::kAllFaces) spread_mask = 0xF;
+    spread_mask = SpreadMask(spread_mask);
     for (int i = 0; i < 4; ++i) {
       if (((spread_mask >> i) & 1) == 0) continue;
       uint16_t* packed = &info.spread[i];
@@ -167,6 +167,11 @@ class CellLabels {
   }
 
  private:
+  // The faces a crossing spreads w2 across under the w2 rule (the walk's mask: camera side).
+  unsigned SpreadMask(unsigned camera_side) const {
+    return w2_rule_ == W2Rule::kAllFaces ? 0xFu : camera_side;
+  }
+
   const Delaunay& dt_;
   // Weights (paper section 2.1): w1 per crossing ray, w2 per ray spreading from a neighbour.
   const double w1_, w2_, free_threshold_;

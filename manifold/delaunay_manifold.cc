@@ -259,22 +259,16 @@ void DelaunayManifold::Impl::TraceRays(const std::vector<RayPoint>& points, Buil
   Progress progress("manifold: ray tracing", static_cast<int64_t>(ray_index_->size()));
   // Walked from the index, in its order, a chunk at a time (no list of every ray: 12 bytes a
   // ray), on all cores.
-  std::vector<RayRef> chunk;
-  const auto walk_chunk = [&] {
-    stats->ray_cell_steps +=
-        walks_.Run(chunk.size(), [&](size_t i, auto& marks, WalkScratch& scratch, auto& count) {
-          return walker_.WalkFromCameraWith(chunk[i].camera, vertex_of_point_[chunk[i].point],
-                                            marks, scratch, count);
-        });
-    stats->rays += static_cast<int64_t>(chunk.size());
-    progress.Update(stats->rays);
-    chunk.clear();
-  };
-  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
-    chunk.push_back(ray);
-    if (chunk.size() == ParallelWalks::kChunk) walk_chunk();
-  });
-  walk_chunk();
+  ray_index_->ForEachChunkInDirectionOrder(
+      ParallelWalks::kChunk, [&](const std::vector<RayRef>& chunk) {
+        stats->ray_cell_steps +=
+            walks_.Run(chunk.size(), [&](size_t i, auto& marks, WalkScratch& scratch, auto& count) {
+              return walker_.WalkFromCameraWith(chunk[i].camera, vertex_of_point_[chunk[i].point],
+                                                marks, scratch, count);
+            });
+        stats->rays += static_cast<int64_t>(chunk.size());
+        progress.Update(stats->rays);
+      });
 }
 
 void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
@@ -562,15 +556,9 @@ void DelaunayManifold::Impl::RewalkMarked(InsertionBatch* batch, uint32_t last_m
 
 // Every ray from its camera on (a batch whose holes meet most rays), a chunk at a time.
 void DelaunayManifold::Impl::RewalkAll(InsertionBatch* batch, InsertionStats* stats) {
-  std::vector<RayRef> chunk;
-  const std::vector<float> from_camera(ParallelWalks::kChunk, 0.0f);
-  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
-    chunk.push_back(ray);
-    if (chunk.size() < ParallelWalks::kChunk) return;
-    Rewalk(*batch, chunk, from_camera, stats);
-    chunk.clear();
-  });
-  Rewalk(*batch, chunk, from_camera, stats);
+  ray_index_->ForEachChunkInDirectionOrder(
+      ParallelWalks::kChunk,
+      [&](const std::vector<RayRef>& chunk) { Rewalk(*batch, chunk, /*reach=*/{}, stats); });
   for (std::vector<RayRef>& bucket : batch->marked_in) std::vector<RayRef>().swap(bucket);
   batch->rays.Reset(ray_index_->size(), batch->part);  // every ray is counted now
 }
@@ -580,7 +568,7 @@ void DelaunayManifold::Impl::Rewalk(const InsertionBatch& batch, const std::vect
   walker_.LocateStarts();  // a ray whose walk back is degenerate walks from its camera
   stats->rewalk_steps +=
       walks_.Run(rays.size(), [&](size_t i, auto& marks, WalkScratch& scratch, auto& count) {
-        return RewalkRay(batch, rays[i], reach[i], marks, scratch, count);
+        return RewalkRay(batch, rays[i], reach.empty() ? 0.0f : reach[i], marks, scratch, count);
       });
   stats->rewalked_rays += static_cast<int64_t>(rays.size());
 }

@@ -173,7 +173,8 @@ class DelaunayManifold::Impl {
   void EndPart(InsertionBatch* batch, InsertionStats* stats);
   void RewalkMarked(InsertionBatch* batch, uint32_t last_marked_by, InsertionStats* stats);
   void RewalkAll(InsertionBatch* batch, InsertionStats* stats);
-  // Walks `rays` again on all cores, each with its reach (RewalkRay), and counts them.
+  // Walks `rays` again on all cores, each with its reach (RewalkRay; none: every ray from its
+  // camera), and counts them.
   void Rewalk(const InsertionBatch& batch, const std::vector<RayRef>& rays,
               const std::vector<float>& reach, InsertionStats* stats);
   // One ray of Rewalk: records its crossings of the cells born since its last walk (the cells

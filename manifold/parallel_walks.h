@@ -33,7 +33,6 @@ class ParallelWalks {
     threads_ =
         threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   }
-  int threads() const { return threads_; }
 
   // For i in [0, n): walk(i, marks, scratch, count) walks ray i with the marks and buffers it
   // is given and calls count(cell, mask) for each crossing to count, returning the cells it

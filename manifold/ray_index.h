@@ -14,6 +14,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -62,6 +63,10 @@ class RayIndex {
   // along them in this order cross mostly the same cells, which stay in cache.
   template <typename Visit>
   void ForEachInDirectionOrder(Visit&& visit) const;
+  // The same order, handed to visit(const std::vector<RayRef>&) `chunk` rays at a time (the last
+  // chunk may be shorter), for callers that work on many rays at once without a list of all.
+  template <typename Visit>
+  void ForEachChunkInDirectionOrder(size_t chunk, Visit&& visit) const;
 
   size_t size() const { return size_; }
   size_t MemoryBytes() const;
@@ -129,6 +134,19 @@ void RayIndex::ForEachInDirectionOrder(Visit&& visit) const {
     for (const Entry& e : cb.pending) visit(RayRef{camera, e.point, e.id});
     for (const OverflowEntry& e : cb.overflow) visit(RayRef{camera, e.point, e.id});
   }
+}
+
+template <typename Visit>
+void RayIndex::ForEachChunkInDirectionOrder(size_t chunk, Visit&& visit) const {
+  std::vector<RayRef> rays;
+  rays.reserve(std::min(chunk, size_));
+  ForEachInDirectionOrder([&](const RayRef& ray) {
+    rays.push_back(ray);
+    if (rays.size() < chunk) return;
+    visit(static_cast<const std::vector<RayRef>&>(rays));
+    rays.clear();
+  });
+  if (!rays.empty()) visit(static_cast<const std::vector<RayRef>&>(rays));
 }
 
 }  // namespace ms

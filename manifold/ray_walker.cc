@@ -23,7 +23,9 @@ const CameraStart& RayWalker::StartOf(int camera) {
 }
 
 void RayWalker::LocateStarts() {
+  if (starts_located_) return;
   for (size_t c = 0; c < camera_cells_.size(); ++c) StartOf(static_cast<int>(c));
+  starts_located_ = true;
 }
 
 CameraStart RayWalker::Locate(int camera) const {
@@ -35,7 +37,10 @@ CameraStart RayWalker::Locate(int camera) const {
 
 void RayWalker::ForgetStartsIn(const Cell_handle& c) {
   for (CameraStart& start : camera_cells_) {
-    if (start.valid && start.cell == c) start.valid = false;
+    if (start.valid && start.cell == c) {
+      start.valid = false;
+      starts_located_ = false;
+    }
   }
 }
 
@@ -66,11 +71,7 @@ std::vector<Cell_handle> RayWalker::StartCandidates(const CameraStart& start,
       break;
     }
     case Delaunay::VERTEX:
-      if (concurrent) {
-        IncidentCells<LocalMarks>(start.cell->vertex(start.li), &cells);
-      } else {
-        IncidentCells<StampMarks>(start.cell->vertex(start.li), &cells);
-      }
+      IncidentCells(start.cell->vertex(start.li), concurrent, &cells);
       break;
     default:
       MS_CHECK(false) << "camera outside the triangulation (locate type " << start.type << ")";

@@ -194,9 +194,9 @@ class RayWalker {
                     Visit& visit) const;
   // The cells around v, appended to *cells. CGAL's incident_cells marks the cells it finds
   // (tds_data) and clears them after: two threads at once would break each other's search.
-  template <typename Marks>
-  void IncidentCells(const Vertex_handle& v, std::vector<Cell_handle>* cells) const {
-    if constexpr (Marks::kConcurrent) {
+  void IncidentCells(const Vertex_handle& v, bool concurrent,
+                     std::vector<Cell_handle>* cells) const {
+    if (concurrent) {
       dt_.incident_cells_threadsafe(v, std::back_inserter(*cells));
     } else {
       dt_.incident_cells(v, std::back_inserter(*cells));
@@ -206,7 +206,8 @@ class RayWalker {
   std::vector<Point> camera_points_;
   std::vector<CameraStart> camera_cells_;
   uint32_t stamp_ = 0;
-  WalkScratch scratch_;  // of the plain walks
+  bool starts_located_ = false;  // every start valid (LocateStarts has nothing to do)
+  WalkScratch scratch_;          // of the plain walks
 };
 
 inline void StampMarks::Begin() { stamp_ = walker_->NextStamp(); }
@@ -290,7 +291,7 @@ int64_t RayWalker::WalkWith(const CameraStart& start, const Point& a, const Vert
           } while (++circ != done);
         } else {
           const int vertex = 6 - ties[0] - ties[1] - ties[2];
-          IncidentCells<Marks>(current->vertex(vertex), &around);
+          IncidentCells(current->vertex(vertex), Marks::kConcurrent, &around);
         }
         for (const Cell_handle& c : around) {
           if (!marks.Marked(c) && !dt_.is_infinite(c) && SegmentCrossesCell(c, a, b)) {
@@ -464,7 +465,7 @@ void RayWalker::WalkFallback(Cell_handle from, const Point& a, const Point& b, M
     }
     for (int i = 0; i < 4; ++i) {
       around.clear();
-      IncidentCells<Marks>(c->vertex(i), &around);
+      IncidentCells(c->vertex(i), Marks::kConcurrent, &around);
       for (const Cell_handle& n : around) {
         if (seen.insert(&*n).second) stack.push_back(n);
       }
