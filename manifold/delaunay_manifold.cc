@@ -651,10 +651,12 @@ void DelaunayManifold::Impl::TraceNewRays(InsertionBatch* batch, InsertionStats*
 // growing refused it.
 void DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, InsertionStats* stats) {
   if (stats->inserted == 0 && stats->shrunk_cells == 0 && stats->gained_rays == 0) return;
-  // From every free cell next to O (the default), Grow leaves them all in `boundary`.
-  GrowShrink::Refusals boundary;
+  // From every free cell next to O (the default), Grow leaves them all in `boundary`, which the
+  // camera stars and the pocket joins then keep up to date.
+  GrowShrink::Refusals boundary(GrowShrink::Refusals::Kind::kRequeued);
   grow_shrink_.Grow(grow_shrink_.BoundarySeeds(options_.regrow_seeds, batch.number), nullptr,
                     &boundary);
+  boundary.Index();
   bool whole_boundary = options_.regrow_seeds == RegrowSeeds::kBoundary;
   if (labels_.outside_count() == 0) {
     grow_shrink_.GrowFromHeaviest();
@@ -662,7 +664,8 @@ void DelaunayManifold::Impl::Regrow(const InsertionBatch& batch, InsertionStats*
   }
   const int64_t slivers_before = grow_shrink_.slivers_joined();
   stats->camera_stars_completed = FreeEnclosedCameras(whole_boundary ? &boundary : nullptr);
-  stats->pockets_joined = JoinFreePockets(options_.regrow_seeds, batch.number);
+  stats->pockets_joined =
+      JoinFreePockets(options_.regrow_seeds, batch.number, whole_boundary ? &boundary : nullptr);
   stats->slivers_joined = grow_shrink_.slivers_joined() - slivers_before;
 }
 
@@ -701,13 +704,8 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* bounda
     // The free cells next to O now: those next to it before (in `boundary`) and the face
     // neighbours of what joined. The same growing as from a scan of every cell, without the
     // scan, and without testing again the cells around which nothing has flipped.
-    std::vector<Cell_handle> beside;
-    for (const Cell_handle& c : joined) {
-      for (int i = 0; i < 4; ++i) {
-        if (grow_shrink_.NextToO(c->neighbor(i))) beside.push_back(c->neighbor(i));
-      }
-    }
-    grow_shrink_.Grow(beside, nullptr, boundary);
+    boundary->Flipped(joined);
+    grow_shrink_.Grow(grow_shrink_.NextToOBeside(joined), nullptr, boundary);
   }
 }
 
@@ -734,7 +732,8 @@ bool FlippedAroundSince(const std::vector<manifold_detail::Cell_handle>& cells, 
 // look only at the pockets around what entered O and at refused ones around which a cell has
 // flipped since (a refusal depends on the labels around the pocket's vertices), so that a round
 // costs what changed, not a scan.
-int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t changed_in) {
+int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t changed_in,
+                                                GrowShrink::Refusals* boundary) {
   if (!options_.join_pockets) return 0;
   constexpr size_t kMaxPocketCells = 1 << 16;
   // A vertex's free cells join only if each weighs twice the free threshold (two crossing
@@ -775,6 +774,7 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
   int64_t joined = 0;
   std::vector<Cell_handle> seeds = grow_shrink_.BoundarySeeds(which, changed_in);
   std::vector<Refused> refused;
+  std::vector<Cell_handle> all_entered;  // for `boundary`
   while (!seeds.empty()) {
     const uint32_t stamp = walker_.NextStamp();
     std::unordered_set<const void*> tried;
@@ -795,9 +795,12 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
       }
     }
     if (entered.empty()) break;
+    all_entered.insert(all_entered.end(), entered.begin(), entered.end());
     // Grow from around what joined; then look at the pockets next to everything that entered
     // O, and again at the refused pockets around whose vertices a cell has flipped.
+    const size_t joined_before_growing = entered.size();
     grow_shrink_.Grow(around(entered), &entered);
+    all_entered.insert(all_entered.end(), entered.begin() + joined_before_growing, entered.end());
     seeds = around(entered);
     std::vector<Refused> still_refused;
     for (std::vector<Refused>* list : {&refused, &refused_now}) {
@@ -815,7 +818,13 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
   }
   // Growing from the local seeds above retries only cells near what joined: one growing from
   // the whole boundary keeps O maximal for single cells.
-  if (joined > 0) grow_shrink_.Grow(grow_shrink_.BoundarySeeds(which, changed_in));
+  if (joined > 0 && boundary != nullptr) {
+    // The free cells next to O now: those in `boundary` and those beside what entered.
+    boundary->Flipped(all_entered);
+    grow_shrink_.Grow(grow_shrink_.NextToOBeside(all_entered), nullptr, boundary);
+  } else if (joined > 0) {
+    grow_shrink_.Grow(grow_shrink_.BoundarySeeds(which, changed_in));
+  }
   return joined;
 }
 

@@ -75,7 +75,8 @@ struct InsertionStats {
   // vertex's free cells; --manifold.join-pockets).
   int64_t pockets_joined = 0;
   // Matter cells crossed by no ray that joined with a pocket, which they alone kept out of O by
-  // pinching one of its vertices (GrowShrink::PinchingSlivers; pocket joins and camera repairs).
+  // pinching one of its vertices (GrowShrink::FlipAllOrFindSlivers; pocket joins and camera
+  // repairs).
   int64_t slivers_joined = 0;
   double seconds_insertion = 0, seconds_growing = 0;
 };

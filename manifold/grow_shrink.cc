@@ -41,19 +41,24 @@ void FaceConnectedPieces(const std::vector<Cell_handle>& cells, std::vector<int>
 
 void GrowShrink::Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_handle>* added_cells,
                       Refusals* refusals) {
+  Refusals within(Refusals::Kind::kRequeued);
+  Refusals& kept = refusals != nullptr ? *refusals : within;
   std::priority_queue<QueueEntry> queue;
-  const auto push = [&](const Cell_handle& c, uint32_t refused_after) {
+  const auto push = [&](const QueueEntry& entry) {
+    entry.cell->info().queued = true;
+    queue.push(entry);
+  };
+  const auto push_new = [&](const Cell_handle& c) {
     if (c->info().queued || !labels_.FreeOutsideO(c)) return;
-    c->info().queued = true;
-    queue.push({labels_.Weight(c), KeyOf(c), c, refused_after});
+    push({labels_.Weight(c), KeyOf(c), c});
   };
   // A refused cell again, its weight and key as they were: it is still free (no weight changes
   // while refusals are kept), so only whether it joined O since is asked.
   const auto push_again = [&](const QueueEntry& entry) {
     const Cell_handle& c = entry.cell;
-    if (c->info().queued || c->info().outside) return;
-    c->info().queued = true;
-    queue.push(entry);
+    if (c->info().queued || c->info().outside) return false;
+    push(entry);
+    return true;
   };
   // Whether a cell joins depends only on the labels of the cells around its vertices
   // (Regularity::FlipKeepsManifold): one refused when no cell around them has flipped since is
@@ -66,39 +71,154 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_ha
     }
     return true;
   };
-  if (refusals != nullptr) {
-    for (const QueueEntry& entry : *refusals) push_again(entry);
+  // The last entry (in queue order) taken this round. A kept refusal above it would already
+  // have been taken, and refused again unchanged, had all refusals been queued at the start of
+  // the round: woken by a flip now it waits for the next round, below it it joins the queue.
+  bool taken_any = false;
+  QueueEntry lowest_taken{};
+  std::vector<int32_t> next_round;
+  const auto wake = [&](int32_t index) {
+    Refusals::Entry& r = kept.entries_[index];
+    if (r.queued.cell->info().queued) return;  // queued anew: that test will be the current one
+    r.woken = true;
+    if (!taken_any || r.queued < lowest_taken) {
+      push(r.queued);
+    } else {
+      next_round.push_back(index);
+    }
+  };
+  if (kept.indexed()) {
+    for (const int32_t index : kept.pending_) {
+      Refusals::Entry& r = kept.entries_[index];
+      r.woken = false;
+      if (r.alive) wake(index);
+    }
+    kept.pending_.clear();
+  } else {
+    for (const Refusals::Entry& r : kept.TakeAll()) push_again(r.queued);
   }
-  for (const Cell_handle& c : seeds) push(c, 0);
-  Refusals refused;
+  for (const Cell_handle& c : seeds) push_new(c);
   for (;;) {
     int64_t added = 0;
+    taken_any = false;
     while (!queue.empty()) {
       const QueueEntry entry = queue.top();
       const Cell_handle c = entry.cell;
       queue.pop();
       c->info().queued = false;
+      if (!taken_any || entry < lowest_taken) lowest_taken = entry;
+      taken_any = true;
+      if (entry.refusal >= 0) kept.entries_[entry.refusal].woken = false;
       if (c->info().outside) continue;
       const bool refused_again = unchanged_since(c, entry.refused_after);
       if (!refused_again && regularity_.FlipKeepsManifold(c)) {
         labels_.SetOutside(c, true);
         ++added;
         if (added_cells != nullptr) added_cells->push_back(c);
-        for (int i = 0; i < 4; ++i) push(c->neighbor(i), 0);
-      } else {
-        refused.push_back(entry);
-        if (!refused_again) refused.back().refused_after = labels_.relabels() + 1;
+        kept.Remove(c);
+        // Before the neighbours: a kept one that is queued again is not queued anew.
+        kept.ForEachAround(c, wake);
+        for (int i = 0; i < 4; ++i) push_new(c->neighbor(i));
+      } else if (!refused_again) {
+        QueueEntry refused = entry;
+        refused.refused_after = labels_.relabels() + 1;
+        kept.Add(refused);
+      } else if (!kept.indexed()) {
+        kept.Add(entry);
       }
     }
     // A cell refused earlier may be accepted now that O has changed around it: retry until
     // a round adds nothing.
-    if (added == 0 || refused.empty()) break;
-    Refusals retry;
-    retry.swap(refused);
-    for (const QueueEntry& entry : retry) push_again(entry);
+    if (added == 0) break;
+    bool queued_any = false;
+    if (kept.indexed()) {
+      for (const int32_t index : next_round) {
+        Refusals::Entry& r = kept.entries_[index];
+        r.woken = false;
+        if (r.alive && push_again(r.queued)) {
+          r.woken = true;
+          queued_any = true;
+        }
+      }
+      next_round.clear();
+    } else {
+      for (const Refusals::Entry& r : kept.TakeAll()) queued_any |= push_again(r.queued);
+    }
+    if (!queued_any) break;
   }
-  for (const QueueEntry& entry : refused) entry.cell->info().queued = false;
-  if (refusals != nullptr) refusals->swap(refused);
+  for (const int32_t index : next_round) kept.entries_[index].woken = false;
+}
+
+void GrowShrink::Refusals::Flipped(const std::vector<Cell_handle>& cells) {
+  for (const Cell_handle& c : cells) {
+    if (c->info().outside) Remove(c);
+    ForEachAround(c, [&](int32_t index) {
+      entries_[index].woken = true;
+      pending_.push_back(index);
+    });
+  }
+}
+
+void GrowShrink::Refusals::Index() {
+  if (indexed()) return;
+  kind_ = Kind::kIndexed;
+  std::vector<Entry> requeued = TakeAll();
+  entry_of_cell_.reserve(requeued.size());
+  first_at_vertex_.reserve(2 * requeued.size());
+  links_.reserve(4 * requeued.size());
+  for (const Entry& r : requeued) {
+    if (!r.queued.cell->info().outside) Add(r.queued);
+  }
+}
+
+void GrowShrink::Refusals::Add(const QueueEntry& refused) {
+  if (indexed()) {
+    const auto [at, added] = entry_of_cell_.emplace(&*refused.cell, 0);
+    if (!added) {
+      // The later refusal: a test then that no flip around it has outdated since.
+      uint32_t& after = entries_[at->second].queued.refused_after;
+      after = std::max(after, refused.refused_after);
+      return;
+    }
+    at->second = static_cast<int32_t>(entries_.size());
+    for (int i = 0; i < 4; ++i) {
+      const auto [first, none_yet] = first_at_vertex_.emplace(&*refused.cell->vertex(i), -1);
+      links_.push_back({at->second, first->second});
+      first->second = static_cast<int32_t>(links_.size() - 1);
+    }
+  }
+  entries_.push_back({refused});
+  entries_.back().queued.refusal = indexed() ? static_cast<int32_t>(entries_.size() - 1) : -1;
+  ++alive_;
+}
+
+void GrowShrink::Refusals::Remove(const Cell_handle& c) {
+  if (!indexed()) return;
+  const auto at = entry_of_cell_.find(&*c);
+  if (at == entry_of_cell_.end()) return;
+  entries_[at->second].alive = false;
+  entry_of_cell_.erase(at);
+  --alive_;
+}
+
+template <class Wake>
+void GrowShrink::Refusals::ForEachAround(const Cell_handle& c, Wake&& wake) {
+  if (!indexed()) return;
+  for (int i = 0; i < 4; ++i) {
+    const auto first = first_at_vertex_.find(&*c->vertex(i));
+    if (first == first_at_vertex_.end()) continue;
+    for (int32_t link = first->second; link >= 0; link = links_[link].next) {
+      const Refusals::Entry& r = entries_[links_[link].entry];
+      if (r.alive && !r.woken) wake(links_[link].entry);
+    }
+  }
+}
+
+std::vector<GrowShrink::Refusals::Entry> GrowShrink::Refusals::TakeAll() {
+  std::vector<Entry> all;
+  all.swap(entries_);
+  alive_ = 0;
+  return all;
 }
 
 int64_t GrowShrink::GrowFromHeaviest() {
@@ -149,6 +269,16 @@ bool GrowShrink::NextToO(const Cell_handle& c) const {
   return false;
 }
 
+std::vector<Cell_handle> GrowShrink::NextToOBeside(const std::vector<Cell_handle>& cells) const {
+  std::vector<Cell_handle> beside;
+  for (const Cell_handle& c : cells) {
+    for (int i = 0; i < 4; ++i) {
+      if (NextToO(c->neighbor(i))) beside.push_back(c->neighbor(i));
+    }
+  }
+  return beside;
+}
+
 int64_t GrowShrink::CountJoinableCells(std::vector<Cell_handle>* first, size_t max_kept) {
   int64_t joinable = 0;
   for (const Cell_handle& c : BoundarySeeds(RegrowSeeds::kBoundary, 0)) {
@@ -166,22 +296,14 @@ bool GrowShrink::FlipAllIfRegular(const std::vector<Cell_handle>& cells,
   if (missing.empty()) return false;
   // A vertex's link depends only on the labels of its own cells: the vertices of the flipped
   // cells are tested, each with the flipped cells around it.
-  std::vector<std::pair<Vertex_handle, Cell_handle>> touched;
-  for (const Cell_handle& c : missing) {
-    for (int i = 0; i < 4; ++i) touched.emplace_back(c->vertex(i), c);
-  }
-  std::sort(touched.begin(), touched.end());
+  const std::vector<std::pair<Vertex_handle, Cell_handle>> touched = VerticesOf(missing);
   bool regular = true;
   std::vector<Cell_handle> near;
   for (size_t k = 0; k < touched.size() && regular;) {
     const Vertex_handle w = touched[k].first;
     near.clear();
     for (; k < touched.size() && touched[k].first == w; ++k) near.push_back(touched[k].second);
-    // Scanning a star costs its size; a box point's star can hold 10^4 cells and be tested
-    // after every flip near it (pocket joins at 10^6 points spent minutes there).
-    constexpr int32_t kLargeStar = 64;
-    regular = w->info().cells > kLargeStar ? regularity_.VertexRegularByLinkWalk(w, near)
-                                           : regularity_.VertexRegular(w, Cell_handle());
+    regular = RegularAfterTrial(w, near);
   }
   if (!regular) UndoFlips(trial);
   return regular;
@@ -225,23 +347,58 @@ bool GrowShrink::CompleteFreeStar(const Vertex_handle& v, double min_weight) {
   return FlipAllIfRegular(std::vector<Cell_handle>(around_.begin(), around_.end()));
 }
 
-std::vector<Cell_handle> GrowShrink::PinchingSlivers(const std::vector<Cell_handle>& pocket) {
+bool GrowShrink::RegularAfterTrial(const Vertex_handle& v, const std::vector<Cell_handle>& near) {
+  // Scanning a star costs its size; a box point's star can hold 10^4 cells and be tested
+  // after every flip near it (pocket joins at 10^6 points spent minutes there).
+  constexpr int32_t kLargeStar = 64;
+  return v->info().cells > kLargeStar ? regularity_.VertexRegularByLinkWalk(v, near)
+                                      : regularity_.VertexRegular(v, Cell_handle());
+}
+
+std::vector<std::pair<Vertex_handle, Cell_handle>> GrowShrink::VerticesOf(
+    const std::vector<Cell_handle>& cells) {
+  std::vector<std::pair<Vertex_handle, Cell_handle>> touched;
+  for (const Cell_handle& c : cells) {
+    for (int i = 0; i < 4; ++i) touched.emplace_back(c->vertex(i), c);
+  }
+  std::sort(touched.begin(), touched.end());
+  return touched;
+}
+
+bool GrowShrink::FlipAllOrFindSlivers(const std::vector<Cell_handle>& pocket,
+                                      std::vector<Cell_handle>* slivers) {
   constexpr size_t kMaxSliverCells = 3;
   // Pinches at vertices of larger stars (the box's Steiner points) are left alone: their pieces
   // cost the square of the star to find.
   constexpr int32_t kMaxStar = 256;
-  // The pinches are those of the pocket in O: it goes in for the search and out again.
+  slivers->clear();
+  // One trial serves both: the pocket goes into O, stays if every vertex is regular, else the
+  // pinches are looked for there and it goes out again.
   const TrialFlips trial = FlipIntoO(pocket);
   const std::vector<Cell_handle>& joined = trial.cells;
+  if (joined.empty()) return false;
+  const std::vector<std::pair<Vertex_handle, Cell_handle>> touched = VerticesOf(joined);
+  bool all_regular = true;
+  std::unordered_set<const void*> irregular;
+  std::vector<Cell_handle> near;
+  for (size_t k = 0; k < touched.size();) {
+    const Vertex_handle w = touched[k].first;
+    near.clear();
+    for (; k < touched.size() && touched[k].first == w; ++k) near.push_back(touched[k].second);
+    if (!all_regular && w->info().cells > kMaxStar) continue;  // the verdict is known already
+    if (RegularAfterTrial(w, near)) continue;
+    all_regular = false;
+    if (w->info().cells <= kMaxStar) irregular.insert(&*w);
+  }
+  if (all_regular) return true;
   std::unordered_set<const void*> seen_vertices, seen_slivers;
-  std::vector<Cell_handle> slivers, star, rest;
+  std::vector<Cell_handle> star, rest;
   std::vector<int> piece;
   std::vector<size_t> sizes;
   for (const Cell_handle& joined_cell : joined) {
     for (int i = 0; i < 4; ++i) {
       const Vertex_handle v = joined_cell->vertex(i);
-      if (!seen_vertices.insert(&*v).second || v->info().cells > kMaxStar) continue;
-      if (regularity_.VertexRegular(v, Cell_handle())) continue;
+      if (!seen_vertices.insert(&*v).second || irregular.count(&*v) == 0) continue;
       star.clear();
       dt_.incident_cells(v, std::back_inserter(star));
       rest.clear();
@@ -255,19 +412,19 @@ std::vector<Cell_handle> GrowShrink::PinchingSlivers(const std::vector<Cell_hand
         const Cell_handle& c = rest[a];
         if (piece[a] == largest || sizes[piece[a]] > kMaxSliverCells) continue;
         if (dt_.is_infinite(c) || c->info().crossings > 0 || labels_.Weight(c) <= 0) continue;
-        if (seen_slivers.insert(&*c).second) slivers.push_back(c);
+        if (seen_slivers.insert(&*c).second) slivers->push_back(c);
       }
     }
   }
   UndoFlips(trial);
-  return slivers;
+  return false;
 }
 
 std::vector<Cell_handle> GrowShrink::JoinPocket(const std::vector<Cell_handle>& pocket,
                                                 double star_min_weight,
                                                 std::unordered_set<const void*>* tried) {
-  if (FlipAllIfRegular(pocket)) return pocket;
-  const std::vector<Cell_handle> slivers = PinchingSlivers(pocket);
+  std::vector<Cell_handle> slivers;
+  if (FlipAllOrFindSlivers(pocket, &slivers)) return pocket;
   if (!slivers.empty() && FlipAllIfRegular(pocket, slivers)) {
     slivers_joined_ += static_cast<int64_t>(slivers.size());
     std::vector<Cell_handle> flipped = pocket;

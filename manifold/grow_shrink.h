@@ -29,21 +29,19 @@ class GrowShrink {
     Cell_handle cell;
     // For a cell refused earlier: CellLabels::relabels() at its refusal + 1 (0: never refused).
     uint32_t refused_after = 0;
+    int32_t refusal = -1;  // its entry in Refusals, if it came from there
     // Max-heap: heavier first; among equal weights the smaller key first (determinism).
     bool operator<(const QueueEntry& o) const {
       if (weight != o.weight) return weight < o.weight;
       return key > o.key;
     }
   };
-  // Cells a Grow refused, each with CellLabels::relabels() at its refusal + 1: a later Grow
-  // need not test one again while no cell around its vertices flips. Valid while no cell is
-  // made or destroyed and no weight changes (within one regrowing).
-  using Refusals = std::vector<QueueEntry>;
+  class Refusals;
 
   // Grows O from `seeds` through free cells, heaviest first (ties: smaller CellKey), retrying
   // refused cells until a round adds nothing.
   // The cells added are appended to `added` when it is not null. With `refusals`, its cells
-  // are queued too (tested only where a cell around them has flipped since), and on return it
+  // take part too (tested only where a cell around them has flipped since), and on return it
   // holds the cells refused at the end: every free cell next to O that is not in it, if the
   // seeds and refusals held all those there were.
   void Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_handle>* added = nullptr,
@@ -69,26 +67,30 @@ class GrowShrink {
   // `matter` cells not in O flip with them though they are not free.
   bool FlipAllIfRegular(const std::vector<Cell_handle>& cells,
                         const std::vector<Cell_handle>& matter = {});
-  // The matter cells that would pinch a vertex of `pocket` once the pocket is in O: around each
-  // vertex that would not stay regular, the cells not in O split into face-connected pieces;
-  // every piece but the largest, if it has at most kMaxSliverCells cells, each crossed by no
-  // ray but weighing more than nothing (rays through its neighbours spread into it).
-  std::vector<Cell_handle> PinchingSlivers(const std::vector<Cell_handle>& pocket);
+  // FlipAllIfRegular(pocket); where it does not flip, *slivers gets the matter cells that would
+  // pinch a vertex of `pocket` once the pocket is in O: around each vertex that would not stay
+  // regular, the cells not in O split into face-connected pieces; every piece but the largest,
+  // if it has at most kMaxSliverCells cells, each crossed by no ray but weighing more than
+  // nothing (rays through its neighbours spread into it).
+  bool FlipAllOrFindSlivers(const std::vector<Cell_handle>& pocket,
+                            std::vector<Cell_handle>* slivers);
   // FlipAllIfRegular on the cells around v, unless a free cell among them not in O weighs less
   // than `min_weight` (then nothing changes and it returns false).
   bool CompleteFreeStar(const Vertex_handle& v, double min_weight = 0);
   // Joins a pocket (from Pocket) into O: whole if FlipAllIfRegular allows it, else whole with
-  // its PinchingSlivers, else the free cells around the first of its surface vertices whose
-  // CompleteFreeStar(v, star_min_weight) succeeds. Vertices in `tried` are skipped, and those tried
-  // are added to it. Returns the cells flipped (for a vertex: all the cells around it); empty when
-  // nothing changed.
+  // its pinching slivers (FlipAllOrFindSlivers), else the free cells around the first of its
+  // surface vertices whose CompleteFreeStar(v, star_min_weight) succeeds. Vertices in `tried` are
+  // skipped, and those tried are added to it. Returns the cells flipped (for a vertex: all the
+  // cells around it); empty when nothing changed.
   std::vector<Cell_handle> JoinPocket(const std::vector<Cell_handle>& pocket,
                                       double star_min_weight,
                                       std::unordered_set<const void*>* tried);
-  // Matter cells joined by JoinPocket through PinchingSlivers so far.
+  // Matter cells joined by JoinPocket with their pocket so far.
   int64_t slivers_joined() const { return slivers_joined_; }
   // Free, not in O, and sharing a face with O: a cell growing can start from.
   bool NextToO(const Cell_handle& c) const;
+  // The face neighbours of `cells` that are NextToO.
+  std::vector<Cell_handle> NextToOBeside(const std::vector<Cell_handle>& cells) const;
 
   // The free cells not in O reachable from `start` through shared faces (at most max_cells),
   // in the order found; empty if start is not one. `stamp` (RayWalker::NextStamp) marks the
@@ -114,6 +116,11 @@ class GrowShrink {
   // are not in O yet, and returns them for UndoFlips.
   TrialFlips FlipIntoO(const std::vector<Cell_handle>& cells,
                        const std::vector<Cell_handle>& matter = {});
+  // Whether v is regular with the cells flipped on trial; `near`: those around v.
+  bool RegularAfterTrial(const Vertex_handle& v, const std::vector<Cell_handle>& near);
+  // (vertex, cell) for each vertex of `cells`, sorted by vertex.
+  static std::vector<std::pair<Vertex_handle, Cell_handle>> VerticesOf(
+      const std::vector<Cell_handle>& cells);
   // Takes the cells FlipIntoO put into O out again, last first, and gives their vertices back
   // their last-flip marks: a trial that is undone is no change around them, so growing and the
   // pocket joins do not test again what it touched (most of their tests on a street).
@@ -127,6 +134,60 @@ class GrowShrink {
   // Reused by ShrinkAround.
   std::vector<std::pair<CellKey, Cell_handle>> shrink_set_;
   std::vector<Cell_handle> around_;
+};
+
+// Cells a Grow refused, each with CellLabels::relabels() at its refusal + 1. Whether a cell may
+// join depends only on the labels of the cells around its vertices
+// (Regularity::FlipKeepsManifold), so a refused cell waits aside until a cell around one of its
+// vertices flips, and only then goes back into the queue, where it would have stood among the
+// others: the same cells join in the same order as when every refusal is queued again, which
+// on a street cost 30-60 ms for each camera star completed (10^5 refusals).
+// Kept aside across Grows (regrowing) they need an index by vertex; within one Grow (the build)
+// they are simply queued again each round, which keeps the build's memory.
+// Valid while no cell is made or destroyed and no weight changes (within one regrowing).
+class GrowShrink::Refusals {
+ public:
+  enum class Kind { kRequeued, kIndexed };
+  explicit Refusals(Kind kind = Kind::kIndexed) : kind_(kind) {}
+
+  // Refused cells not in O since.
+  size_t size() const { return alive_; }
+  // Turns kRequeued refusals, as a Grow left them, into kIndexed ones: indexing costs more than
+  // it saves within the one large Grow that starts a regrowing, less in the Grows after it.
+  void Index();
+  // `cells` may have flipped since the last Grow with these refusals (a superset is fine): the
+  // refused cells around their vertices take part in the next one.
+  void Flipped(const std::vector<Cell_handle>& cells);
+
+ private:
+  friend class GrowShrink;
+  struct Entry {
+    QueueEntry queued;
+    bool alive = true;
+    bool woken = false;  // in the queue, or waiting for the next round
+  };
+  struct Link {
+    int32_t entry;
+    int32_t next;  // -1: the last
+  };
+  bool indexed() const { return kind_ == Kind::kIndexed; }
+  // Keeps a refused cell aside, or renews the refusal of one kept already.
+  void Add(const QueueEntry& refused);
+  // The cell joined O.
+  void Remove(const Cell_handle& c);
+  // Calls wake(index) on each kept cell, not woken yet, with a vertex of c (kIndexed).
+  template <class Wake>
+  void ForEachAround(const Cell_handle& c, Wake&& wake);
+  // kRequeued: every refusal, for the next round (they are kept again if refused again).
+  std::vector<Entry> TakeAll();
+
+  Kind kind_;
+  std::vector<Entry> entries_;
+  size_t alive_ = 0;
+  std::unordered_map<const void*, int32_t> entry_of_cell_;    // kIndexed
+  std::unordered_map<const void*, int32_t> first_at_vertex_;  // kIndexed: into links_
+  std::vector<Link> links_;
+  std::vector<int32_t> pending_;  // woken by Flipped, for the next Grow
 };
 
 }  // namespace ms::manifold_detail

@@ -78,7 +78,9 @@ class DelaunayManifold::Impl {
   int64_t FreeEnclosedCameras(manifold_detail::GrowShrink::Refusals* boundary);
   // Joins the pockets of free space next to O (from the cells BoundarySeeds(which, changed_in)
   // gives) that growing could not enter, and grows on from them; returns the joins.
-  int64_t JoinFreePockets(RegrowSeeds which, uint32_t changed_in);
+  // `boundary` as for FreeEnclosedCameras: the last growing then starts from what changed.
+  int64_t JoinFreePockets(RegrowSeeds which, uint32_t changed_in,
+                          manifold_detail::GrowShrink::Refusals* boundary = nullptr);
   void LogCameraStars(int64_t completed) const;
   // Cameras none of whose start cells is in O (manifold.h).
   std::vector<int32_t> CamerasInMatter() {

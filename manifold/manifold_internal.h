@@ -8,6 +8,8 @@
 #include <functional>
 #include <vector>
 
+#include "manifold/delaunay_manifold.h"
+
 namespace ms::manifold_internal {
 
 using CellVertices = std::array<int32_t, 4>;  // sorted point indices
@@ -57,5 +59,21 @@ struct SpreadCounts {
   int64_t after_forget = 0;     // Spread of face 0 once its counts were forgotten and reset
 };
 SpreadCounts CountSpreads(int64_t rays, int threads = 1);
+
+// Two copies of a manifold built from `points`, O shrunk at the same random cells, then grown
+// back from its boundary in parts with single cells joined between them, then cells taken out
+// of O, each time followed by growing: one copy keeps its refusals aside between growings
+// (GrowShrink::Refusals::Kind::kIndexed, woken by the flips), the other queues them all again
+// each time (kRequeued). What differs between the two.
+struct KeptRefusalsComparison {
+  int64_t joins = 0;             // single cells joined between growings
+  int64_t shrinks = 0;           // cells taken out of O
+  int64_t grown = 0;             // cells that joined by growing
+  int64_t refusals = 0;          // refusals kept after growing back
+  int64_t order_mismatches = 0;  // places where the cells joined, in order, differ
+  int64_t label_mismatches = 0;  // cells whose label differs at the end
+};
+KeptRefusalsComparison CompareKeptRefusals(const std::vector<ManifoldCamera>& cameras,
+                                           const std::vector<RayPoint>& points, uint32_t seed);
 
 }  // namespace ms::manifold_internal

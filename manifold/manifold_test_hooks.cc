@@ -4,6 +4,7 @@
 #include <functional>
 #include <iterator>
 #include <thread>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -178,6 +179,120 @@ struct ManifoldTestAccess {
     return result;
   }
 
+  static manifold_internal::KeptRefusalsComparison CompareKeptRefusals(
+      const std::vector<ManifoldCamera>& cameras, const std::vector<RayPoint>& points,
+      uint32_t seed) {
+    using manifold_detail::GrowShrink;
+    DelaunayManifold::Impl kept(cameras, ManifoldOptions{});
+    DelaunayManifold::Impl requeued(cameras, ManifoldOptions{});
+    kept.Build(points);
+    requeued.Build(points);
+    // The two triangulations are the same; cells are paired by key.
+    const auto by_key = [](DelaunayManifold::Impl& impl) {
+      std::vector<std::pair<manifold_detail::CellKey, Cell_handle>> cells;
+      for (auto c = impl.dt_.finite_cells_begin(); c != impl.dt_.finite_cells_end(); ++c) {
+        cells.emplace_back(KeyOf(c), c);
+      }
+      std::sort(cells.begin(), cells.end());
+      return cells;
+    };
+    const auto kept_cells = by_key(kept), requeued_cells = by_key(requeued);
+    MS_CHECK(kept_cells.size() == requeued_cells.size()) << "the two builds differ";
+    const auto pair_of = [&](const Cell_handle& c) {
+      const auto at = std::lower_bound(kept_cells.begin(), kept_cells.end(),
+                                       std::make_pair(KeyOf(c), Cell_handle()));
+      MS_CHECK(at != kept_cells.end() && at->first == KeyOf(c)) << "no such cell";
+      return requeued_cells[at - kept_cells.begin()].second;
+    };
+    const auto pairs_of = [&](const std::vector<Cell_handle>& cells) {
+      std::vector<Cell_handle> paired;
+      for (const Cell_handle& c : cells) paired.push_back(pair_of(c));
+      return paired;
+    };
+    uint64_t state = seed * 2654435761u + 1;
+    const auto next = [&]() {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      return static_cast<size_t>(state >> 33);
+    };
+    manifold_internal::KeptRefusalsComparison result;
+    GrowShrink::Refusals indexed(GrowShrink::Refusals::Kind::kIndexed);
+    GrowShrink::Refusals requeue(GrowShrink::Refusals::Kind::kRequeued);
+    // Grows both from `seeds` (cells of `kept`) and compares the cells joined, in order.
+    const auto grow = [&](const std::vector<Cell_handle>& seeds) {
+      std::vector<Cell_handle> added_kept, added_requeued;
+      kept.grow_shrink_.Grow(seeds, &added_kept, &indexed);
+      requeued.grow_shrink_.Grow(pairs_of(seeds), &added_requeued, &requeue);
+      for (size_t i = 0; i < std::max(added_kept.size(), added_requeued.size()); ++i) {
+        result.order_mismatches += i >= added_kept.size() || i >= added_requeued.size() ||
+                                   KeyOf(added_kept[i]) != KeyOf(added_requeued[i]);
+      }
+      result.grown += static_cast<int64_t>(added_kept.size());
+    };
+    // Takes up to 12 face-connected cells of O out, from a, where the surface stays manifold.
+    const auto shrink = [&](const Cell_handle& a) {
+      std::vector<Cell_handle> front = {a}, out;
+      for (size_t f = 0; f < front.size() && out.size() < 12; ++f) {
+        const Cell_handle x = front[f];
+        if (!x->info().outside || !kept.regularity_.FlipKeepsManifold(x)) continue;
+        kept.labels_.SetOutside(x, false);
+        requeued.labels_.SetOutside(pair_of(x), false);
+        out.push_back(x);
+        for (int i = 0; i < 4; ++i) front.push_back(x->neighbor(i));
+      }
+      return out;
+    };
+    // O shrunk at a third of its cells, then grown back from its boundary in four parts: each
+    // part's growing changes the labels around the refusals of the parts before, and so do
+    // cells joined singly between the parts (FlipAllIfRegular, notified as a regrowing's
+    // pocket joins are).
+    std::vector<Cell_handle> o_cells;
+    for (const auto& [key, c] : kept_cells) {
+      if (c->info().outside && next() % 3 == 0) o_cells.push_back(c);
+    }
+    for (const Cell_handle& c : o_cells) shrink(c);
+    std::vector<std::vector<Cell_handle>> parts(4);
+    for (const Cell_handle& c : kept.grow_shrink_.BoundarySeeds(RegrowSeeds::kBoundary, 0)) {
+      parts[next() % parts.size()].push_back(c);
+    }
+    parts.emplace_back();  // the last growing starts from what the last joins woke
+    for (const std::vector<Cell_handle>& part : parts) {
+      grow(part);
+      const std::vector<Cell_handle> next_to_o =
+          kept.grow_shrink_.BoundarySeeds(RegrowSeeds::kBoundary, 0);
+      for (int attempt = 0; attempt < 20 && !next_to_o.empty(); ++attempt) {
+        const Cell_handle a = next_to_o[next() % next_to_o.size()];
+        if (!kept.grow_shrink_.NextToO(a)) continue;
+        const bool joined = kept.grow_shrink_.FlipAllIfRegular({a});
+        if (joined != requeued.grow_shrink_.FlipAllIfRegular({pair_of(a)})) {
+          ++result.label_mismatches;  // the two have diverged already
+          continue;
+        }
+        if (!joined) continue;
+        ++result.joins;
+        indexed.Flipped({a});
+      }
+    }
+    result.refusals = static_cast<int64_t>(indexed.size());
+    // Then cells of O taken out, each time followed by growing.
+    for (int attempt = 0; attempt < 300; ++attempt) {
+      const std::vector<Cell_handle> flipped =
+          shrink(kept_cells[next() % kept_cells.size()].second);
+      if (flipped.empty()) continue;
+      result.shrinks += static_cast<int64_t>(flipped.size());
+      std::vector<Cell_handle> seeds = kept.grow_shrink_.NextToOBeside(flipped);
+      for (const Cell_handle& c : flipped) {
+        if (kept.grow_shrink_.NextToO(c)) seeds.push_back(c);
+      }
+      indexed.Flipped(flipped);
+      grow(seeds);
+    }
+    for (size_t k = 0; k < kept_cells.size(); ++k) {
+      result.label_mismatches +=
+          kept_cells[k].second->info().outside != requeued_cells[k].second->info().outside;
+    }
+    return result;
+  }
+
   static void CrossedCells(const std::vector<Eigen::Vector3d>& points,
                            const Eigen::Vector3d& camera, int32_t target,
                            std::vector<manifold_internal::CellVertices>* walked,
@@ -220,6 +335,11 @@ bool IsVertexRegular(const std::vector<Eigen::Vector3d>& points,
 LinkWalkComparison CompareLinkWalk(const std::vector<Eigen::Vector3d>& points,
                                    const std::function<bool(const Eigen::Vector3d&)>& in_o) {
   return ManifoldTestAccess::CompareLinkWalk(points, in_o);
+}
+
+KeptRefusalsComparison CompareKeptRefusals(const std::vector<ManifoldCamera>& cameras,
+                                           const std::vector<RayPoint>& points, uint32_t seed) {
+  return ManifoldTestAccess::CompareKeptRefusals(cameras, points, seed);
 }
 
 void CrossedCells(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& camera,
