@@ -71,7 +71,7 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_ha
     }
     return true;
   };
-  // The last entry (in queue order) taken this round. A kept refusal above it would already
+  // The lowest entry (in queue order) taken this round. A kept refusal above it would already
   // have been taken, and refused again unchanged, had all refusals been queued at the start of
   // the round: woken by a flip now it waits for the next round, below it it joins the queue.
   bool taken_any = false;
