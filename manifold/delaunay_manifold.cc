@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <iterator>
+#include <map>
 #include <unordered_set>
 #include <utility>
 
@@ -677,6 +678,20 @@ void DelaunayManifold::Impl::LogCameraStars(int64_t completed) const {
       completed);
 }
 
+namespace {
+
+// Whether a cell around a vertex of `cells` has flipped since labels_.relabels() was `relabels`.
+bool FlippedAroundSince(const std::vector<manifold_detail::Cell_handle>& cells, uint32_t relabels) {
+  for (const auto& c : cells) {
+    for (int i = 0; i < 4; ++i) {
+      if (c->vertex(i)->info().relabelled > relabels) return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
 // A camera stands in free space, but greedy growing can leave the free cells around one out of
 // O: a pocket that touches O only where adding any one cell would pinch the surface (seen after
 // an insertion re-triangulated the space in front of a camera). Completing the star of a vertex
@@ -684,15 +699,31 @@ void DelaunayManifold::Impl::LogCameraStars(int64_t completed) const {
 // first); growing then goes on from there.
 int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* boundary) {
   constexpr size_t kMaxPocketCells = 1 << 16;
+  // A camera's pocket that could not join, with the cells its trial read: it fails again
+  // until a cell around their vertices flips. Each star completed used to try every camera
+  // still in the matter again (1,800 failed trials, 1.8 s of 2.3, on a 2,048-camera street).
+  struct Failed {
+    uint32_t relabels;
+    std::vector<Cell_handle> read;
+  };
+  std::map<std::pair<int32_t, const void*>, Failed> failed;
   for (int64_t completed = 0;; ++completed) {
     std::vector<Cell_handle> joined;
     for (const int32_t camera : CamerasInMatter()) {
       for (const Cell_handle& start : walker_.StartCandidates(walker_.StartOf(camera))) {
+        const std::pair<int32_t, const void*> key(camera, &*start);
+        const auto before = failed.find(key);
+        if (before != failed.end() &&
+            !FlippedAroundSince(before->second.read, before->second.relabels)) {
+          continue;
+        }
         const std::vector<Cell_handle> pocket =
             grow_shrink_.Pocket(start, kMaxPocketCells, walker_.NextStamp());
         std::unordered_set<const void*> tried;
-        joined = grow_shrink_.JoinPocket(pocket, /*star_min_weight=*/0, &tried);
+        std::vector<Cell_handle> read = {start};
+        joined = grow_shrink_.JoinPocket(pocket, /*star_min_weight=*/0, &tried, &read);
         if (!joined.empty()) break;
+        failed[key] = {labels_.relabels(), std::move(read)};
       }
       if (!joined.empty()) break;
     }
@@ -708,20 +739,6 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* bounda
     grow_shrink_.Grow(grow_shrink_.NextToOBeside(joined), nullptr, boundary);
   }
 }
-
-namespace {
-
-// Whether a cell around a vertex of `cells` has flipped since labels_.relabels() was `relabels`.
-bool FlippedAroundSince(const std::vector<manifold_detail::Cell_handle>& cells, uint32_t relabels) {
-  for (const auto& c : cells) {
-    for (int i = 0; i < 4; ++i) {
-      if (c->vertex(i)->info().relabelled > relabels) return true;
-    }
-  }
-  return false;
-}
-
-}  // namespace
 
 // Growing adds one cell at a time, so a pocket of free space that touches O only where each
 // single cell would pinch the surface stays out of O, and with it what lies behind it: on open

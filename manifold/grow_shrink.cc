@@ -422,7 +422,8 @@ bool GrowShrink::FlipAllOrFindSlivers(const std::vector<Cell_handle>& pocket,
 
 std::vector<Cell_handle> GrowShrink::JoinPocket(const std::vector<Cell_handle>& pocket,
                                                 double star_min_weight,
-                                                std::unordered_set<const void*>* tried) {
+                                                std::unordered_set<const void*>* tried,
+                                                std::vector<Cell_handle>* read) {
   std::vector<Cell_handle> slivers;
   if (FlipAllOrFindSlivers(pocket, &slivers)) return pocket;
   if (!slivers.empty() && FlipAllIfRegular(pocket, slivers)) {
@@ -430,6 +431,10 @@ std::vector<Cell_handle> GrowShrink::JoinPocket(const std::vector<Cell_handle>& 
     std::vector<Cell_handle> flipped = pocket;
     flipped.insert(flipped.end(), slivers.begin(), slivers.end());
     return flipped;
+  }
+  if (read != nullptr) {
+    read->insert(read->end(), pocket.begin(), pocket.end());
+    read->insert(read->end(), slivers.begin(), slivers.end());
   }
   for (const Cell_handle& cell : pocket) {
     for (int i = 0; i < 4; ++i) {
@@ -440,6 +445,7 @@ std::vector<Cell_handle> GrowShrink::JoinPocket(const std::vector<Cell_handle>& 
         dt_.incident_cells(v, std::back_inserter(star));
         return star;
       }
+      if (read != nullptr) read->insert(read->end(), around_.begin(), around_.end());
     }
   }
   return {};

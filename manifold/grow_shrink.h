@@ -83,9 +83,12 @@ class GrowShrink {
   // surface vertices whose CompleteFreeStar(v, star_min_weight) succeeds. Vertices in `tried` are
   // skipped, and those tried are added to it. Returns the cells flipped (for a vertex: all the
   // cells around it); empty when nothing changed.
+  // With `read`, a failed join appends the cells whose vertices' labels decided it (the pocket,
+  // its slivers, the stars tried): it would fail again until a cell around one of those flips.
   std::vector<Cell_handle> JoinPocket(const std::vector<Cell_handle>& pocket,
                                       double star_min_weight,
-                                      std::unordered_set<const void*>* tried);
+                                      std::unordered_set<const void*>* tried,
+                                      std::vector<Cell_handle>* read = nullptr);
   // Matter cells joined by JoinPocket with their pocket so far.
   int64_t slivers_joined() const { return slivers_joined_; }
   // Free, not in O, and sharing a face with O: a cell growing can start from.
