@@ -791,7 +791,7 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
   int64_t joined = 0;
   std::vector<Cell_handle> seeds = grow_shrink_.BoundarySeeds(which, changed_in);
   std::vector<Refused> refused;
-  std::vector<Cell_handle> all_entered;  // for `boundary`
+  std::vector<Cell_handle> all_entered;  // with `boundary`: what joined O here
   while (!seeds.empty()) {
     const uint32_t stamp = walker_.NextStamp();
     std::unordered_set<const void*> tried;
@@ -812,12 +812,10 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
       }
     }
     if (entered.empty()) break;
-    all_entered.insert(all_entered.end(), entered.begin(), entered.end());
     // Grow from around what joined; then look at the pockets next to everything that entered
     // O, and again at the refused pockets around whose vertices a cell has flipped.
-    const size_t joined_before_growing = entered.size();
     grow_shrink_.Grow(around(entered), &entered);
-    all_entered.insert(all_entered.end(), entered.begin() + joined_before_growing, entered.end());
+    if (boundary != nullptr) all_entered.insert(all_entered.end(), entered.begin(), entered.end());
     seeds = around(entered);
     std::vector<Refused> still_refused;
     for (std::vector<Refused>* list : {&refused, &refused_now}) {

@@ -294,17 +294,7 @@ bool GrowShrink::FlipAllIfRegular(const std::vector<Cell_handle>& cells,
   const TrialFlips trial = FlipIntoO(cells, matter);
   const std::vector<Cell_handle>& missing = trial.cells;
   if (missing.empty()) return false;
-  // A vertex's link depends only on the labels of its own cells: the vertices of the flipped
-  // cells are tested, each with the flipped cells around it.
-  const std::vector<std::pair<Vertex_handle, Cell_handle>> touched = VerticesOf(missing);
-  bool regular = true;
-  std::vector<Cell_handle> near;
-  for (size_t k = 0; k < touched.size() && regular;) {
-    const Vertex_handle w = touched[k].first;
-    near.clear();
-    for (; k < touched.size() && touched[k].first == w; ++k) near.push_back(touched[k].second);
-    regular = RegularAfterTrial(w, near);
-  }
+  const bool regular = AllRegularAfterTrial(missing, nullptr);
   if (!regular) UndoFlips(trial);
   return regular;
 }
@@ -347,50 +337,47 @@ bool GrowShrink::CompleteFreeStar(const Vertex_handle& v, double min_weight) {
   return FlipAllIfRegular(std::vector<Cell_handle>(around_.begin(), around_.end()));
 }
 
-bool GrowShrink::RegularAfterTrial(const Vertex_handle& v, const std::vector<Cell_handle>& near) {
-  // Scanning a star costs its size; a box point's star can hold 10^4 cells and be tested
-  // after every flip near it (pocket joins at 10^6 points spent minutes there).
-  constexpr int32_t kLargeStar = 64;
-  return v->info().cells > kLargeStar ? regularity_.VertexRegularByLinkWalk(v, near)
-                                      : regularity_.VertexRegular(v, Cell_handle());
-}
-
-std::vector<std::pair<Vertex_handle, Cell_handle>> GrowShrink::VerticesOf(
-    const std::vector<Cell_handle>& cells) {
+bool GrowShrink::AllRegularAfterTrial(const std::vector<Cell_handle>& flipped,
+                                      std::unordered_set<const void*>* irregular) {
+  // A vertex's link depends only on the labels of its own cells: the vertices of the flipped
+  // cells are tested, each with the flipped cells around it.
   std::vector<std::pair<Vertex_handle, Cell_handle>> touched;
-  for (const Cell_handle& c : cells) {
+  for (const Cell_handle& c : flipped) {
     for (int i = 0; i < 4; ++i) touched.emplace_back(c->vertex(i), c);
   }
   std::sort(touched.begin(), touched.end());
-  return touched;
+  // Scanning a star costs its size; a box point's star can hold 10^4 cells and be tested
+  // after every flip near it (pocket joins at 10^6 points spent minutes there).
+  constexpr int32_t kLargeStar = 64;
+  bool all_regular = true;
+  std::vector<Cell_handle> near;
+  for (size_t k = 0; k < touched.size();) {
+    const Vertex_handle w = touched[k].first;
+    near.clear();
+    for (; k < touched.size() && touched[k].first == w; ++k) near.push_back(touched[k].second);
+    // Once one is irregular, only the stars `irregular` collects are worth a test.
+    if (!all_regular && w->info().cells > kMaxSliverStar) continue;
+    const bool regular = w->info().cells > kLargeStar ? regularity_.VertexRegularByLinkWalk(w, near)
+                                                      : regularity_.VertexRegular(w, Cell_handle());
+    if (regular) continue;
+    all_regular = false;
+    if (irregular == nullptr) break;
+    if (w->info().cells <= kMaxSliverStar) irregular->insert(&*w);
+  }
+  return all_regular;
 }
 
 bool GrowShrink::FlipAllOrFindSlivers(const std::vector<Cell_handle>& pocket,
                                       std::vector<Cell_handle>* slivers) {
   constexpr size_t kMaxSliverCells = 3;
-  // Pinches at vertices of larger stars (the box's Steiner points) are left alone: their pieces
-  // cost the square of the star to find.
-  constexpr int32_t kMaxStar = 256;
   slivers->clear();
   // One trial serves both: the pocket goes into O, stays if every vertex is regular, else the
   // pinches are looked for there and it goes out again.
   const TrialFlips trial = FlipIntoO(pocket);
   const std::vector<Cell_handle>& joined = trial.cells;
   if (joined.empty()) return false;
-  const std::vector<std::pair<Vertex_handle, Cell_handle>> touched = VerticesOf(joined);
-  bool all_regular = true;
   std::unordered_set<const void*> irregular;
-  std::vector<Cell_handle> near;
-  for (size_t k = 0; k < touched.size();) {
-    const Vertex_handle w = touched[k].first;
-    near.clear();
-    for (; k < touched.size() && touched[k].first == w; ++k) near.push_back(touched[k].second);
-    if (!all_regular && w->info().cells > kMaxStar) continue;  // the verdict is known already
-    if (RegularAfterTrial(w, near)) continue;
-    all_regular = false;
-    if (w->info().cells <= kMaxStar) irregular.insert(&*w);
-  }
-  if (all_regular) return true;
+  if (AllRegularAfterTrial(joined, &irregular)) return true;
   std::unordered_set<const void*> seen_vertices, seen_slivers;
   std::vector<Cell_handle> star, rest;
   std::vector<int> piece;

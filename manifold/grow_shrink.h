@@ -120,11 +120,14 @@ class GrowShrink {
   // are not in O yet, and returns them for UndoFlips.
   TrialFlips FlipIntoO(const std::vector<Cell_handle>& cells,
                        const std::vector<Cell_handle>& matter = {});
-  // Whether v is regular with the cells flipped on trial; `near`: those around v.
-  bool RegularAfterTrial(const Vertex_handle& v, const std::vector<Cell_handle>& near);
-  // (vertex, cell) for each vertex of `cells`, sorted by vertex.
-  static std::vector<std::pair<Vertex_handle, Cell_handle>> VerticesOf(
-      const std::vector<Cell_handle>& cells);
+  // Pinches at vertices of larger stars (the box's Steiner points) are left alone: their pieces
+  // cost the square of the star to find.
+  static constexpr int32_t kMaxSliverStar = 256;
+  // Whether every vertex of `flipped` (cells flipped into O on trial) is regular. Stops at the
+  // first that is not, unless `irregular` is given: then it gets every irregular vertex whose
+  // star has at most kMaxSliverStar cells.
+  bool AllRegularAfterTrial(const std::vector<Cell_handle>& flipped,
+                            std::unordered_set<const void*>* irregular);
   // Takes the cells FlipIntoO put into O out again, last first, and gives their vertices back
   // their last-flip marks: a trial that is undone is no change around them, so growing and the
   // pocket joins do not test again what it touched (most of their tests on a street).
@@ -154,7 +157,7 @@ class GrowShrink::Refusals {
   enum class Kind { kRequeued, kIndexed };
   explicit Refusals(Kind kind = Kind::kIndexed) : kind_(kind) {}
 
-  // Refused cells not in O since.
+  // Refused cells not in O since (kIndexed; kRequeued: those the last Grow refused).
   size_t size() const { return alive_; }
   // Turns kRequeued refusals, as a Grow left them, into kIndexed ones: indexing costs more than
   // it saves within the one large Grow that starts a regrowing, less in the Grows after it.
