@@ -292,9 +292,8 @@ int64_t GrowShrink::CountJoinableCells(std::vector<Cell_handle>* first, size_t m
 bool GrowShrink::FlipAllIfRegular(const std::vector<Cell_handle>& cells,
                                   const std::vector<Cell_handle>& matter) {
   const TrialFlips trial = FlipIntoO(cells, matter);
-  const std::vector<Cell_handle>& missing = trial.cells;
-  if (missing.empty()) return false;
-  const bool regular = AllRegularAfterTrial(missing, nullptr);
+  if (trial.cells.empty()) return false;
+  const bool regular = AllRegularAfterTrial(trial, nullptr);
   if (!regular) UndoFlips(trial);
   return regular;
 }
@@ -308,6 +307,22 @@ GrowShrink::TrialFlips GrowShrink::FlipIntoO(const std::vector<Cell_handle>& cel
   }
   for (const Cell_handle& c : matter) {
     if (!dt_.is_infinite(c) && !c->info().outside && !labels_.IsFree(c)) flipped.push_back(c);
+  }
+  // Most vertices of a small pocket belong to one of its cells; each such vertex is decided
+  // now, while the labels around it are those the local test reasons from.
+  std::vector<std::pair<Vertex_handle, Cell_handle>>& touched = trial.touched;
+  for (const Cell_handle& c : flipped) {
+    for (int i = 0; i < 4; ++i) touched.emplace_back(c->vertex(i), c);
+  }
+  std::sort(touched.begin(), touched.end());
+  trial.single_regular.assign(touched.size(), 0);
+  for (size_t k = 0; k < touched.size(); ++k) {
+    const bool single = (k == 0 || touched[k - 1].first != touched[k].first) &&
+                        (k + 1 == touched.size() || touched[k + 1].first != touched[k].first);
+    if (single) {
+      trial.single_regular[k] =
+          regularity_.VertexRegularAfterFlip(touched[k].first, touched[k].second);
+    }
   }
   for (const Cell_handle& c : flipped) {
     for (int i = 0; i < 4; ++i)
@@ -337,15 +352,11 @@ bool GrowShrink::CompleteFreeStar(const Vertex_handle& v, double min_weight) {
   return FlipAllIfRegular(std::vector<Cell_handle>(around_.begin(), around_.end()));
 }
 
-bool GrowShrink::AllRegularAfterTrial(const std::vector<Cell_handle>& flipped,
+bool GrowShrink::AllRegularAfterTrial(const TrialFlips& trial,
                                       std::unordered_set<const void*>* irregular) {
   // A vertex's link depends only on the labels of its own cells: the vertices of the flipped
   // cells are tested, each with the flipped cells around it.
-  std::vector<std::pair<Vertex_handle, Cell_handle>> touched;
-  for (const Cell_handle& c : flipped) {
-    for (int i = 0; i < 4; ++i) touched.emplace_back(c->vertex(i), c);
-  }
-  std::sort(touched.begin(), touched.end());
+  const std::vector<std::pair<Vertex_handle, Cell_handle>>& touched = trial.touched;
   // Scanning a star costs its size; a box point's star can hold 10^4 cells and be tested
   // after every flip near it (pocket joins at 10^6 points spent minutes there).
   constexpr int32_t kLargeStar = 64;
@@ -353,12 +364,19 @@ bool GrowShrink::AllRegularAfterTrial(const std::vector<Cell_handle>& flipped,
   std::vector<Cell_handle> near;
   for (size_t k = 0; k < touched.size();) {
     const Vertex_handle w = touched[k].first;
+    const size_t first = k;
     near.clear();
     for (; k < touched.size() && touched[k].first == w; ++k) near.push_back(touched[k].second);
     // Once one is irregular, only the stars `irregular` collects are worth a test.
     if (!all_regular && w->info().cells > kMaxSliverStar) continue;
-    const bool regular = w->info().cells > kLargeStar ? regularity_.VertexRegularByLinkWalk(w, near)
-                                                      : regularity_.VertexRegular(w, Cell_handle());
+    bool regular;
+    if (near.size() == 1) {
+      regular = trial.single_regular[first];
+    } else if (w->info().cells > kLargeStar) {
+      regular = regularity_.VertexRegularByLinkWalk(w, near);
+    } else {
+      regular = regularity_.VertexRegular(w, Cell_handle());
+    }
     if (regular) continue;
     all_regular = false;
     if (irregular == nullptr) break;
@@ -377,7 +395,7 @@ bool GrowShrink::FlipAllOrFindSlivers(const std::vector<Cell_handle>& pocket,
   const std::vector<Cell_handle>& joined = trial.cells;
   if (joined.empty()) return false;
   std::unordered_set<const void*> irregular;
-  if (AllRegularAfterTrial(joined, &irregular)) return true;
+  if (AllRegularAfterTrial(trial, &irregular)) return true;
   std::unordered_set<const void*> seen_vertices, seen_slivers;
   std::vector<Cell_handle> star, rest;
   std::vector<int> piece;

@@ -115,6 +115,11 @@ class GrowShrink {
   struct TrialFlips {
     std::vector<Cell_handle> cells;
     std::vector<std::pair<Vertex_handle, uint32_t>> marks;
+    // Each vertex of `cells` with the flipped cells around it, sorted by vertex. A vertex of
+    // one flipped cell only has its verdict (`single_regular`, aligned) from the local test
+    // before the flips (Regularity::VertexRegularAfterFlip), not from a scan of its star after.
+    std::vector<std::pair<Vertex_handle, Cell_handle>> touched;
+    std::vector<char> single_regular;
   };
   // Puts into O, in this order, the free cells of `cells` and the matter cells of `matter` that
   // are not in O yet, and returns them for UndoFlips.
@@ -123,11 +128,10 @@ class GrowShrink {
   // Pinches at vertices of larger stars (the box's Steiner points) are left alone: their pieces
   // cost the square of the star to find.
   static constexpr int32_t kMaxSliverStar = 256;
-  // Whether every vertex of `flipped` (cells flipped into O on trial) is regular. Stops at the
+  // Whether every vertex of trial.cells (flipped into O on trial) is regular. Stops at the
   // first that is not, unless `irregular` is given: then it gets every irregular vertex whose
   // star has at most kMaxSliverStar cells.
-  bool AllRegularAfterTrial(const std::vector<Cell_handle>& flipped,
-                            std::unordered_set<const void*>* irregular);
+  bool AllRegularAfterTrial(const TrialFlips& trial, std::unordered_set<const void*>* irregular);
   // Takes the cells FlipIntoO put into O out again, last first, and gives their vertices back
   // their last-flip marks: a trial that is undone is no change around them, so growing and the
   // pocket joins do not test again what it touched (most of their tests on a street).
