@@ -5,14 +5,18 @@
 // replaces the tile's running best if strictly higher (running bests start at t_NCC; batches run
 // in increasing k, so ties keep the earlier batch). A pixel competes only where u_required
 // neighbours support it at its offset (its own NCC above t_NCC, the others' above u_support), or
-// all that see it if fewer (unless u_strict). Also counts defined NCC values and covered pixels
-// of the batch for the statistics.
+// all that see it if fewer (unless u_strict), and with u_must_move only where its NCC beats the
+// same neighbour's at k = 0 (u_unswept_ncc; the batch of k = 0 itself then competes for nothing,
+// u_compete = 0). Also counts defined NCC values and covered pixels of the batch for the
+// statistics.
 layout(local_size_x = REDUCE_THREADS) in;
 
 // imageLoad rather than texelFetch: cheaper on llvmpipe, the same on GPUs.
 layout(binding = 0, r32f) readonly uniform image2DArray u_ncc;  // layer b * neighbours + j
 // C's render, layer b: xyz, w = face; pixel x at column x + RADIUS.
 layout(binding = 1, rgba32f) readonly uniform image2DArray u_world;
+// Each neighbour's NCC at k = 0 (layer j), read with u_must_move.
+layout(binding = 2, r32f) readonly uniform image2DArray u_unswept_ncc;
 
 layout(std430, binding = 0) readonly buffer TileColumns { int tile_x_begin[]; };  // tiles_x + 1
 layout(std430, binding = 1) readonly buffer TileRows { int tile_y_begin[]; };     // tiles_y + 1
@@ -34,6 +38,8 @@ uniform float u_threshold;    // t_NCC (float, as the reference compares)
 uniform int u_required;       // neighbours supporting a winner it needs (WinnerRule)
 uniform int u_strict;         // 1: a neighbour that does not see the pixel never supports it
 uniform float u_support;      // NCC above which another neighbour supports it
+uniform int u_must_move;      // 1: a pixel must match better than the unswept mesh (k = 0)
+uniform int u_compete;        // 0: this batch only counts (the unswept batch)
 
 shared float s_ncc[REDUCE_THREADS];
 shared int s_layer[REDUCE_THREADS];  // b * neighbours + j
@@ -92,8 +98,10 @@ void main() {
         for (int x = x0 + lid; x < x1; x += REDUCE_THREADS) {
           float value = imageLoad(u_ncc, ivec3(x, y, layer)).r;
           if (value >= -1.0) ++defined;
-          if (value > ncc && (u_required <= 1 ||
-                              (value > u_threshold && Supported(ivec2(x, y), b, j)))) {
+          // Undefined at k = 0 (UNDEFINED_NCC, below -1): any defined value beats it.
+          if (u_compete != 0 && value > ncc &&
+              (u_required <= 1 || (value > u_threshold && Supported(ivec2(x, y), b, j))) &&
+              (u_must_move == 0 || value > imageLoad(u_unswept_ncc, ivec3(x, y, j)).r)) {
             ncc = value;
             best_layer = layer;
             best_index = (y - y0) * tile_width + (x - x0);

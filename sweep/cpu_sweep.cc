@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
 
@@ -255,42 +256,54 @@ struct ChunkResult {
   double raster_s = 0, reproject_s = 0, ncc_s = 0, reduce_s = 0;
 };
 
-// Sweeps offsets taken one at a time from `next` (shared by the threads) until none is left.
-// A thread's offsets ascend, so its winners keep UpdateTileWinners' ties.
-ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, std::atomic<int>* next) {
-  const View& view = prep.camera.view;
-  const size_t pixels = static_cast<size_t>(view.intrinsics.width) * view.intrinsics.height;
-  const int num_neighbours = static_cast<int>(prep.neighbours.size());
-  const int num_offsets = static_cast<int>(prep.offsets.size());
+// One NCC map per neighbour, C's image size.
+struct NccMaps {
+  explicit NccMaps(const PreparedSweep& prep) : maps(prep.neighbours.size()) {
+    const Intrinsics& k = prep.camera.view.intrinsics;
+    for (LargeBuffer<float>& m : maps) {
+      m.resize(static_cast<size_t>(k.width) * k.height);
+      pointers.push_back(m.data());
+    }
+  }
+  std::vector<LargeBuffer<float>> maps;
+  std::vector<const float*> pointers;
+};
+
+// Offset k's mesh rendered from C and every neighbour's NCC against C into *maps.
+void SweepOffset(int k, CpuSweepSlab* slab, NccMaps* maps, ChunkResult* out) {
+  Timer stage;
+  slab->Render(k);
+  out->covered_pixels += slab->CoveredPixels();
+  out->raster_s += stage.Seconds();
+  for (size_t j = 0; j < maps->maps.size(); ++j) {
+    stage.Restart();
+    slab->Reproject(static_cast<int>(j));
+    out->reproject_s += stage.Seconds();
+    stage.Restart();
+    out->valid_hypotheses += slab->Ncc(maps->maps[j].data());
+    out->ncc_s += stage.Seconds();
+  }
+}
+
+// Sweeps the offsets of `competing` taken one at a time from `next` (shared by the threads)
+// until none is left. A thread's offsets ascend, so its winners keep UpdateTileWinners' ties.
+ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep,
+                         const std::vector<int>& competing,
+                         const std::vector<const float*>& surface, std::atomic<int>* next) {
+  const int num_offsets = static_cast<int>(competing.size());
   ChunkResult out;
   out.best.resize(prep.tiles.NumTiles());
   int i = next->fetch_add(1);
   if (i >= num_offsets) return out;  // a thread that started late: no buffers to set up
   CpuSweepSlab slab(job, prep);
-  std::vector<LargeBuffer<float>> maps(num_neighbours);
-  std::vector<const float*> map_pointers;
-  for (LargeBuffer<float>& m : maps) {
-    m.resize(pixels);
-    map_pointers.push_back(m.data());
-  }
-  const WinnerRule rule = WinnerRule::For(job.options, num_neighbours);
-  Timer stage;
+  NccMaps maps(prep);
+  const WinnerRule rule = WinnerRule::For(job.options, static_cast<int>(prep.neighbours.size()));
   for (; i < num_offsets; i = next->fetch_add(1)) {
-    const int k = prep.offsets[i];
-    stage.Restart();
-    slab.Render(k);
-    out.covered_pixels += slab.CoveredPixels();
-    out.raster_s += stage.Seconds();
-    for (int j = 0; j < num_neighbours; ++j) {
-      stage.Restart();
-      slab.Reproject(j);
-      out.reproject_s += stage.Seconds();
-      stage.Restart();
-      out.valid_hypotheses += slab.Ncc(maps[j].data());
-      out.ncc_s += stage.Seconds();
-    }
-    stage.Restart();
-    UpdateTileWinners(prep.tiles, k, map_pointers, slab.faces().data(), nullptr, rule, &out.best);
+    const int k = competing[i];
+    SweepOffset(k, &slab, &maps, &out);
+    Timer stage;
+    UpdateTileWinners(prep.tiles, k, maps.pointers, surface, slab.faces().data(), nullptr, rule,
+                      &out.best);
     out.reduce_s += stage.Seconds();
   }
   return out;
@@ -346,22 +359,37 @@ SweepResult CpuSweepKernel::Run(const SweepJob& job) {
   result.stats = PreparedSweepStats(prep);
   SweepStats& stats = result.stats;
   const std::vector<Eigen::Vector3d> normals = FaceNormals(job.mesh);
+  const WinnerRule rule = WinnerRule::For(job.options, static_cast<int>(prep.neighbours.size()));
+  const std::vector<int> competing = CompetingOffsets(prep, rule);
+  stats.prepare_s = total.Seconds();
+  // The unswept mesh's NCC first, when the others must beat it (one thread: a nineteenth of the
+  // work, and every other offset needs it).
+  std::vector<ChunkResult> found(1);
+  std::unique_ptr<NccMaps> surface_maps;
+  std::vector<const float*> surface;
+  if (rule.must_move) {
+    CpuSweepSlab slab(job, prep);
+    surface_maps = std::make_unique<NccMaps>(prep);
+    SweepOffset(0, &slab, surface_maps.get(), &found[0]);
+    surface = surface_maps->pointers;
+  }
   // Each thread takes the next offset when it is done with one, so that the threads finish
   // together whatever each offset costs; the merge below keeps one thread's winners.
-  const int num_offsets = static_cast<int>(prep.offsets.size());
-  const int threads = std::clamp(cv::getNumThreads(), 1, num_offsets);
+  const int num_offsets = static_cast<int>(competing.size());
+  const int threads = std::clamp(cv::getNumThreads(), 1, std::max(1, num_offsets));
   std::atomic<int> next{0};
-  stats.prepare_s = total.Seconds();
-  std::vector<ChunkResult> found(threads);
+  found.resize(1 + threads);
   cv::parallel_for_(
       cv::Range(0, threads),
       [&](const cv::Range& range) {
-        for (int c = range.start; c < range.end; ++c) found[c] = SweepOffsets(job, prep, &next);
+        for (int c = range.start; c < range.end; ++c) {
+          found[1 + c] = SweepOffsets(job, prep, competing, surface, &next);
+        }
       },
       threads);
   std::vector<TileWinner> best(prep.tiles.NumTiles());
   for (const ChunkResult& chunk : found) {
-    for (size_t t = 0; t < best.size(); ++t) {
+    for (size_t t = 0; t < chunk.best.size(); ++t) {
       if (BeatsInSweepOrder(chunk.best[t], best[t])) best[t] = chunk.best[t];
     }
     stats.covered_pixels += chunk.covered_pixels;

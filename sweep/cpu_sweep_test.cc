@@ -366,12 +366,21 @@ TEST(CpuSweepSlab, ReprojectsLikeTheReference) {
 
 // ---- End to end ----
 
+// With the paper's rule (the default) and where winners must move.
 TEST(CpuSweep, PyramidFromAFlatSquareLikeTheReference) {
-  const SweepJob job = MakeSmallSweepJob(NoisyPyramidScene(), MakeFlatSquare(0.15, 1.3, 8));
-  const SweepResult ref = ReferenceSweepKernel().Run(job);
-  const SweepResult cpu = CpuSweepKernel().Run(job);
-  ExpectSameWinners(ref, cpu, ref.stats.median_depth, "cpu");
-  std::printf("  %s\n  reference: %s\n", cpu.stats.Summary().c_str(), ref.stats.Summary().c_str());
+  SweepJob job = MakeSmallSweepJob(NoisyPyramidScene(), MakeFlatSquare(0.15, 1.3, 8));
+  for (const bool must_move : {false, true}) {
+    job.options.winners_must_move = must_move;
+    const SweepResult ref = ReferenceSweepKernel().Run(job);
+    const SweepResult cpu = CpuSweepKernel().Run(job);
+    ASSERT_GT(ref.points.size(), 40u);
+    ExpectSameWinners(ref, cpu, ref.stats.median_depth,
+                      must_move ? "cpu, winners must move" : "cpu");
+    EXPECT_EQ(cpu.stats.valid_hypotheses, ref.stats.valid_hypotheses);  // k = 0 counted
+    EXPECT_EQ(cpu.stats.covered_pixels, ref.stats.covered_pixels);
+    std::printf("  %s\n  reference: %s\n", cpu.stats.Summary().c_str(),
+                ref.stats.Summary().c_str());
+  }
 }
 
 TEST(CpuSweep, TrueMeshWithOcclusionAndDefaultWindow) {

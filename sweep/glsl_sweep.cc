@@ -217,6 +217,8 @@ struct GlslSweepKernel::Impl {
   struct Resources {
     std::vector<int> key;
     std::unique_ptr<gl::Texture2DArray> surface, surface_depth, world, ncc;
+    // Each neighbour's NCC at k = 0 (layer j), which the other offsets must beat (WinnerRule).
+    std::unique_ptr<gl::Texture2DArray> unswept_ncc;
     std::vector<std::unique_ptr<gl::Texture2DArray>> reprojected;  // per neighbour
     std::vector<std::unique_ptr<gl::Texture2DArray>> shadow, shadow_depth;
     std::unique_ptr<LayeredTarget> surface_target;
@@ -361,6 +363,7 @@ struct GlslSweepKernel::Impl {
   void RenderShadowMaps(const GpuJob& gpu, const Batch& batch);
   void RenderCameraView(const GpuJob& gpu, const Batch& batch);
   void NccBatch(const GpuJob& gpu, const Batch& batch);
+  void KeepUnsweptNcc(const GpuJob& gpu);
   void ReduceBatch(const GpuJob& gpu, const Batch& batch);
   std::vector<SweepPoint> ReadBackWinners(const GpuJob& gpu, SweepStats* stats) const;
 };
@@ -402,6 +405,8 @@ void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, 
   }
   resources.ncc = std::make_unique<Texture2DArray>(width, height, batch_size * num_neighbours,
                                                    TextureFormat::kR32F);
+  resources.unswept_ncc =
+      std::make_unique<Texture2DArray>(width, height, num_neighbours, TextureFormat::kR32F);
   // Row sums, padded by zeros along the columns (transposed: along the rows); never written
   // outside the image afterwards.
   const bool transposed = variant == GlslBlurVariant::kUnrolled;
@@ -459,8 +464,9 @@ GlslSweepKernel::MemoryPlan GlslSweepKernel::PlanMemory(const PreparedSweep& pre
   // Per offset: C's surface + depth, world and one reprojection per neighbour (padded), NCC
   // maps.
   plan.per_offset_bytes = padded * (8 + 4 + 16 + 16 * neighbours) + width * height * 4 * neighbours;
-  // Per job: C's image, the row sums (RGBA32F + RG32F, padded).
-  plan.fixed_bytes = width * height * 4 + (height + 2 * radius + block) * width * (16 + 8);
+  // Per job: C's image, the row sums (RGBA32F + RG32F, padded), the NCC maps at k = 0.
+  plan.fixed_bytes = width * height * 4 + (height + 2 * radius + block) * width * (16 + 8) +
+                     width * height * 4 * neighbours;
   for (const SweepCamera& n : prep.neighbours) {
     const int64_t n_pixels = int64_t{n.view.intrinsics.width} * n.view.intrinsics.height;
     plan.per_offset_bytes += n_pixels * (4 + 4);  // shadow map + its depth buffer
@@ -583,14 +589,15 @@ TileRecords::TileRecords(const TileGrid& tiles, float threshold, int match_words
 
 }  // namespace
 
-// The offsets of one batch: layer b of every texture array sweeps prep.offsets[first + b].
+// The offsets of one batch: layer b of every texture array sweeps k = first_offset + b.
 struct GlslSweepKernel::Impl::Batch {
-  // The offsets in batches of `size` (the last one may be smaller).
-  static std::vector<Batch> Split(const std::vector<int>& offsets, int size);
+  // The offsets in batches of at most `size`, in increasing k. Where rule.must_move, k = 0 comes
+  // first, alone, as the unswept batch, and the others' batches skip it.
+  static std::vector<Batch> Split(const PreparedSweep& prep, const WinnerRule& rule, int size);
   int index = 0;
-  int first = 0;
   int layers = 0;
   int first_offset = 0;  // k of layer 0
+  bool unswept = false;  // the NCC maps at k = 0 that the others must beat; competes for nothing
 };
 
 // One reprojection dispatch per group of neighbours (image units are limited). Groups of the
@@ -636,16 +643,26 @@ struct GlslSweepKernel::Impl::GpuJob {
 };
 
 std::vector<GlslSweepKernel::Impl::Batch> GlslSweepKernel::Impl::Batch::Split(
-    const std::vector<int>& offsets, int size) {
+    const PreparedSweep& prep, const WinnerRule& rule, int size) {
   std::vector<Batch> batches;
-  const int num_offsets = static_cast<int>(offsets.size());
-  for (int first = 0; first < num_offsets; first += size) {
+  const auto add = [&](int first_offset, int layers, bool unswept) {
     Batch batch;
     batch.index = static_cast<int>(batches.size());
-    batch.first = first;
-    batch.layers = std::min(size, num_offsets - first);
-    batch.first_offset = offsets[first];
+    batch.layers = layers;
+    batch.first_offset = first_offset;
+    batch.unswept = unswept;
     batches.push_back(batch);
+  };
+  if (rule.must_move) add(0, 1, true);
+  // Runs of consecutive offsets (a layer's k is first_offset + layer), each in batches.
+  const std::vector<int> competing = CompetingOffsets(prep, rule);
+  for (size_t run = 0; run < competing.size();) {
+    size_t end = run + 1;
+    while (end < competing.size() && competing[end] == competing[end - 1] + 1) ++end;
+    for (size_t first = run; first < end; first += size) {
+      add(competing[first], static_cast<int>(std::min<size_t>(size, end - first)), false);
+    }
+    run = end;
   }
   return batches;
 }
@@ -659,7 +676,7 @@ GlslSweepKernel::Impl::GpuJob::GpuJob(const SweepJob& job, const PreparedSweep& 
       num_neighbours(static_cast<int>(prep.neighbours.size())),
       radius((prep.window.rows - 1) / 2),
       match_words(DivUp(num_neighbours, 32)),
-      batches(Batch::Split(prep.offsets, batch_size)),
+      batches(Batch::Split(prep, WinnerRule::For(job.options, num_neighbours), batch_size)),
       mesh(job.mesh),
       origin(mesh.origin()),
       image(ImageTexture(prep.camera.image)),
@@ -817,6 +834,7 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
     clock.Book(&stats.reproject_s);
     if (recorder.AfterRender(batch)) clock.Skip();
     NccBatch(*gpu, batch);
+    if (batch.unswept) KeepUnsweptNcc(*gpu);
     clock.Book(&stats.ncc_s);
     if (recorder.AfterNcc(batch)) clock.Skip();
     ReduceBatch(*gpu, batch);
@@ -894,6 +912,7 @@ std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
   tile_best.Set("u_required", rule.required_matches);
   tile_best.Set("u_support", rule.support);
   tile_best.Set("u_strict", rule.strict ? 1 : 0);
+  tile_best.Set("u_must_move", rule.must_move ? 1 : 0);
   gl::CheckGlError("sweep setup");
   const bool transposed = variant == GlslBlurVariant::kUnrolled;
   gpu->rows_groups_x = DivUp(DivUp(width, block), local_x);
@@ -1014,11 +1033,22 @@ void GlslSweepKernel::Impl::NccBatch(const GpuJob& gpu, const Batch& batch) {
   gl::CheckGlError("sweep NCC");
 }
 
-// Every tile's best pixel of the batch against its record so far (one work group per tile).
+// The unswept batch's NCC maps (layers 0..neighbours-1) kept for the batches after it.
+void GlslSweepKernel::Impl::KeepUnsweptNcc(const GpuJob& gpu) {
+  glCopyImageSubData(resources.ncc->id(), GL_TEXTURE_2D_ARRAY, 0, 0, 0, 0,
+                     resources.unswept_ncc->id(), GL_TEXTURE_2D_ARRAY, 0, 0, 0, 0, gpu.width,
+                     gpu.height, gpu.num_neighbours);
+  Barrier();
+  gl::CheckGlError("sweep NCC at k = 0");
+}
+
+// Every tile's best pixel of the batch against its record so far (one work group per tile);
+// the unswept batch only counts.
 void GlslSweepKernel::Impl::ReduceBatch(const GpuJob& gpu, const Batch& batch) {
   const TileRecords& records = gpu.records;
   BindImageArray(*resources.ncc, 0, GL_READ_ONLY, GL_R32F);
   BindImageArray(*resources.world, 1, GL_READ_ONLY, GL_RGBA32F);
+  BindImageArray(*resources.unswept_ncc, 2, GL_READ_ONLY, GL_R32F);
   records.columns.BindStorage(0);
   records.rows.BindStorage(1);
   records.best_ncc.BindStorage(2);
@@ -1030,6 +1060,7 @@ void GlslSweepKernel::Impl::ReduceBatch(const GpuJob& gpu, const Batch& batch) {
   tile_best.Set("u_layers", batch.layers);
   tile_best.Set("u_first_offset", batch.first_offset);
   tile_best.Set("u_batch", batch.index);
+  tile_best.Set("u_compete", batch.unswept ? 0 : 1);
   tile_best.Dispatch(gpu.prep.tiles.tiles_x, gpu.prep.tiles.tiles_y);
   Barrier();
   gl::CheckGlError("sweep tile-best");

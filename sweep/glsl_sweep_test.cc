@@ -241,15 +241,27 @@ TEST_F(GlslSweepTest, StagesMatchTheReference) {
 
 // ---- End to end ----
 
-// Tile winners are compared by ExpectSameWinners (sweep/sweep_parity_testing.h).
+// Tile winners are compared by ExpectSameWinners (sweep/sweep_parity_testing.h). With the paper's
+// rule (the default), and where winners must move below.
 TEST_F(GlslSweepTest, PyramidFromAFlatSquareLikeTheReference) {
   const PyramidScene& scene = NoisyPyramidScene();
-  const SweepJob job = MakeSmallSweepJob(scene, MakeFlatSquare(0.15, 1.3, 8));
+  SweepJob job = MakeSmallSweepJob(scene, MakeFlatSquare(0.15, 1.3, 8));
   const SweepResult ref = ReferenceSweepKernel().Run(job);
+  job.options.winners_must_move = true;
+  const SweepResult moving = ReferenceSweepKernel().Run(job);
+  job.options.winners_must_move = false;
   for (GlslSweepKernel* kernel : Kernels()) {
     SCOPED_TRACE(Label(kernel));
     const SweepResult gl = kernel->Run(job);
     ExpectSameWinners(ref, gl, ref.stats.median_depth, Label(kernel));
+    job.options.winners_must_move = true;
+    const SweepResult gl_moving = kernel->Run(job);
+    job.options.winners_must_move = false;
+    ExpectSameWinners(moving, gl_moving, ref.stats.median_depth,
+                      Label(kernel) + ", winners must move");
+    // Both sweep k = 0 and count its hypotheses.
+    EXPECT_EQ(gl.stats.valid_hypotheses, gl_moving.stats.valid_hypotheses);
+    EXPECT_EQ(gl.stats.covered_pixels, gl_moving.stats.covered_pixels);
     std::vector<double> d;
     for (const SweepPoint& p : gl.points) {
       d.push_back(scene.Distance(p.position));

@@ -153,16 +153,16 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
   const WinnerRule rule = WinnerRule::For(options, num_neighbours);
   stats.prepare_s = stage.Seconds();
 
-  std::vector<cv::Mat> ncc(num_neighbours);
+  // Offset k's mesh rendered from C and every neighbour's NCC against C into *ncc.
   cv::Mat reprojected, mask;
-  for (const int k : prep.offsets) {
+  const auto sweep = [&](int k, std::vector<cv::Mat>* ncc) {
     stage.Restart();
     const auto soup = SweepFacets(job.mesh, normals, center, prep.alpha * k);
     RenderSoup(soup, &camera_raster);
     for (int j = 0; j < num_neighbours; ++j) RenderSoup(soup, &shadow_maps[j]);
     for (int32_t f : camera_raster.face()) stats.covered_pixels += f >= 0;
     stats.raster_s += stage.Seconds();
-
+    ncc->resize(num_neighbours);
     for (int j = 0; j < num_neighbours; ++j) {
       stage.Restart();
       ReprojectNeighbour(camera_raster, prep.neighbours[j].view, prep.neighbours[j].image,
@@ -171,15 +171,23 @@ SweepResult ReferenceSweepKernel::Run(const SweepJob& job) {
       stage.Restart();
       stats.valid_hypotheses +=
           WeightedNcc(prep.camera.image, reprojected, mask, prep.window,
-                      options.min_texture_variance, options.min_window_weight, &ncc[j]);
+                      options.min_texture_variance, options.min_window_weight, &(*ncc)[j]);
       stats.ncc_s += stage.Seconds();
     }
-
+  };
+  const auto pointers = [](const std::vector<cv::Mat>& maps) {
+    std::vector<const float*> out;
+    for (const cv::Mat& m : maps) out.push_back(m.ptr<float>());
+    return out;
+  };
+  std::vector<cv::Mat> surface_ncc, ncc;
+  if (rule.must_move) sweep(0, &surface_ncc);
+  const std::vector<const float*> surface = pointers(surface_ncc);
+  for (const int k : CompetingOffsets(prep, rule)) {
+    sweep(k, &ncc);
     // Tile-best (sweep_kernel.h): ties go to the smaller k, neighbour, pixel.
     stage.Restart();
-    std::vector<const float*> maps;
-    for (const cv::Mat& m : ncc) maps.push_back(m.ptr<float>());
-    UpdateTileWinners(prep.tiles, k, maps, camera_raster.face().data(),
+    UpdateTileWinners(prep.tiles, k, pointers(ncc), surface, camera_raster.face().data(),
                       camera_raster.world().data(), rule, &best);
     stats.reduce_s += stage.Seconds();
   }

@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 #include <tuple>
 
+#include "base/check.h"
 #include "base/error.h"
 #include "mesh/visible_mesh.h"
 #include "scene/camera.h"
@@ -241,13 +242,26 @@ bool BeatsInSweepOrder(const TileWinner& a, const TileWinner& b) {
 WinnerRule WinnerRule::For(const SweepOptions& options, int num_neighbours) {
   return WinnerRule{static_cast<float>(options.ncc_threshold),
                     std::clamp(options.min_matching_neighbours, 1, std::max(1, num_neighbours)),
-                    static_cast<float>(options.support_ncc), options.strict_support};
+                    static_cast<float>(options.support_ncc), options.strict_support,
+                    options.winners_must_move};
+}
+
+std::vector<int> CompetingOffsets(const PreparedSweep& prep, const WinnerRule& rule) {
+  std::vector<int> offsets;
+  for (int k : prep.offsets) {
+    if (k != 0 || !rule.must_move) offsets.push_back(k);
+  }
+  return offsets;
 }
 
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
-                       const int32_t* face, const Eigen::Vector3d* world, const WinnerRule& rule,
+                       const std::vector<const float*>& surface, const int32_t* face,
+                       const Eigen::Vector3d* world, const WinnerRule& rule,
                        std::vector<TileWinner>* best) {
   const int num_neighbours = static_cast<int>(ncc.size());
+  MS_CHECK(rule.must_move ? offset != 0 && static_cast<int>(surface.size()) == num_neighbours
+                          : surface.empty())
+      << "tile winners of offset " << offset << " with " << surface.size() << " surface maps";
   // Enough support for neighbour j's match at a pixel (WinnerRule).
   const auto supported_at = [&](int j, size_t index) {
     int supporters = 1, defined = 1;
@@ -291,6 +305,7 @@ void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<cons
             if (!(value > rule.threshold) || !(value > tile.ncc)) continue;  // NaN never wins
             const size_t index = row_offset + col;
             if (rule.required_matches > 1 && !supported_at(j, index)) continue;
+            if (!surface.empty() && surface[j][index] >= value) continue;
             tile.ncc = value;
             tile.offset = offset;
             tile.neighbour = j;

@@ -187,19 +187,30 @@ struct WinnerRule {
   int required_matches;
   float support;
   bool strict;
+  // The unswept mesh (k = 0) competes for nothing, and a pixel competes at k != 0 only where its
+  // NCC beats neighbour j's at k = 0 (the `surface` maps). Else k = 0 competes like any offset.
+  bool must_move;
 
   // From the options; required_matches is min_matching_neighbours clamped to [1, the job's
   // neighbours].
   static WinnerRule For(const SweepOptions& options, int num_neighbours);
 };
 
+// The offsets that compete for tiles under `rule`, ascending: all of prep.offsets, or, where
+// winners must move, all but k = 0, whose NCC maps are then swept first as the `surface` of
+// UpdateTileWinners.
+std::vector<int> CompetingOffsets(const PreparedSweep& prep, const WinnerRule& rule);
+
 // One offset's contribution to the tile winners, as every kernel keeps them: a pixel whose NCC
 // (ncc[j], row-major at the swept resolution, NaN where undefined) meets `rule` and is strictly
 // above its tile's best wins; ties go to the smaller k (offsets in ascending order), then the
 // earlier neighbour, then the earlier pixel in row-major order. `face` gives each pixel's face;
-// `world`, when not null, its position (else left as is).
+// `world`, when not null, its position (else left as is). Where rule.must_move, `surface` holds
+// each neighbour's NCC at k = 0 (same layout; empty otherwise), which neighbour j's NCC must beat
+// at the pixel (where it is undefined, nothing to beat).
 void UpdateTileWinners(const TileGrid& tiles, int offset, const std::vector<const float*>& ncc,
-                       const int32_t* face, const Eigen::Vector3d* world, const WinnerRule& rule,
+                       const std::vector<const float*>& surface, const int32_t* face,
+                       const Eigen::Vector3d* world, const WinnerRule& rule,
                        std::vector<TileWinner>* best);
 
 // Whether tile winner a beats b as UpdateTileWinners would decide had it seen both: the higher

@@ -107,8 +107,9 @@ TEST(SweepKernel, WinnersNeedTheRequiredMatches) {
   const auto winner = [&](const std::vector<float>& a, const std::vector<float>& b, int required,
                           bool strict = false) {
     std::vector<TileWinner> best(1);
-    const WinnerRule rule{/*threshold=*/0.98f, required, /*support=*/0.98f, strict};
-    UpdateTileWinners(tiles, /*offset=*/-1, {a.data(), b.data()}, face.data(), nullptr, rule,
+    const WinnerRule rule{/*threshold=*/0.98f, required, /*support=*/0.98f, strict,
+                          /*must_move=*/false};
+    UpdateTileWinners(tiles, /*offset=*/-1, {a.data(), b.data()}, {}, face.data(), nullptr, rule,
                       &best);
     return best[0];
   };
@@ -144,6 +145,41 @@ TEST(SweepKernel, WinnersNeedTheRequiredMatches) {
   EXPECT_LT(winner(first, unseen, 2, /*strict=*/true).neighbour, 0);
 }
 
+// Winners that must move: k = 0 never competes, and a pixel at k != 0 must beat the same
+// neighbour's NCC at k = 0 there (undefined at k = 0: nothing to beat).
+TEST(SweepKernel, WinnersMustBeatTheUnsweptMesh) {
+  const TileGrid tiles = TileGrid::Make(4, 1, 100);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<float> swept = {0.999f, 0.99f, 0.985f, 0.982f};
+  const std::vector<float> unswept = {0.9995f, 0.99f, 0.5f, nan};
+  const std::vector<int32_t> face = {10, 11, 12, 13};
+  WinnerRule rule{/*threshold=*/0.98f, /*required_matches=*/1, /*support=*/0.8f,
+                  /*strict=*/false, /*must_move=*/true};
+  std::vector<TileWinner> best(1);
+  // Pixel 0 matches better unswept, pixel 1 no better: pixel 2 wins, not the higher 0 or 1.
+  UpdateTileWinners(tiles, /*offset=*/2, {swept.data()}, {unswept.data()}, face.data(), nullptr,
+                    rule, &best);
+  EXPECT_EQ(best[0].col, 2);
+  EXPECT_EQ(best[0].offset, 2);
+  // Where k = 0 is undefined (pixel 3), any offset above the threshold may win.
+  best.assign(1, TileWinner());
+  const std::vector<float> only_3 = {nan, nan, nan, 0.982f};
+  UpdateTileWinners(tiles, /*offset=*/-1, {only_3.data()}, {unswept.data()}, face.data(), nullptr,
+                    rule, &best);
+  EXPECT_EQ(best[0].col, 3);
+  // The paper's rule: pixel 0, and k = 0 itself may be passed.
+  rule.must_move = false;
+  best.assign(1, TileWinner());
+  UpdateTileWinners(tiles, /*offset=*/2, {swept.data()}, {}, face.data(), nullptr, rule, &best);
+  EXPECT_EQ(best[0].col, 0);
+  // Which offsets compete.
+  PreparedSweep prep;
+  prep.offsets = SweepOffsets(6);  // -2..2
+  EXPECT_EQ(CompetingOffsets(prep, rule), (std::vector<int>{-2, -1, 0, 1, 2}));
+  rule.must_move = true;
+  EXPECT_EQ(CompetingOffsets(prep, rule), (std::vector<int>{-2, -1, 1, 2}));
+}
+
 TEST(SweepKernel, WinnerRuleTakesTheOptions) {
   SweepOptions options;
   EXPECT_EQ(options.min_matching_neighbours, 2);
@@ -160,6 +196,9 @@ TEST(SweepKernel, WinnerRuleTakesTheOptions) {
   EXPECT_EQ(rule.threshold, 0.95f);
   EXPECT_EQ(rule.support, 0.7f);
   EXPECT_TRUE(rule.strict);
+  EXPECT_FALSE(rule.must_move);  // the default, and an older coordinator's message
+  options.winners_must_move = true;
+  EXPECT_TRUE(WinnerRule::For(options, 2).must_move);
 }
 
 TEST(SweepKernel, PreparedSweepStatsCountsTheHypotheses) {

@@ -51,6 +51,7 @@ TEST(JobCodec, SweepOptionsRoundTripThroughTheWire) {
   sent.min_matching_neighbours = 3;
   sent.support_ncc = 0.7;
   sent.strict_support = true;
+  sent.winners_must_move = true;
   sent.image_noise_target = 1.5;
   sent.min_texture_variance = 2e-4;
   sent.min_window_weight = 0.75;
