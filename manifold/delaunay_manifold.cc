@@ -722,6 +722,7 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* bounda
         std::unordered_set<const void*> tried;
         std::vector<Cell_handle> read = {start};
         joined = grow_shrink_.JoinPocket(pocket, /*star_min_weight=*/0, &tried, &read);
+        if (joined.empty()) joined = grow_shrink_.JoinPocketWithPinches(pocket, 8, &read);
         if (!joined.empty()) break;
         failed[key] = {labels_.relabels(), std::move(read)};
       }

@@ -693,6 +693,26 @@ TEST(DelaunayManifold, KeptRefusalsGrowLikeRequeuedOnes) {
   EXPECT_GT(shrinks, 100);
 }
 
+// The last resort of a camera's pocket (JoinPocketWithPinches) on the pockets a random third of O
+// leaves: every join keeps the surface a manifold and takes the whole pocket, and some need the
+// pinching matter; a failure changes nothing.
+TEST(DelaunayManifold, PocketsJoinWithTheirPinchingMatter) {
+  int64_t with_pieces = 0, pockets = 0;
+  for (uint32_t seed = 1; seed <= 3; ++seed) {
+    const RandomScene scene = SphereScene(300, 10, seed, 1.0);
+    const manifold_internal::PinchJoinCounts c =
+        manifold_internal::JoinPocketsWithPinches(scene.cameras, scene.points, seed);
+    EXPECT_EQ(c.problems, 0) << "seed " << seed;
+    std::printf("seed %u: %lld pockets, %lld joined whole, %lld with matter, %lld failed\n", seed,
+                static_cast<long long>(c.pockets), static_cast<long long>(c.whole),
+                static_cast<long long>(c.with_pieces), static_cast<long long>(c.failed));
+    with_pieces += c.with_pieces;
+    pockets += c.pockets;
+  }
+  EXPECT_GT(pockets, 30);
+  EXPECT_GT(with_pieces, 0);
+}
+
 // Input points 1e-7 from others (far below the default floor, 2e-6 of the scene's diagonal)
 // are merged into them: never a vertex, their rays counted at the kept vertex.
 TEST(DelaunayManifold, NearDuplicateInputPointsAreMergedKeepingTheirRays) {

@@ -392,11 +392,24 @@ bool GrowShrink::FlipAllOrFindSlivers(const std::vector<Cell_handle>& pocket,
   // One trial serves both: the pocket goes into O, stays if every vertex is regular, else the
   // pinches are looked for there and it goes out again.
   const TrialFlips trial = FlipIntoO(pocket);
-  const std::vector<Cell_handle>& joined = trial.cells;
-  if (joined.empty()) return false;
+  if (trial.cells.empty()) return false;
   std::unordered_set<const void*> irregular;
   if (AllRegularAfterTrial(trial, &irregular)) return true;
-  std::unordered_set<const void*> seen_vertices, seen_slivers;
+  *slivers = PinchingPieces(trial.cells, irregular, /*whole_single_piece=*/false,
+                            [&](const Cell_handle& c, size_t piece_size) {
+                              return piece_size <= kMaxSliverCells && c->info().crossings == 0 &&
+                                     labels_.Weight(c) > 0;
+                            });
+  UndoFlips(trial);
+  return false;
+}
+
+template <class Accept>
+std::vector<Cell_handle> GrowShrink::PinchingPieces(
+    const std::vector<Cell_handle>& joined, const std::unordered_set<const void*>& irregular,
+    bool whole_single_piece, Accept&& accept) {
+  std::vector<Cell_handle> pieces;
+  std::unordered_set<const void*> seen_vertices, seen_cells;
   std::vector<Cell_handle> star, rest;
   std::vector<int> piece;
   std::vector<size_t> sizes;
@@ -411,18 +424,42 @@ bool GrowShrink::FlipAllOrFindSlivers(const std::vector<Cell_handle>& pocket,
         if (!labels_.InO(c)) rest.push_back(c);
       }
       FaceConnectedPieces(rest, &piece, &sizes);
-      if (sizes.size() < 2) continue;
-      const auto largest = std::max_element(sizes.begin(), sizes.end()) - sizes.begin();
+      if (sizes.size() < 2 && !whole_single_piece) continue;
+      // One piece: O pinches itself at v, and only the whole piece joining O mends it.
+      const auto largest =
+          sizes.size() < 2 ? -1 : std::max_element(sizes.begin(), sizes.end()) - sizes.begin();
       for (size_t a = 0; a < rest.size(); ++a) {
         const Cell_handle& c = rest[a];
-        if (piece[a] == largest || sizes[piece[a]] > kMaxSliverCells) continue;
-        if (dt_.is_infinite(c) || c->info().crossings > 0 || labels_.Weight(c) <= 0) continue;
-        if (seen_slivers.insert(&*c).second) slivers->push_back(c);
+        if (piece[a] == largest || dt_.is_infinite(c) || !accept(c, sizes[piece[a]])) continue;
+        if (seen_cells.insert(&*c).second) pieces.push_back(c);
       }
     }
   }
-  UndoFlips(trial);
-  return false;
+  return pieces;
+}
+
+std::vector<Cell_handle> GrowShrink::JoinPocketWithPinches(const std::vector<Cell_handle>& pocket,
+                                                           int rounds,
+                                                           std::vector<Cell_handle>* read) {
+  std::vector<Cell_handle> matter;
+  for (int round = 0; round < rounds; ++round) {
+    const TrialFlips trial = FlipIntoO(pocket, matter);
+    if (trial.cells.empty()) return {};
+    std::unordered_set<const void*> irregular;
+    if (AllRegularAfterTrial(trial, &irregular)) {
+      slivers_joined_ += static_cast<int64_t>(trial.cells.size() - pocket.size());
+      return trial.cells;
+    }
+    // Matter pinches first; where O touches itself, the whole piece only when nothing else is left.
+    const auto any = [](const Cell_handle&, size_t) { return true; };
+    std::vector<Cell_handle> pieces = PinchingPieces(trial.cells, irregular, false, any);
+    if (pieces.empty()) pieces = PinchingPieces(trial.cells, irregular, true, any);
+    UndoFlips(trial);
+    if (read != nullptr) read->insert(read->end(), pieces.begin(), pieces.end());
+    if (pieces.empty()) return {};
+    matter.insert(matter.end(), pieces.begin(), pieces.end());
+  }
+  return {};
 }
 
 std::vector<Cell_handle> GrowShrink::JoinPocket(const std::vector<Cell_handle>& pocket,

@@ -89,6 +89,13 @@ class GrowShrink {
                                       double star_min_weight,
                                       std::unordered_set<const void*>* tried,
                                       std::vector<Cell_handle>* read = nullptr);
+  // JoinPocket's last resort for a camera's pocket (a camera stands in free space): the pocket
+  // with every matter piece that would pinch one of its vertices, whatever its size or weight,
+  // piece by piece for up to `rounds` rounds while vertices stay irregular. Returns the cells
+  // flipped (the pocket's free cells first), empty when it failed. With `read`, a failure
+  // appends the pieces it tried (see JoinPocket).
+  std::vector<Cell_handle> JoinPocketWithPinches(const std::vector<Cell_handle>& pocket, int rounds,
+                                                 std::vector<Cell_handle>* read = nullptr);
   // Matter cells joined by JoinPocket with their pocket so far.
   int64_t slivers_joined() const { return slivers_joined_; }
   // Free, not in O, and sharing a face with O: a cell growing can start from.
@@ -132,6 +139,15 @@ class GrowShrink {
   // first that is not, unless `irregular` is given: then it gets every irregular vertex whose
   // star has at most kMaxSliverStar cells.
   bool AllRegularAfterTrial(const TrialFlips& trial, std::unordered_set<const void*>* irregular);
+  // Around each vertex of `irregular` (vertices of `joined`, cells in O on trial), the cells not
+  // in O split into face-connected pieces: the finite cells of every piece but the largest that
+  // accept(cell, piece size) takes. A pinch that O closes through such a piece goes away when
+  // the piece joins O too. With whole_single_piece, a vertex whose cells not in O are one piece
+  // (O touches itself there) gives that whole piece.
+  template <class Accept>
+  std::vector<Cell_handle> PinchingPieces(const std::vector<Cell_handle>& joined,
+                                          const std::unordered_set<const void*>& irregular,
+                                          bool whole_single_piece, Accept&& accept);
   // Takes the cells FlipIntoO put into O out again, last first, and gives their vertices back
   // their last-flip marks: a trial that is undone is no change around them, so growing and the
   // pocket joins do not test again what it touched (most of their tests on a street).

@@ -76,4 +76,18 @@ struct KeptRefusalsComparison {
 KeptRefusalsComparison CompareKeptRefusals(const std::vector<ManifoldCamera>& cameras,
                                            const std::vector<RayPoint>& points, uint32_t seed);
 
+// GrowShrink::JoinPocketWithPinches on every pocket next to O after O lost a third of its cells
+// (seeded), each checked at once: a join leaves the pocket in O and every vertex regular, a
+// failure changes no label.
+struct PinchJoinCounts {
+  int64_t pockets = 0;
+  int64_t whole = 0;        // joined with no matter
+  int64_t with_pieces = 0;  // joined with pinching matter
+  int64_t failed = 0;
+  int64_t problems = 0;  // joins that broke the manifold or missed a pocket cell, failures
+                         // that changed a label
+};
+PinchJoinCounts JoinPocketsWithPinches(const std::vector<ManifoldCamera>& cameras,
+                                       const std::vector<RayPoint>& points, uint32_t seed);
+
 }  // namespace ms::manifold_internal

@@ -179,6 +179,41 @@ struct ManifoldTestAccess {
     return result;
   }
 
+  static manifold_internal::PinchJoinCounts JoinPocketsWithPinches(
+      const std::vector<ManifoldCamera>& cameras, const std::vector<RayPoint>& points,
+      uint32_t seed) {
+    DelaunayManifold::Impl impl(cameras, ManifoldOptions{});
+    impl.Build(points);
+    uint64_t state = seed * 2654435761u + 7;
+    std::vector<Cell_handle> o_cells;
+    for (auto c = impl.dt_.finite_cells_begin(); c != impl.dt_.finite_cells_end(); ++c) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      if (c->info().outside && (state >> 33) % 3 == 0) o_cells.push_back(c);
+    }
+    for (const Cell_handle& c : o_cells) {
+      if (impl.regularity_.FlipKeepsManifold(c)) impl.labels_.SetOutside(c, false);
+    }
+    manifold_internal::PinchJoinCounts counts;
+    const uint32_t stamp = impl.walker_.NextStamp();
+    for (const Cell_handle& seed_cell :
+         impl.grow_shrink_.BoundarySeeds(RegrowSeeds::kBoundary, 0)) {
+      const std::vector<Cell_handle> pocket = impl.grow_shrink_.Pocket(seed_cell, 1 << 16, stamp);
+      if (pocket.empty()) continue;
+      ++counts.pockets;
+      const int64_t outside_before = impl.labels_.outside_count();
+      const std::vector<Cell_handle> joined = impl.grow_shrink_.JoinPocketWithPinches(pocket, 8);
+      if (joined.empty()) {
+        ++counts.failed;
+        counts.problems += impl.labels_.outside_count() != outside_before;
+        continue;
+      }
+      (joined.size() > pocket.size() ? counts.with_pieces : counts.whole) += 1;
+      for (const Cell_handle& c : pocket) counts.problems += !c->info().outside;
+      counts.problems += !impl.ValidateManifold().empty() || !impl.ValidateLabels().empty();
+    }
+    return counts;
+  }
+
   static manifold_internal::KeptRefusalsComparison CompareKeptRefusals(
       const std::vector<ManifoldCamera>& cameras, const std::vector<RayPoint>& points,
       uint32_t seed) {
@@ -340,6 +375,11 @@ LinkWalkComparison CompareLinkWalk(const std::vector<Eigen::Vector3d>& points,
 KeptRefusalsComparison CompareKeptRefusals(const std::vector<ManifoldCamera>& cameras,
                                            const std::vector<RayPoint>& points, uint32_t seed) {
   return ManifoldTestAccess::CompareKeptRefusals(cameras, points, seed);
+}
+
+PinchJoinCounts JoinPocketsWithPinches(const std::vector<ManifoldCamera>& cameras,
+                                       const std::vector<RayPoint>& points, uint32_t seed) {
+  return ManifoldTestAccess::JoinPocketsWithPinches(cameras, points, seed);
 }
 
 void CrossedCells(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& camera,
