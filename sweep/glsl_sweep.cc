@@ -346,7 +346,8 @@ struct GlslSweepKernel::Impl {
   // radius columns beyond each side, and up to block - 1 more after the last block).
   int PaddedWidth(int width, int radius) const { return width + 2 * radius + block; }
 
-  void Allocate(const PreparedSweep& prep, int batch_size, int radius);
+  // `unswept`: keep the NCC maps at k = 0 too (WinnerRule::must_move).
+  void Allocate(const PreparedSweep& prep, int batch_size, int radius, bool unswept);
 
   // Run and its stages (below): UploadJob puts a job on the GPU; each batch of offsets goes
   // through RenderShadowMaps, RenderCameraView, NccBatch and ReduceBatch; ReadBackWinners turns
@@ -368,11 +369,12 @@ struct GlslSweepKernel::Impl {
   std::vector<SweepPoint> ReadBackWinners(const GpuJob& gpu, SweepStats* stats) const;
 };
 
-void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, int radius) {
+void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, int radius,
+                                     bool unswept) {
   const int width = prep.camera.view.intrinsics.width;
   const int height = prep.camera.view.intrinsics.height;
   const int num_neighbours = static_cast<int>(prep.neighbours.size());
-  std::vector<int> key = {width, height, batch_size, radius, block, num_neighbours};
+  std::vector<int> key = {width, height, batch_size, radius, block, num_neighbours, unswept};
   for (const SweepCamera& n : prep.neighbours) {
     key.push_back(n.view.intrinsics.width);
     key.push_back(n.view.intrinsics.height);
@@ -405,8 +407,10 @@ void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, 
   }
   resources.ncc = std::make_unique<Texture2DArray>(width, height, batch_size * num_neighbours,
                                                    TextureFormat::kR32F);
-  resources.unswept_ncc =
-      std::make_unique<Texture2DArray>(width, height, num_neighbours, TextureFormat::kR32F);
+  if (unswept) {
+    resources.unswept_ncc =
+        std::make_unique<Texture2DArray>(width, height, num_neighbours, TextureFormat::kR32F);
+  }
   // Row sums, padded by zeros along the columns (transposed: along the rows); never written
   // outside the image afterwards.
   const bool transposed = variant == GlslBlurVariant::kUnrolled;
@@ -453,7 +457,8 @@ const gl::GlInfo& GlslSweepKernel::gl_info() const { return impl_->context->info
 GlslBlurVariant GlslSweepKernel::blur_variant() const { return impl_->variant; }
 int GlslSweepKernel::blur_block() const { return impl_->block; }
 
-GlslSweepKernel::MemoryPlan GlslSweepKernel::PlanMemory(const PreparedSweep& prep) const {
+GlslSweepKernel::MemoryPlan GlslSweepKernel::PlanMemory(const PreparedSweep& prep,
+                                                        const WinnerRule& rule) const {
   const int64_t width = prep.camera.view.intrinsics.width;
   const int64_t height = prep.camera.view.intrinsics.height;
   const int64_t radius = (prep.window.rows - 1) / 2;
@@ -464,9 +469,10 @@ GlslSweepKernel::MemoryPlan GlslSweepKernel::PlanMemory(const PreparedSweep& pre
   // Per offset: C's surface + depth, world and one reprojection per neighbour (padded), NCC
   // maps.
   plan.per_offset_bytes = padded * (8 + 4 + 16 + 16 * neighbours) + width * height * 4 * neighbours;
-  // Per job: C's image, the row sums (RGBA32F + RG32F, padded), the NCC maps at k = 0.
-  plan.fixed_bytes = width * height * 4 + (height + 2 * radius + block) * width * (16 + 8) +
-                     width * height * 4 * neighbours;
+  // Per job: C's image, the row sums (RGBA32F + RG32F, padded), the NCC maps at k = 0 where
+  // winners must move.
+  plan.fixed_bytes = width * height * 4 + (height + 2 * radius + block) * width * (16 + 8);
+  if (rule.must_move) plan.fixed_bytes += width * height * 4 * neighbours;
   for (const SweepCamera& n : prep.neighbours) {
     const int64_t n_pixels = int64_t{n.view.intrinsics.width} * n.view.intrinsics.height;
     plan.per_offset_bytes += n_pixels * (4 + 4);  // shadow map + its depth buffer
@@ -824,7 +830,8 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
   SweepResult result;
   result.stats = PreparedSweepStats(prep);
   SweepStats& stats = result.stats;
-  const std::unique_ptr<GpuJob> gpu = UploadJob(job, prep, kernel->PlanMemory(prep));
+  const WinnerRule rule = WinnerRule::For(job.options, static_cast<int>(prep.neighbours.size()));
+  const std::unique_ptr<GpuJob> gpu = UploadJob(job, prep, kernel->PlanMemory(prep, rule));
   CaptureRecorder recorder(capture, *gpu, resources);
   stats.prepare_s = clock.Prepared();
   for (const Batch& batch : gpu->batches) {
@@ -884,7 +891,8 @@ std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
     const SweepJob& job, const PreparedSweep& prep, const MemoryPlan& plan) {
   const int radius = (prep.window.rows - 1) / 2;
   BlurPrograms& programs = Blur(radius);
-  Allocate(prep, plan.offsets_per_batch, radius);
+  Allocate(prep, plan.offsets_per_batch, radius,
+           WinnerRule::For(job.options, static_cast<int>(prep.neighbours.size())).must_move);
   auto gpu =
       std::make_unique<GpuJob>(job, prep, plan.offsets_per_batch, context->info().clip_control);
   gl::ShaderProgram& tile_best = TileBest(radius, gpu->match_words);
@@ -1048,7 +1056,9 @@ void GlslSweepKernel::Impl::ReduceBatch(const GpuJob& gpu, const Batch& batch) {
   const TileRecords& records = gpu.records;
   BindImageArray(*resources.ncc, 0, GL_READ_ONLY, GL_R32F);
   BindImageArray(*resources.world, 1, GL_READ_ONLY, GL_RGBA32F);
-  BindImageArray(*resources.unswept_ncc, 2, GL_READ_ONLY, GL_R32F);
+  // Read only where winners must move; some array is bound there either way.
+  BindImageArray(resources.unswept_ncc ? *resources.unswept_ncc : *resources.ncc, 2, GL_READ_ONLY,
+                 GL_R32F);
   records.columns.BindStorage(0);
   records.rows.BindStorage(1);
   records.best_ncc.BindStorage(2);

@@ -91,7 +91,7 @@ class GlslSweepKernel : public SweepKernel {
     int64_t per_offset_bytes = 0;  // C's render + shadow maps + NCC maps of one offset
     int64_t fixed_bytes = 0;       // images, reprojection and blur buffers, tile records
   };
-  MemoryPlan PlanMemory(const PreparedSweep& prep) const;
+  MemoryPlan PlanMemory(const PreparedSweep& prep, const WinnerRule& rule) const;
 
  private:
   struct Impl;
