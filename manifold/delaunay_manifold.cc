@@ -699,6 +699,9 @@ bool FlippedAroundSince(const std::vector<manifold_detail::Cell_handle>& cells, 
 // first); growing then goes on from there.
 int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* boundary) {
   constexpr size_t kMaxPocketCells = 1 << 16;
+  // Rounds of pinching matter added to a camera's pocket (camera 5 of the upward pyramid with
+  // --sweep.winners-must-move took 3; docs/manifold.md "Known limits").
+  constexpr int kMaxPinchRounds = 8;
   // A camera's pocket that could not join, with the cells its trial read: it fails again
   // until a cell around their vertices flips. Each star completed used to try every camera
   // still in the matter again (1,800 failed trials, 1.8 s of 2.3, on a 2,048-camera street).
@@ -722,7 +725,8 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* bounda
         std::unordered_set<const void*> tried;
         std::vector<Cell_handle> read = {start};
         joined = grow_shrink_.JoinPocket(pocket, /*star_min_weight=*/0, &tried, &read);
-        if (joined.empty()) joined = grow_shrink_.JoinPocketWithPinches(pocket, 8, &read);
+        if (joined.empty())
+          joined = grow_shrink_.JoinPocketWithPinches(pocket, kMaxPinchRounds, &read);
         if (!joined.empty()) break;
         failed[key] = {labels_.relabels(), std::move(read)};
       }

@@ -96,7 +96,7 @@ class GrowShrink {
   // appends the pieces it tried (see JoinPocket).
   std::vector<Cell_handle> JoinPocketWithPinches(const std::vector<Cell_handle>& pocket, int rounds,
                                                  std::vector<Cell_handle>* read = nullptr);
-  // Matter cells joined by JoinPocket with their pocket so far.
+  // Matter cells joined by JoinPocket and JoinPocketWithPinches with their pocket so far.
   int64_t slivers_joined() const { return slivers_joined_; }
   // Free, not in O, and sharing a face with O: a cell growing can start from.
   bool NextToO(const Cell_handle& c) const;

@@ -287,7 +287,7 @@ void SweepOffset(int k, CpuSweepSlab* slab, NccMaps* maps, ChunkResult* out) {
 
 // Sweeps the offsets of `competing` taken one at a time from `next` (shared by the threads)
 // until none is left. A thread's offsets ascend, so its winners keep UpdateTileWinners' ties.
-ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep,
+ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep, const WinnerRule& rule,
                          const std::vector<int>& competing,
                          const std::vector<const float*>& surface, std::atomic<int>* next) {
   const int num_offsets = static_cast<int>(competing.size());
@@ -297,7 +297,6 @@ ChunkResult SweepOffsets(const SweepJob& job, const PreparedSweep& prep,
   if (i >= num_offsets) return out;  // a thread that started late: no buffers to set up
   CpuSweepSlab slab(job, prep);
   NccMaps maps(prep);
-  const WinnerRule rule = WinnerRule::For(job.options, static_cast<int>(prep.neighbours.size()));
   for (; i < num_offsets; i = next->fetch_add(1)) {
     const int k = competing[i];
     SweepOffset(k, &slab, &maps, &out);
@@ -383,7 +382,7 @@ SweepResult CpuSweepKernel::Run(const SweepJob& job) {
       cv::Range(0, threads),
       [&](const cv::Range& range) {
         for (int c = range.start; c < range.end; ++c) {
-          found[1 + c] = SweepOffsets(job, prep, competing, surface, &next);
+          found[1 + c] = SweepOffsets(job, prep, rule, competing, surface, &next);
         }
       },
       threads);

@@ -360,7 +360,7 @@ struct GlslSweepKernel::Impl {
   void CheckLimits(const SweepJob& job, const PreparedSweep& prep,
                    const GlslSweepCapture* capture) const;
   std::unique_ptr<GpuJob> UploadJob(const SweepJob& job, const PreparedSweep& prep,
-                                    const MemoryPlan& plan);
+                                    const WinnerRule& rule, const MemoryPlan& plan);
   void RenderShadowMaps(const GpuJob& gpu, const Batch& batch);
   void RenderCameraView(const GpuJob& gpu, const Batch& batch);
   void NccBatch(const GpuJob& gpu, const Batch& batch);
@@ -617,7 +617,8 @@ struct GlslSweepKernel::Impl::Group {
 // batch need.
 struct GlslSweepKernel::Impl::GpuJob {
   // Uploads the mesh, the images and the tile records; `batch_size` offsets per batch.
-  GpuJob(const SweepJob& job, const PreparedSweep& prep, int batch_size, bool clip_control);
+  GpuJob(const SweepJob& job, const PreparedSweep& prep, const WinnerRule& rule, int batch_size,
+         bool clip_control);
   // The uniforms of a raster program sweeping the mesh as seen from `view` (C or a neighbour).
   void SetSweep(const gl::ShaderProgram& program, const View& view, double far) const;
   // Those of the world + reprojection pass for a group of neighbours.
@@ -674,7 +675,7 @@ std::vector<GlslSweepKernel::Impl::Batch> GlslSweepKernel::Impl::Batch::Split(
 }
 
 GlslSweepKernel::Impl::GpuJob::GpuJob(const SweepJob& job, const PreparedSweep& prep,
-                                      int batch_size, bool clip_control)
+                                      const WinnerRule& rule, int batch_size, bool clip_control)
     : job(job),
       prep(prep),
       width(prep.camera.view.intrinsics.width),
@@ -682,7 +683,7 @@ GlslSweepKernel::Impl::GpuJob::GpuJob(const SweepJob& job, const PreparedSweep& 
       num_neighbours(static_cast<int>(prep.neighbours.size())),
       radius((prep.window.rows - 1) / 2),
       match_words(DivUp(num_neighbours, 32)),
-      batches(Batch::Split(prep, WinnerRule::For(job.options, num_neighbours), batch_size)),
+      batches(Batch::Split(prep, rule, batch_size)),
       mesh(job.mesh),
       origin(mesh.origin()),
       image(ImageTexture(prep.camera.image)),
@@ -831,7 +832,7 @@ SweepResult GlslSweepKernel::Impl::Run(GlslSweepKernel* kernel, const SweepJob& 
   result.stats = PreparedSweepStats(prep);
   SweepStats& stats = result.stats;
   const WinnerRule rule = WinnerRule::For(job.options, static_cast<int>(prep.neighbours.size()));
-  const std::unique_ptr<GpuJob> gpu = UploadJob(job, prep, kernel->PlanMemory(prep, rule));
+  const std::unique_ptr<GpuJob> gpu = UploadJob(job, prep, rule, kernel->PlanMemory(prep, rule));
   CaptureRecorder recorder(capture, *gpu, resources);
   stats.prepare_s = clock.Prepared();
   for (const Batch& batch : gpu->batches) {
@@ -888,13 +889,13 @@ void GlslSweepKernel::Impl::CheckLimits(const SweepJob& job, const PreparedSweep
 // of plan.offsets_per_batch, groups the neighbours for C's draws, and sets the compute passes'
 // uniforms that stay for the whole job.
 std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
-    const SweepJob& job, const PreparedSweep& prep, const MemoryPlan& plan) {
+    const SweepJob& job, const PreparedSweep& prep, const WinnerRule& rule,
+    const MemoryPlan& plan) {
   const int radius = (prep.window.rows - 1) / 2;
   BlurPrograms& programs = Blur(radius);
-  Allocate(prep, plan.offsets_per_batch, radius,
-           WinnerRule::For(job.options, static_cast<int>(prep.neighbours.size())).must_move);
-  auto gpu =
-      std::make_unique<GpuJob>(job, prep, plan.offsets_per_batch, context->info().clip_control);
+  Allocate(prep, plan.offsets_per_batch, radius, rule.must_move);
+  auto gpu = std::make_unique<GpuJob>(job, prep, rule, plan.offsets_per_batch,
+                                      context->info().clip_control);
   gl::ShaderProgram& tile_best = TileBest(radius, gpu->match_words);
   gpu->blur = &programs;
   gpu->tile_best = &tile_best;
@@ -915,7 +916,6 @@ std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
   SetDouble(programs.ncc, "u_min_texture_variance", sweep.min_texture_variance);
   tile_best.Set("u_neighbours", num_neighbours);
   tile_best.Set("u_width", width);
-  const WinnerRule rule = WinnerRule::For(sweep, num_neighbours);
   tile_best.Set("u_threshold", rule.threshold);
   tile_best.Set("u_required", rule.required_matches);
   tile_best.Set("u_support", rule.support);

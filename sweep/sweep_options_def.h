@@ -35,19 +35,20 @@ MS_OPTION(
     "a neighbour that does not see a pixel counts as not supporting it (min-matching-neighbours "
     "then binds everywhere)",
     AnyValue())
-// Another neighbour supports a winning pixel when its NCC there is above this: a false match
-// in repeated texture is at the wrong depth for the other neighbour, a true one only
-// foreshortened.
 // The unswept mesh (k = 0) is where the surface already is. From the second iteration on, 450
 // of the downward pyramid's 467 tile winners per iteration were at k = 0, the same pixels as
 // before, and all went as duplicates or conflicts: the loop stalls. With this, k = 0 competes for
 // nothing and a pixel competes at k != 0 only where it matches the neighbour better than the
-// unswept mesh does there. It halves Table 1's errors but costs the street (more points, more
-// spikes), so it is not the default (docs/accuracy.md "Winners that move the surface").
+// unswept mesh does there. It about halves Table 1's errors, but one street seed ends above its
+// initial mesh (more points, more spikes) and fountain-P11's photo-consistency falls, so it is
+// not the default (docs/accuracy.md "Winners that move the surface").
 MS_OPTION(bool, winners_must_move, false, "winners-must-move",
           "tile winners only at offsets k != 0 that match better than the unswept mesh (k = 0) "
           "at their pixel (the paper: k = 0 competes like any offset)",
           AnyValue())
+// Another neighbour supports a winning pixel when its NCC there is above this: a false match
+// in repeated texture is at the wrong depth for the other neighbour, a true one only
+// foreshortened.
 MS_OPTION(double, support_ncc, 0.8, "support-ncc",
           "NCC above which another neighbour supports a winning pixel (min-matching-neighbours)",
           InRange(-1, 1))
