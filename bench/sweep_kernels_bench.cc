@@ -1,17 +1,19 @@
 // Pixel-hypotheses per second (pixels x offsets x neighbours) of the sweep kernels on the
 // synthetic pyramid job (sweep/sweep_test_scene.h: noise 0.01, the flat square at half height),
 // default options (N = 20: 19 offsets, 2 neighbours, sigma = 8 px, 100 px tiles), swept at full
-// size (max_image_dimension 0). Kernels run interleaved, round after round, so a noisy shared
-// machine slows them alike; the median of the rounds is reported.
+// size (max_image_dimension 0); every --sweep.* option of `reconstruct` changes them. Kernels run
+// interleaved, round after round, so a noisy shared machine slows them alike; the median of the
+// rounds is reported.
 //
 // Per kernel and size: hypotheses per second of wall time (what one worker delivers) and per
 // second of process CPU time (per core), the stage seconds (CPU seconds, summed over threads)
 // and the tile winners shared with the reference where it ran. Numbers: docs/performance.md.
 //
 //   sweep_kernels_bench [--sizes 640x480,1536x1024,3072x2048] [--kernels cpu,cpu:2,reference,glsl]
-//                       [--rounds 3] [--output results.tsv]
+//                       [--rounds 3] [--output results.tsv] [--sweep.winners-must-move ...]
 // "cpu:T" is the CPU kernel on T threads (default 1); "glsl" uses whatever GL context the
 // machine has (llvmpipe on a CPU machine, the GPU where there is one).
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <ctime>
@@ -23,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "app/option_registration.h"
+#include "base/error.h"
 #include "base/log.h"
 #include "sweep/cpu_sweep.h"
 #include "sweep/glsl_sweep.h"
@@ -74,11 +78,8 @@ int SameWinners(const SweepResult& reference, const SweepResult& other) {
   return same;
 }
 
-int Usage(const char* error) {
-  std::fprintf(stderr,
-               "error: %s\nusage: sweep_kernels_bench [--sizes WxH,...] [--kernels "
-               "cpu,cpu:T,reference,glsl] [--rounds N] [--output FILE.tsv]\n",
-               error);
+int Usage(const std::string& error) {
+  std::fprintf(stderr, "error: %s (see sweep_kernels_bench --help)\n", error.c_str());
   return 2;
 }
 
@@ -86,28 +87,30 @@ int Main(int argc, char** argv) {
   std::string sizes_arg = "640x480,1536x1024,3072x2048", kernels_arg = "cpu,cpu:2,reference";
   std::string output;
   int rounds = 3;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (i + 1 >= argc) return Usage(("missing value after " + arg).c_str());
-    const std::string value = argv[++i];
-    if (arg == "--sizes") {
-      sizes_arg = value;
-    } else if (arg == "--kernels") {
-      kernels_arg = value;
-    } else if (arg == "--rounds") {
-      rounds = std::atoi(value.c_str());
-      if (rounds < 1) return Usage("--rounds must be at least 1");
-    } else if (arg == "--output") {
-      output = value;
-    } else {
-      return Usage(("unknown argument " + arg).c_str());
-    }
+  SweepOptions sweep;
+  sweep.max_image_dimension = 0;  // full size unless asked
+  CLI::App cli("Pixel-hypotheses per second of the sweep kernels (docs/performance.md)");
+  cli.add_option("--sizes", sizes_arg, "image sizes, WxH,...")->capture_default_str();
+  cli.add_option("--kernels", kernels_arg, "cpu, cpu:T (T threads), reference, glsl")
+      ->capture_default_str();
+  cli.add_option("--rounds", rounds, "rounds, kernels interleaved in each")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  cli.add_option("--output", output, "write the table as TSV to this file");
+  app::AddOptionGroup(&cli, &sweep);
+  try {
+    cli.parse(argc, argv);
+    sweep.Check();
+  } catch (const CLI::ParseError& e) {
+    return cli.exit(e);
+  } catch (const InputError& e) {
+    return Usage(e.what());
   }
   std::vector<std::pair<int, int>> sizes;
   for (const std::string& s : Split(sizes_arg, ',')) {
     int w = 0, h = 0;
     if (std::sscanf(s.c_str(), "%dx%d", &w, &h) != 2 || w < 16 || h < 16) {
-      return Usage(("bad size " + s).c_str());
+      return Usage("bad size " + s);
     }
     sizes.emplace_back(w, h);
   }
@@ -121,7 +124,7 @@ int Main(int argc, char** argv) {
     }
     if ((spec.name != "cpu" && spec.name != "reference" && spec.name != "glsl") ||
         spec.threads < 1) {
-      return Usage(("bad kernel " + k).c_str());
+      return Usage("bad kernel " + k);
     }
     kernels.push_back(spec);
   }
@@ -138,7 +141,7 @@ int Main(int argc, char** argv) {
            "reproject_s\tncc_s\treduce_s\tpoints\tsame_winners_as_reference\n";
   for (const auto& [width, height] : sizes) {
     SweepJob job = MakeBenchmarkSweepJob(width, height);
-    job.options.max_image_dimension = 0;  // full size
+    job.options = sweep;
     std::map<std::string, std::vector<Sample>> samples;
     if (glsl) glsl->Run(job);  // warm-up: shader JIT, texture allocation
     for (int round = 0; round < rounds; ++round) {
