@@ -307,6 +307,8 @@ TEST(ReferenceSweep, TrueMeshMatchesAtOffsetZero) {
   SweepJob job = MakeSmallSweepJob(scene, scene.truth);
   job.options.num_offsets = 3;
   job.options.alpha = 0.05;
+  job.options.strict_support = false;
+  job.options.winners_must_move = false;
   const SweepResult paper = ReferenceSweepKernel().Run(job);
   ASSERT_GT(paper.points.size(), 100u) << paper.stats.Summary();
   int at_zero = 0;

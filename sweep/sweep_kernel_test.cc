@@ -183,6 +183,8 @@ TEST(SweepKernel, WinnersMustBeatTheUnsweptMesh) {
 TEST(SweepKernel, WinnerRuleTakesTheOptions) {
   SweepOptions options;
   EXPECT_EQ(options.min_matching_neighbours, 2);
+  EXPECT_TRUE(WinnerRule::For(options, 2).strict);  // the defaults
+  EXPECT_TRUE(WinnerRule::For(options, 2).must_move);
   EXPECT_EQ(WinnerRule::For(options, 2).required_matches, 2);
   EXPECT_EQ(WinnerRule::For(options, 1).required_matches, 1);
   options.min_matching_neighbours = 0;  // what an older coordinator's message holds
@@ -191,14 +193,15 @@ TEST(SweepKernel, WinnerRuleTakesTheOptions) {
   options.ncc_threshold = 0.95;
   options.support_ncc = 0.7;
   options.strict_support = true;
+  options.winners_must_move = false;  // what an older coordinator's message holds
   const WinnerRule rule = WinnerRule::For(options, 34);
   EXPECT_EQ(rule.required_matches, 3);
   EXPECT_EQ(rule.threshold, 0.95f);
   EXPECT_EQ(rule.support, 0.7f);
   EXPECT_TRUE(rule.strict);
-  EXPECT_FALSE(rule.must_move);  // the default, and an older coordinator's message
-  options.winners_must_move = true;
-  EXPECT_TRUE(WinnerRule::For(options, 2).must_move);
+  EXPECT_FALSE(rule.must_move);
+  options.strict_support = false;
+  EXPECT_FALSE(WinnerRule::For(options, 2).strict);
 }
 
 TEST(SweepKernel, PreparedSweepStatsCountsTheHypotheses) {

@@ -28,23 +28,23 @@ MS_OPTION(int, min_matching_neighbours, 2, "min-matching-neighbours",
           "unless --sweep.strict-support; 1 = the paper's rule)",
           InRange(0, 64))
 // Also where the other neighbours do not see the pixel: single-neighbour points were the
-// street's outliers, but at 100 px tiles the rule did not pay (docs/accuracy.md "Tiles counted
-// per image").
-MS_OPTION(
-    bool, strict_support, false, "strict-support",
-    "a neighbour that does not see a pixel counts as not supporting it (min-matching-neighbours "
-    "then binds everywhere)",
-    AnyValue())
+// street's outliers (1.07% beyond Sigma against 0.11%). With winners that must move, which
+// insert 2-3 times as many points, the street needs it (docs/accuracy.md "Winners that move the
+// surface").
+MS_OPTION(bool, strict_support, true, "strict-support",
+          "a neighbour that does not see a pixel counts as not supporting it, so "
+          "min-matching-neighbours binds everywhere (=false: where fewer neighbours see the "
+          "pixel, all of those)",
+          AnyValue())
 // The unswept mesh (k = 0) is where the surface already is. From the second iteration on, 450
 // of the downward pyramid's 467 tile winners per iteration were at k = 0, the same pixels as
 // before, and all went as duplicates or conflicts: the loop stalls. With this, k = 0 competes for
 // nothing and a pixel competes at k != 0 only where it matches the neighbour better than the
-// unswept mesh does there. It about halves Table 1's errors, but one street seed ends above its
-// initial mesh (more points, more spikes) and fountain-P11's photo-consistency falls, so it is
-// not the default (docs/accuracy.md "Winners that move the surface").
-MS_OPTION(bool, winners_must_move, false, "winners-must-move",
+// unswept mesh does there. With strict support it halves Table 1's errors and the street's
+// (docs/accuracy.md "Winners that move the surface").
+MS_OPTION(bool, winners_must_move, true, "winners-must-move",
           "tile winners only at offsets k != 0 that match better than the unswept mesh (k = 0) "
-          "at their pixel (the paper: k = 0 competes like any offset)",
+          "at their pixel (=false: the paper's rule, k = 0 competes like any offset)",
           AnyValue())
 // Another neighbour supports a winning pixel when its NCC there is above this: a false match
 // in repeated texture is at the wrong depth for the other neighbour, a true one only
