@@ -33,8 +33,8 @@ MS_OPTION(int, min_matching_neighbours, 2, "min-matching-neighbours",
 // surface").
 MS_OPTION(bool, strict_support, true, "strict-support",
           "a neighbour that does not see a pixel counts as not supporting it, so "
-          "min-matching-neighbours binds everywhere (=false: where fewer neighbours see the "
-          "pixel, all of those)",
+          "min-matching-neighbours binds everywhere (on by default; =false: where fewer "
+          "neighbours see the pixel, all of those)",
           AnyValue())
 // The unswept mesh (k = 0) is where the surface already is. From the second iteration on, 450
 // of the downward pyramid's 467 tile winners per iteration were at k = 0, the same pixels as
@@ -44,7 +44,8 @@ MS_OPTION(bool, strict_support, true, "strict-support",
 // street ends 39-53% below its initial mesh (docs/accuracy.md "Winners that move the surface").
 MS_OPTION(bool, winners_must_move, true, "winners-must-move",
           "tile winners only at offsets k != 0 that match better than the unswept mesh (k = 0) "
-          "at their pixel (=false: the paper's rule, k = 0 competes like any offset)",
+          "at their pixel (on by default; =false: the paper's rule, k = 0 competes like any "
+          "offset)",
           AnyValue())
 // Another neighbour supports a winning pixel when its NCC there is above this: a false match
 // in repeated texture is at the wrong depth for the other neighbour, a true one only
