@@ -284,6 +284,39 @@ TEST(RefineMesh, PullsAFlattenedApexBackToTheTruth) {
   EXPECT_TRUE(ValidWithBoundary(mesh));
 }
 
+// What no camera sees stays where it is: a second surface behind the cameras, which the thin
+// plate alone would shrink, keeps every vertex bit for bit while the seen pyramid moves.
+TEST(RefineMesh, ThinPlateLeavesUnseenVerticesInPlace) {
+  const PyramidScene scene = MakePyramidScene();
+  Mesh mesh = LoweredApex(scene, 0.8);
+  const size_t seen = mesh.vertices.size();
+  Eigen::Vector3d behind = Eigen::Vector3d::Zero();
+  for (const SweepCamera& camera : scene.cameras) behind += camera.view.Center();
+  behind /= static_cast<double>(scene.cameras.size());
+  behind.z() += 2 * scene.pyramid_height;  // the cameras look down
+  Mesh unseen = test_meshes::Icosahedron();
+  for (size_t v = 0; v < unseen.vertices.size(); ++v) {
+    // Uneven, so that its thin-plate gradient is not zero.
+    unseen.vertices[v] = behind + 0.1 * (1.0 + 0.05 * static_cast<double>(v)) * unseen.vertices[v];
+  }
+  for (const Eigen::Vector3d& x : unseen.vertices) mesh.vertices.push_back(x);
+  for (const auto& f : unseen.faces) {
+    mesh.faces.push_back({f[0] + static_cast<int32_t>(seen), f[1] + static_cast<int32_t>(seen),
+                          f[2] + static_cast<int32_t>(seen)});
+  }
+  const Mesh start = mesh;
+  RefineOptions options;
+  options.iterations = 4;
+  options.levels = 1;
+  options.smoothness = 0.03;
+  RefineMesh(&mesh, scene.cameras, kPyramidPairs, options);
+  EXPECT_NE(mesh.vertices[0], start.vertices[0]);
+  for (size_t v = seen; v < mesh.vertices.size(); ++v) {
+    EXPECT_EQ(mesh.vertices[v], start.vertices[v]) << "unseen vertex " << v;
+  }
+  EXPECT_TRUE(ValidWithBoundary(mesh));
+}
+
 // Pairs are summed in pair order whatever the threads did: one thread and two give the same
 // mesh, bit for bit.
 TEST(RefineMesh, ThreadsDoNotChangeTheResult) {

@@ -56,7 +56,9 @@ PairGradient SumPairs(const Mesh& mesh, const std::vector<RefineView>& views, in
 
 // The step of docs/refine.md: -step x g / H per vertex (a Gauss-Newton scale), at most
 // max_step_px pixels of reprojection shift, plus the thin plate's -smoothness x dE_s/dv; all
-// times `scale` (backtracking, in (0, 1]).
+// times `scale` (backtracking, in (0, 1]). The thin plate moves only vertices the images move
+// (H > 0): alone it shrinks what no camera sees, such as the closed mesh's matter above the
+// cameras, and once remeshing has cut that into small faces it swept them onto the cameras.
 std::vector<Eigen::Vector3d> Displacements(const Mesh& mesh, const PairGradient& data,
                                            const std::vector<std::vector<int32_t>>& neighbours,
                                            const RefineOptions& options, double scale) {
@@ -74,7 +76,9 @@ std::vector<Eigen::Vector3d> Displacements(const Mesh& mesh, const PairGradient&
   }
   if (options.smoothness > 0) {
     const std::vector<Eigen::Vector3d> thin_plate = ThinPlateGradient(mesh, neighbours);
-    for (size_t v = 0; v < move.size(); ++v) move[v] -= scale * options.smoothness * thin_plate[v];
+    for (size_t v = 0; v < move.size(); ++v) {
+      if (data.parallax_rate2[v] > 0) move[v] -= scale * options.smoothness * thin_plate[v];
+    }
   }
   return move;
 }
