@@ -713,6 +713,22 @@ TEST(DelaunayManifold, PocketsJoinWithTheirPinchingMatter) {
   EXPECT_GT(with_pieces, 0);
 }
 
+// The same on denser spheres, where the last resort also takes whole pieces of matter between
+// two parts of O that touch (PinchingPieces' second pass): those joins keep the manifold too.
+TEST(DelaunayManifold, PocketsJoinWholePiecesWhereOTouchesItself) {
+  int64_t whole_piece_rounds = 0, joined = 0;
+  for (uint32_t seed = 1; seed <= 3; ++seed) {
+    const RandomScene scene = SphereScene(1000, 10, seed, 1.0);
+    const manifold_internal::PinchJoinCounts c =
+        manifold_internal::JoinPocketsWithPinches(scene.cameras, scene.points, seed);
+    EXPECT_EQ(c.problems, 0) << "seed " << seed;
+    whole_piece_rounds += c.whole_piece_rounds;
+    joined += c.whole + c.with_pieces;
+  }
+  EXPECT_GT(whole_piece_rounds, 0);
+  EXPECT_GT(joined, 0);
+}
+
 // Input points 1e-7 from others (far below the default floor, 2e-6 of the scene's diagonal)
 // are merged into them: never a vertex, their rays counted at the kept vertex.
 TEST(DelaunayManifold, NearDuplicateInputPointsAreMergedKeepingTheirRays) {

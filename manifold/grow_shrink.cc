@@ -453,7 +453,10 @@ std::vector<Cell_handle> GrowShrink::JoinPocketWithPinches(const std::vector<Cel
     // Matter pinches first; where O touches itself, the whole piece only when nothing else is left.
     const auto any = [](const Cell_handle&, size_t) { return true; };
     std::vector<Cell_handle> pieces = PinchingPieces(trial.cells, irregular, false, any);
-    if (pieces.empty()) pieces = PinchingPieces(trial.cells, irregular, true, any);
+    if (pieces.empty()) {
+      pieces = PinchingPieces(trial.cells, irregular, true, any);
+      whole_pieces_tried_ += !pieces.empty();
+    }
     UndoFlips(trial);
     if (read != nullptr) read->insert(read->end(), pieces.begin(), pieces.end());
     if (pieces.empty()) return {};

@@ -98,6 +98,8 @@ class GrowShrink {
                                                  std::vector<Cell_handle>* read = nullptr);
   // Matter cells joined by JoinPocket and JoinPocketWithPinches with their pocket so far.
   int64_t slivers_joined() const { return slivers_joined_; }
+  // Rounds of JoinPocketWithPinches that took a whole piece where O touches itself, so far.
+  int64_t whole_pieces_tried() const { return whole_pieces_tried_; }
   // Free, not in O, and sharing a face with O: a cell growing can start from.
   bool NextToO(const Cell_handle& c) const;
   // The face neighbours of `cells` that are NextToO.
@@ -158,6 +160,7 @@ class GrowShrink {
   CellLabels& labels_;
   Regularity& regularity_;
   int64_t slivers_joined_ = 0;
+  int64_t whole_pieces_tried_ = 0;
   // Reused by ShrinkAround.
   std::vector<std::pair<CellKey, Cell_handle>> shrink_set_;
   std::vector<Cell_handle> around_;

@@ -84,6 +84,7 @@ struct PinchJoinCounts {
   int64_t whole = 0;        // joined with no matter
   int64_t with_pieces = 0;  // joined with pinching matter
   int64_t failed = 0;
+  int64_t whole_piece_rounds = 0;  // rounds that took a whole piece where O touches itself
   int64_t problems = 0;  // joins that broke the manifold or missed a pocket cell, failures
                          // that changed a label
 };

@@ -194,6 +194,7 @@ struct ManifoldTestAccess {
       if (impl.regularity_.FlipKeepsManifold(c)) impl.labels_.SetOutside(c, false);
     }
     manifold_internal::PinchJoinCounts counts;
+    const int64_t whole_pieces_before = impl.grow_shrink_.whole_pieces_tried();  // by Build
     const uint32_t stamp = impl.walker_.NextStamp();
     for (const Cell_handle& seed_cell :
          impl.grow_shrink_.BoundarySeeds(RegrowSeeds::kBoundary, 0)) {
@@ -211,6 +212,7 @@ struct ManifoldTestAccess {
       for (const Cell_handle& c : pocket) counts.problems += !c->info().outside;
       counts.problems += !impl.ValidateManifold().empty() || !impl.ValidateLabels().empty();
     }
+    counts.whole_piece_rounds = impl.grow_shrink_.whole_pieces_tried() - whole_pieces_before;
     return counts;
   }
 
