@@ -307,21 +307,6 @@ Eigen::Vector3d ClosestOnSegment(const Eigen::Vector3d& x, const Eigen::Vector3d
   return l2 > 0 ? Eigen::Vector3d(a + std::clamp((x - a).dot(ab) / l2, 0.0, 1.0) * ab) : a;
 }
 
-Eigen::Vector3d ClosestOnTriangle(const Eigen::Vector3d& x, const Triangle& t) {
-  const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]);
-  const double n2 = n.squaredNorm();
-  if (n2 > 0 && (t[1] - t[0]).cross(x - t[0]).dot(n) >= 0 &&
-      (t[2] - t[1]).cross(x - t[1]).dot(n) >= 0 && (t[0] - t[2]).cross(x - t[2]).dot(n) >= 0) {
-    return x - (x - t[0]).dot(n) / n2 * n;
-  }
-  Eigen::Vector3d best = t[0];
-  for (int i = 0; i < 3; ++i) {
-    const Eigen::Vector3d c = ClosestOnSegment(x, t[i], t[(i + 1) % 3]);
-    if ((c - x).squaredNorm() < (best - x).squaredNorm()) best = c;
-  }
-  return best;
-}
-
 // The closest points of segments p0p1 and q0q1 (SegmentSegmentDistance2's parameters).
 std::array<Eigen::Vector3d, 2> SegmentClosestPoints(const Eigen::Vector3d& p0,
                                                     const Eigen::Vector3d& p1,
@@ -359,8 +344,8 @@ std::array<Eigen::Vector3d, 2> TriangleClosestPoints(const Triangle& p, const Tr
     }
   };
   for (int i = 0; i < 3; ++i) {
-    consider(p[i], ClosestOnTriangle(p[i], q));
-    consider(ClosestOnTriangle(q[i], p), q[i]);
+    consider(p[i], ClosestPointOnTriangle(p[i], q));
+    consider(ClosestPointOnTriangle(q[i], p), q[i]);
     for (int j = 0; j < 3; ++j) {
       const auto c = SegmentClosestPoints(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3]);
       consider(c[0], c[1]);
@@ -370,6 +355,22 @@ std::array<Eigen::Vector3d, 2> TriangleClosestPoints(const Triangle& p, const Tr
 }
 
 }  // namespace float_robustness_internal
+
+Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& x,
+                                       const std::array<Eigen::Vector3d, 3>& t) {
+  const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]);
+  const double n2 = n.squaredNorm();
+  if (n2 > 0 && (t[1] - t[0]).cross(x - t[0]).dot(n) >= 0 &&
+      (t[2] - t[1]).cross(x - t[1]).dot(n) >= 0 && (t[0] - t[2]).cross(x - t[2]).dot(n) >= 0) {
+    return x - (x - t[0]).dot(n) / n2 * n;
+  }
+  Eigen::Vector3d best = t[0];
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d c = float_robustness_internal::ClosestOnSegment(x, t[i], t[(i + 1) % 3]);
+    if ((c - x).squaredNorm() < (best - x).squaredNorm()) best = c;
+  }
+  return best;
+}
 
 namespace {
 

@@ -91,6 +91,11 @@ double FloatCheckTolerance(const Mesh& mesh, const std::vector<uint8_t>& usable,
 FloatRobustnessReport CheckFloatRobustness(const Mesh& mesh, const std::vector<uint8_t>& usable,
                                            const FloatRobustnessOptions& options = {});
 
+// The point of triangle t nearest to x, in double precision (a degenerate t: the nearest point
+// of its edges).
+Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& x,
+                                       const std::array<Eigen::Vector3d, 3>& t);
+
 // The geometric kernels, exposed for tests.
 namespace float_robustness_internal {
 

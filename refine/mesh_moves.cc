@@ -5,6 +5,7 @@
 #include <cmath>
 #include <initializer_list>
 
+#include "mesh/float_robustness.h"
 #include "mesh/mesh_checker.h"
 
 namespace ms {
@@ -81,6 +82,53 @@ void MarkTurnedFaces(const Mesh& mesh, const std::vector<Eigen::Vector3d>& befor
   }
 }
 
+// Whether p projects along the normal of face f (over the points x) into the face.
+bool ProjectsInto(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& x,
+                  const std::array<int32_t, 3>& f) {
+  const Eigen::Vector3d n = FaceCross(x, f);
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d& u = x[f[k]];
+    const Eigen::Vector3d& w = x[f[(k + 1) % 3]];
+    if ((w - u).cross(p - u).dot(n) < 0) return false;
+  }
+  return true;
+}
+
+// Vertices of moved faces that came nearer to a kept-clear point than the clearance (and nearer
+// than they were), or that crossed one: its side of the face changed where it lies over the face
+// before or after (a face that slid past it sideways within one step would not be caught; steps
+// are a fraction of a pixel's parallax).
+void MarkFacesNearPoints(const Mesh& mesh, const std::vector<Eigen::Vector3d>& before,
+                         const std::vector<uint8_t>& moving, const MoveOptions& options,
+                         std::vector<uint8_t>* trouble) {
+  if (options.keep_clear.empty()) return;
+  for (const auto& f : mesh.faces) {
+    if (!moving[f[0]] && !moving[f[1]] && !moving[f[2]]) continue;
+    // A ball around the face before and after the move holds everything in between.
+    Eigen::Vector3d middle = Eigen::Vector3d::Zero();
+    for (int32_t v : f) middle += before[v] + mesh.vertices[v];
+    middle /= 6;
+    double radius = 0;
+    for (int32_t v : f) {
+      radius = std::max({radius, (before[v] - middle).norm(), (mesh.vertices[v] - middle).norm()});
+    }
+    const Eigen::Vector3d n0 = FaceCross(before, f), n1 = FaceCross(mesh.vertices, f);
+    for (const Eigen::Vector3d& p : options.keep_clear) {
+      if ((p - middle).norm() > radius + options.clearance) continue;
+      const auto& x = mesh.vertices;
+      const double after = (p - ClosestPointOnTriangle(p, {x[f[0]], x[f[1]], x[f[2]]})).norm();
+      const double was =
+          (p - ClosestPointOnTriangle(p, {before[f[0]], before[f[1]], before[f[2]]})).norm();
+      const bool near = after < options.clearance && after < was;
+      const bool crossed = n0.dot(p - before[f[0]]) * n1.dot(p - x[f[0]]) < 0 &&
+                           (ProjectsInto(p, before, f) || ProjectsInto(p, x, f));
+      if (near || crossed) {
+        for (int32_t v : f) (*trouble)[v] = 1;
+      }
+    }
+  }
+}
+
 // Vertices of the checker's problems that involve a moving vertex.
 void MarkCheckerProblems(const Mesh& mesh, const std::vector<uint8_t>& moving, double tolerance,
                          const std::vector<uint8_t>& focus, std::vector<uint8_t>* trouble) {
@@ -129,6 +177,7 @@ MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& dis
     }
     std::vector<uint8_t> trouble(n, 0);
     MarkTurnedFaces(*mesh, before, moving, cos_limit, &trouble);
+    MarkFacesNearPoints(*mesh, before, moving, options, &trouble);
     MarkCheckerProblems(*mesh, moving, options.tolerance, focus, &trouble);
     ++stats.rounds;
     bool any = false;

@@ -51,6 +51,10 @@ struct MoveOptions {
   double tolerance = 0;           // absolute: faces sharing no vertex stay farther apart than this
   double max_face_turn_deg = 60;  // a face's normal turns by at most this
   int max_halvings = 4;           // a refused move is halved this many times, then dropped
+  // Points the surface keeps clear of (the cameras' centres): a move that brings a face nearer
+  // to one than `clearance` (and nearer than before) or across it is refused like the others.
+  std::vector<Eigen::Vector3d> keep_clear;
+  double clearance = 0;
 };
 
 struct MoveStats {
@@ -62,9 +66,9 @@ struct MoveStats {
 };
 
 // Adds displacement[v] to every vertex, halving it (then dropping it) for the vertices of
-// faces that a check finds in trouble after the move, and checking again until no trouble
-// involves a moved vertex. Trouble the mesh had before (between vertices that do not move) is
-// left alone.
+// faces that a check (the checker's, the face turn, the clearance) finds in trouble after the move,
+// and checking again until no trouble involves a moved vertex. Trouble the mesh had before (between
+// vertices that do not move) is left alone.
 MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& displacement,
                              const MoveOptions& options);
 

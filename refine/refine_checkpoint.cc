@@ -38,7 +38,8 @@ void WriteRefineCheckpoint(const std::string& output, const Mesh& mesh, const Re
                             {"scale", state.scale},
                             {"accepted_energy", state.accepted_energy},
                             {"has_accepted", !state.accepted.empty()},
-                            {"tolerance", state.tolerance}};
+                            {"tolerance", state.tolerance},
+                            {"camera_clearance", state.camera_clearance}};
   WriteFileAtomically(
       JsonPath(output), [&](std::ostream& os) { os << j.dump(2) << "\n"; }, false);
 }
@@ -65,6 +66,7 @@ std::optional<RefineCheckpoint> ReadRefineCheckpoint(const std::string& output,
     c.state.scale = j.at("scale").get<double>();
     c.state.accepted_energy = j.at("accepted_energy").get<double>();
     c.state.tolerance = j.at("tolerance").get<double>();
+    c.state.camera_clearance = j.value("camera_clearance", 0.0);
     c.mesh = ReadMesh(MeshPath(output));
     if (j.at("has_accepted").get<bool>()) {
       Mesh accepted = ReadMesh(AcceptedPath(output));

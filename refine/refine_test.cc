@@ -239,6 +239,33 @@ TEST(MeshMoves, ThinPlateGradientMatchesFiniteDifferences) {
   }
 }
 
+// A sheet lifted through a camera's centre stops short of it by the clearance where it lies
+// under it; lowered, away from it, it moves freely, and without the camera the lift goes through.
+TEST(MeshMoves, TheSurfaceKeepsClearOfTheCameras) {
+  const Mesh start = MakeFlatSquare(0, 1, 4);  // vertex 12 at the centre
+  ASSERT_EQ(start.vertices[12], Eigen::Vector3d(0, 0, 0));
+  const Eigen::Vector3d camera(0, 0, 0.05);
+  const auto moved = [&](double dz, bool with_camera) {
+    Mesh mesh = start;
+    MoveOptions options;
+    options.tolerance = 1e-6;
+    if (with_camera) {
+      options.keep_clear = {camera};
+      options.clearance = 0.02;
+    }
+    MoveVerticesSafely(&mesh, std::vector<Eigen::Vector3d>(mesh.vertices.size(), {0, 0, dz}),
+                       options);
+    EXPECT_TRUE(ValidWithBoundary(mesh));
+    return mesh;
+  };
+  const Mesh lifted = moved(0.1, true);
+  EXPECT_GT(lifted.vertices[12].z(), 0);  // halved: 0.1 and 0.05 cross it or come too near
+  EXPECT_LE(lifted.vertices[12].z(), camera.z() - 0.02);
+  EXPECT_EQ(lifted.vertices[0].z(), 0.1);  // a corner, far from the camera
+  EXPECT_EQ(moved(-0.1, true).vertices[12].z(), -0.1);
+  EXPECT_EQ(moved(0.1, false).vertices[12].z(), 0.1);
+}
+
 // A move that would push a vertex through the opposite sheet is refused; the others are made.
 TEST(MeshMoves, AMoveThroughAnotherFaceIsRefused) {
   Mesh mesh = MakeFlatSquare(0, 1, 4);

@@ -12,6 +12,7 @@
 #include "mesh/float_robustness.h"
 #include "refine/gradient_kernel.h"
 #include "refine/mesh_moves.h"
+#include "refine/pair_sampling.h"
 #include "refine/photometric_gradient.h"
 #include "refine/remesh.h"
 
@@ -81,6 +82,16 @@ std::vector<Eigen::Vector3d> Displacements(const Mesh& mesh, const PairGradient&
     }
   }
   return move;
+}
+
+// 1% of the median depth of the mesh's vertices in front of a camera (ten times its near plane),
+// the smallest over the cameras.
+double CameraClearance(const Mesh& mesh, const std::vector<SweepCamera>& cameras) {
+  double clearance = std::numeric_limits<double>::infinity();
+  for (const SweepCamera& c : cameras) {
+    clearance = std::min(clearance, 10 * RefineNearPlane(mesh, c.view));
+  }
+  return std::isfinite(clearance) ? clearance : 0;
 }
 
 // The size of a pixel at x (scene units) in the camera that sees it finest: the smallest
@@ -177,6 +188,10 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
              : 2 * FloatCheckTolerance(*mesh, std::vector<uint8_t>(mesh->faces.size(), 1));
   move_options.max_face_turn_deg = options.max_face_turn_deg;
   move_options.max_halvings = options.max_halvings;
+  // The surface keeps away from every camera's centre (CameraClearance), fixed like the
+  // tolerance: a camera in the matter, or a face inside its near plane, would break its views.
+  for (const SweepCamera& c : cameras) move_options.keep_clear.push_back(c.view.Center());
+  move_options.clearance = resume ? resume->camera_clearance : CameraClearance(*mesh, cameras);
 
   const int finest = FinestLevel(cameras, options);
   const int per_level = options.iterations / options.levels;
@@ -254,6 +269,7 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
         state.accepted_energy = accepted_energy;
         state.accepted = accepted;
         state.tolerance = move_options.tolerance;
+        state.camera_clearance = move_options.clearance;
         hooks.checkpoint(*mesh, state);
       }
     }

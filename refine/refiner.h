@@ -62,6 +62,7 @@ struct RefineState {
   double accepted_energy = 0;
   std::vector<Eigen::Vector3d> accepted;  // the last accepted vertices; empty before the first
   double tolerance = 0;                   // of the checks, fixed at the start
+  double camera_clearance = 0;            // the same (0 from checkpoints older than it: none)
 };
 
 // Every camera with each of its neighbours (scene/view_selection.h), in camera order.
