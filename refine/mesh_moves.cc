@@ -94,16 +94,20 @@ bool ProjectsInto(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& 
   return true;
 }
 
-// Vertices of moved faces that came nearer to a kept-clear point than the clearance (and nearer
-// than they were), or that crossed one: its side of the face changed where it lies over the face
-// before or after (a face that slid past it sideways within one step would not be caught; steps
-// are a fraction of a pixel's parallax).
+// Vertices of moved faces in `focus` that came nearer to a kept-clear point than the clearance
+// (and nearer than they were), or that crossed one: its side of the face changed where it lies
+// over the face before or after (a face that slid past it sideways within one step would not be
+// caught; steps are a fraction of a pixel's parallax). `by_x`: the points sorted by x, so that a
+// face looks only at those within its reach along x (thousands of cameras in a large scene).
 void MarkFacesNearPoints(const Mesh& mesh, const std::vector<Eigen::Vector3d>& before,
-                         const std::vector<uint8_t>& moving, const MoveOptions& options,
+                         const std::vector<uint8_t>& moving, const std::vector<uint8_t>& focus,
+                         const std::vector<Eigen::Vector3d>& by_x, double clearance,
                          std::vector<uint8_t>* trouble) {
-  if (options.keep_clear.empty()) return;
-  for (const auto& f : mesh.faces) {
-    if (!moving[f[0]] && !moving[f[1]] && !moving[f[2]]) continue;
+  if (by_x.empty()) return;
+  const auto x_below = [](const Eigen::Vector3d& p, double x) { return p.x() < x; };
+  for (size_t fi = 0; fi < mesh.faces.size(); ++fi) {
+    const auto& f = mesh.faces[fi];
+    if (!focus[fi] || (!moving[f[0]] && !moving[f[1]] && !moving[f[2]])) continue;
     // A ball around the face before and after the move holds everything in between.
     Eigen::Vector3d middle = Eigen::Vector3d::Zero();
     for (int32_t v : f) middle += before[v] + mesh.vertices[v];
@@ -113,13 +117,16 @@ void MarkFacesNearPoints(const Mesh& mesh, const std::vector<Eigen::Vector3d>& b
       radius = std::max({radius, (before[v] - middle).norm(), (mesh.vertices[v] - middle).norm()});
     }
     const Eigen::Vector3d n0 = FaceCross(before, f), n1 = FaceCross(mesh.vertices, f);
-    for (const Eigen::Vector3d& p : options.keep_clear) {
-      if ((p - middle).norm() > radius + options.clearance) continue;
+    const double reach = radius + clearance;
+    for (auto it = std::lower_bound(by_x.begin(), by_x.end(), middle.x() - reach, x_below);
+         it != by_x.end() && it->x() <= middle.x() + reach; ++it) {
+      const Eigen::Vector3d& p = *it;
+      if ((p - middle).norm() > reach) continue;
       const auto& x = mesh.vertices;
       const double after = (p - ClosestPointOnTriangle(p, {x[f[0]], x[f[1]], x[f[2]]})).norm();
       const double was =
           (p - ClosestPointOnTriangle(p, {before[f[0]], before[f[1]], before[f[2]]})).norm();
-      const bool near = after < options.clearance && after < was;
+      const bool near = after < clearance && after < was;
       const bool crossed = n0.dot(p - before[f[0]]) * n1.dot(p - x[f[0]]) < 0 &&
                            (ProjectsInto(p, before, f) || ProjectsInto(p, x, f));
       if (near || crossed) {
@@ -164,6 +171,9 @@ MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& dis
   // was just halved or dropped (against all faces).
   std::vector<uint8_t> changed(n, 0);
   for (size_t v = 0; v < n; ++v) changed[v] = displacement[v] != Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> keep_clear_by_x = options.keep_clear;
+  std::sort(keep_clear_by_x.begin(), keep_clear_by_x.end(),
+            [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return a.x() < b.x(); });
   while (true) {
     std::vector<uint8_t> moving(n, 0);
     for (size_t v = 0; v < n; ++v) {
@@ -177,7 +187,7 @@ MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& dis
     }
     std::vector<uint8_t> trouble(n, 0);
     MarkTurnedFaces(*mesh, before, moving, cos_limit, &trouble);
-    MarkFacesNearPoints(*mesh, before, moving, options, &trouble);
+    MarkFacesNearPoints(*mesh, before, moving, focus, keep_clear_by_x, options.clearance, &trouble);
     MarkCheckerProblems(*mesh, moving, options.tolerance, focus, &trouble);
     ++stats.rounds;
     bool any = false;
