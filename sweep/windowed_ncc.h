@@ -58,13 +58,15 @@ class WindowedNcc {
   Window window_;
   LargeBuffer<float> i_;       // I - 0.5
   LargeBuffer<float> causal_;  // pass 1: [row][col / 16][quantity][col % 16]
-  std::vector<float> state_;   // vertical recursions: [col / 16][quantity][4][col % 16]
-  std::vector<float> zeros_;   // one row
+  // The passes' own buffers are cache-line aligned too (LargeBuffer): their vectors of 16 floats
+  // then never straddle two lines.
+  LargeBuffer<float> state_;  // vertical recursions: [col / 16][quantity][4][col % 16]
+  LargeBuffer<float> zeros_;  // one row
   // The 8 rows of a block as pass 2 makes them ([quantity][lane][col], each quantity's rows 16
   // floats further on than a plain array, so that the six never share cache sets), then
   // transposed for the horizontal recursions ([quantity / 2][col][quantity % 2][lane]) and their
   // sums.
-  std::vector<float> rows_, block_, sums_;
+  LargeBuffer<float> rows_, block_, sums_;
   size_t RowsOffset(int q, int lane) const {
     return q * (static_cast<size_t>(kLanes) * width_ + 16) + static_cast<size_t>(lane) * width_;
   }
