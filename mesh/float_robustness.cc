@@ -356,13 +356,17 @@ std::array<Eigen::Vector3d, 2> TriangleClosestPoints(const Triangle& p, const Tr
 
 }  // namespace float_robustness_internal
 
+bool PointOverTriangle(const Eigen::Vector3d& x, const std::array<Eigen::Vector3d, 3>& t) {
+  const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]);
+  return n.squaredNorm() > 0 && (t[1] - t[0]).cross(x - t[0]).dot(n) >= 0 &&
+         (t[2] - t[1]).cross(x - t[1]).dot(n) >= 0 && (t[0] - t[2]).cross(x - t[2]).dot(n) >= 0;
+}
+
 Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& x,
                                        const std::array<Eigen::Vector3d, 3>& t) {
-  const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]);
-  const double n2 = n.squaredNorm();
-  if (n2 > 0 && (t[1] - t[0]).cross(x - t[0]).dot(n) >= 0 &&
-      (t[2] - t[1]).cross(x - t[1]).dot(n) >= 0 && (t[0] - t[2]).cross(x - t[2]).dot(n) >= 0) {
-    return x - (x - t[0]).dot(n) / n2 * n;
+  if (PointOverTriangle(x, t)) {
+    const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]);
+    return x - (x - t[0]).dot(n) / n.squaredNorm() * n;
   }
   Eigen::Vector3d best = t[0];
   for (int i = 0; i < 3; ++i) {

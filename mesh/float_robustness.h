@@ -91,6 +91,10 @@ double FloatCheckTolerance(const Mesh& mesh, const std::vector<uint8_t>& usable,
 FloatRobustnessReport CheckFloatRobustness(const Mesh& mesh, const std::vector<uint8_t>& usable,
                                            const FloatRobustnessOptions& options = {});
 
+// Whether x lies over triangle t: its projection along t's normal falls inside t or on its
+// edges (false for a degenerate t).
+bool PointOverTriangle(const Eigen::Vector3d& x, const std::array<Eigen::Vector3d, 3>& t);
+
 // The point of triangle t nearest to x, in double precision (a degenerate t: the nearest point
 // of its edges).
 Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& x,

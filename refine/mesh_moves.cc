@@ -82,18 +82,6 @@ void MarkTurnedFaces(const Mesh& mesh, const std::vector<Eigen::Vector3d>& befor
   }
 }
 
-// Whether p projects along the normal of face f (over the points x) into the face.
-bool ProjectsInto(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& x,
-                  const std::array<int32_t, 3>& f) {
-  const Eigen::Vector3d n = FaceCross(x, f);
-  for (int k = 0; k < 3; ++k) {
-    const Eigen::Vector3d& u = x[f[k]];
-    const Eigen::Vector3d& w = x[f[(k + 1) % 3]];
-    if ((w - u).cross(p - u).dot(n) < 0) return false;
-  }
-  return true;
-}
-
 // Vertices of moved faces in `focus` that came nearer to a kept-clear point than the clearance
 // (and nearer than they were), or that crossed one: its side of the face changed where it lies
 // over the face before or after (a face that slid past it sideways within one step would not be
@@ -117,18 +105,18 @@ void MarkFacesNearPoints(const Mesh& mesh, const std::vector<Eigen::Vector3d>& b
       radius = std::max({radius, (before[v] - middle).norm(), (mesh.vertices[v] - middle).norm()});
     }
     const Eigen::Vector3d n0 = FaceCross(before, f), n1 = FaceCross(mesh.vertices, f);
+    const auto& x = mesh.vertices;
+    const std::array<Eigen::Vector3d, 3> then = {before[f[0]], before[f[1]], before[f[2]]};
+    const std::array<Eigen::Vector3d, 3> now = {x[f[0]], x[f[1]], x[f[2]]};
     const double reach = radius + clearance;
     for (auto it = std::lower_bound(by_x.begin(), by_x.end(), middle.x() - reach, x_below);
          it != by_x.end() && it->x() <= middle.x() + reach; ++it) {
       const Eigen::Vector3d& p = *it;
       if ((p - middle).norm() > reach) continue;
-      const auto& x = mesh.vertices;
-      const double after = (p - ClosestPointOnTriangle(p, {x[f[0]], x[f[1]], x[f[2]]})).norm();
-      const double was =
-          (p - ClosestPointOnTriangle(p, {before[f[0]], before[f[1]], before[f[2]]})).norm();
-      const bool near = after < clearance && after < was;
+      const double after = (p - ClosestPointOnTriangle(p, now)).norm();
+      const bool near = after < clearance && after < (p - ClosestPointOnTriangle(p, then)).norm();
       const bool crossed = n0.dot(p - before[f[0]]) * n1.dot(p - x[f[0]]) < 0 &&
-                           (ProjectsInto(p, before, f) || ProjectsInto(p, x, f));
+                           (PointOverTriangle(p, then) || PointOverTriangle(p, now));
       if (near || crossed) {
         for (int32_t v : f) (*trouble)[v] = 1;
       }

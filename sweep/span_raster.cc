@@ -24,7 +24,8 @@ namespace {
 // vectors, a blend and plain stores: left to the vectoriser, the conditional update became masked
 // stores (vmaskmovps), which AMD processors execute slowly, and a mesh's spans are short (about
 // 10 pixels on fountain-P11's later meshes at full size). The same operations per pixel as the
-// plain loop, so the same values.
+// plain loop, so the same values. The vectoriser is kept off the function (no-tree-vectorize), or
+// it would turn the loop of short spans into masked stores again.
 typedef double Doubles4 __attribute__((vector_size(32)));
 typedef float Floats4 __attribute__((vector_size(16)));
 typedef int32_t Ints4 __attribute__((vector_size(16)));
