@@ -22,6 +22,7 @@ struct ManifoldCommandOptions {
   std::string input;
   std::string from = "auto";
   std::string output;
+  std::string free_space_boundary;
   bool ascii = false;
   bool check = true;
   ManifoldOptions manifold;
@@ -86,6 +87,15 @@ void RunManifold(const ManifoldCommandOptions& options) {
         static_cast<long long>(c.moves), c.seconds);
   }
   std::printf("  total             %.3f s; wrote %s\n", total, options.output.c_str());
+  if (!options.free_space_boundary.empty()) {
+    const Mesh boundary = manifold.ExtractFreeSpaceBoundary();
+    WriteMesh(boundary, options.free_space_boundary, write_options);
+    std::printf(
+        "  free space        %lld free cells (%lld not in O), boundary %zu faces; wrote %s\n",
+        static_cast<long long>(stats.free_cells),
+        static_cast<long long>(stats.free_cells_left_inside), boundary.NumFaces(),
+        options.free_space_boundary.c_str());
+  }
   if (options.check) {
     MeshCheckOptions check_options;
     check_options.check_self_intersections = mesh.NumFaces() < 2000000;
@@ -111,6 +121,10 @@ void RegisterManifoldCommand(CLI::App& app) {
   cmd->add_option("--from", options->from, "input format (see `manisweep convert --help`)")
       ->capture_default_str();
   cmd->add_option("-o,--output", options->output, "mesh to write (.ply or .obj)")->required();
+  cmd->add_option("--free-space-boundary", options->free_space_boundary,
+                  "also write the boundary of every free cell, in O or not: what the visibility "
+                  "alone gives before growing keeps the surface manifold (generally not a "
+                  "manifold; for diagnosis)");
   cmd->add_flag("--ascii", options->ascii, "write ASCII PLY instead of binary");
   cmd->add_flag("!--no-check", options->check, "skip the independent manifold check of the result");
   AddOptionGroup(cmd, &options->manifold);

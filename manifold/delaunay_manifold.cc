@@ -906,6 +906,46 @@ Mesh DelaunayManifold::Impl::ExtractSurface(SurfaceInfo* info) const {
   return mesh;
 }
 
+Mesh DelaunayManifold::Impl::ExtractFreeSpaceBoundary() const {
+  std::vector<std::pair<int32_t, Point>> used;  // (vertex id, position), repeated
+  std::vector<std::array<int32_t, 3>> faces;    // by vertex id
+  for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+    if (!labels_.IsFree(c)) continue;
+    for (int i = 0; i < 4; ++i) {
+      if (labels_.IsFree(c->neighbor(i))) continue;
+      // Oriented and rotated as in ExtractSurface: the normal points into the free cell c.
+      std::array<int32_t, 3> face;
+      for (int j = 0; j < 3; ++j) {
+        const Vertex_handle v = c->vertex(Delaunay::vertex_triple_index(i, j));
+        face[j] = v->info().id;
+        used.emplace_back(face[j], v->point());
+      }
+      std::rotate(face.begin(), std::min_element(face.begin(), face.end()), face.end());
+      faces.push_back(face);
+    }
+  }
+  const auto by_id = [](const auto& a, const auto& b) { return a.first < b.first; };
+  std::sort(used.begin(), used.end(), by_id);
+  used.erase(std::unique(used.begin(), used.end(),
+                         [](const auto& a, const auto& b) { return a.first == b.first; }),
+             used.end());
+  std::sort(faces.begin(), faces.end());
+  Mesh mesh;
+  mesh.vertices.reserve(used.size());
+  for (const auto& [id, p] : used) mesh.vertices.emplace_back(p.x(), p.y(), p.z());
+  mesh.faces.reserve(faces.size());
+  for (const auto& f : faces) {
+    std::array<int32_t, 3> face;
+    for (int j = 0; j < 3; ++j) {
+      const auto at =
+          std::lower_bound(used.begin(), used.end(), std::make_pair(f[j], Point()), by_id);
+      face[j] = static_cast<int32_t>(at - used.begin());
+    }
+    mesh.faces.push_back(face);
+  }
+  return mesh;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Public interface
 
@@ -937,6 +977,9 @@ void DelaunayManifold::InsertPart(const std::vector<RayPoint>& points) {
 InsertionStats DelaunayManifold::FinishInsert() { return impl_->FinishInsert(); }
 Mesh DelaunayManifold::ExtractSurface(SurfaceInfo* info) const {
   return impl_->ExtractSurface(info);
+}
+Mesh DelaunayManifold::ExtractFreeSpaceBoundary() const {
+  return impl_->ExtractFreeSpaceBoundary();
 }
 std::string DelaunayManifold::Validate(bool check_weights) const {
   return impl_->Validate(check_weights);

@@ -133,6 +133,12 @@ class DelaunayManifold {
   // vertices ordered by point id, faces sorted.
   Mesh ExtractSurface(SurfaceInfo* info = nullptr) const;
 
+  // The boundary of every free cell (weight at least t_w), in O or not, normals towards free
+  // space: the surface the visibility alone gives, before growing keeps it manifold. Generally
+  // not a manifold; for diagnosis (`manifold --free-space-boundary`). Ordered as
+  // ExtractSurface.
+  Mesh ExtractFreeSpaceBoundary() const;
+
   // Full validity check: triangulation valid, no infinite cell in O, bookkeeping consistent,
   // every vertex regular (the surface is a closed 2-manifold), if check_weights the ray counts
   // of every cell equal a recomputation from scratch, and with the paper's regrowing

@@ -52,6 +52,7 @@ class DelaunayManifold::Impl {
   void InsertPart(const std::vector<RayPoint>& points);
   InsertionStats FinishInsert();
   Mesh ExtractSurface(SurfaceInfo* info) const;
+  Mesh ExtractFreeSpaceBoundary() const;
   // Not const, unlike DelaunayManifold::Validate: the weight layer walks every ray again,
   // which takes visit stamps and the walker's scratch buffers. The state checked is unchanged.
   std::string Validate(bool check_weights);
