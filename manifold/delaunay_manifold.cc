@@ -40,6 +40,17 @@ std::vector<int32_t> SortedCameras(std::vector<int32_t> cams) {
   return cams;
 }
 
+// The face of c opposite its vertex i, as vertex ids in the order that makes the normal point
+// into c, rotated so the smallest id leads (keeps orientation): a canonical order.
+std::array<int32_t, 3> FaceIntoCell(const manifold_detail::Cell_handle& c, int i) {
+  std::array<int32_t, 3> face;
+  for (int j = 0; j < 3; ++j) {
+    face[j] = c->vertex(manifold_detail::Delaunay::vertex_triple_index(i, j))->info().id;
+  }
+  std::rotate(face.begin(), std::min_element(face.begin(), face.end()), face.end());
+  return face;
+}
+
 }  // namespace
 
 DelaunayManifold::Impl::Impl(std::vector<ManifoldCamera> cameras, const ManifoldOptions& options)
@@ -877,15 +888,8 @@ Mesh DelaunayManifold::Impl::ExtractSurface(SurfaceInfo* info) const {
   for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
     if (!c->info().outside) continue;
     for (int i = 0; i < 4; ++i) {
-      if (labels_.InO(c->neighbor(i))) continue;
-      // This vertex order makes the normal point into c, i.e. towards O (free space).
-      std::array<int32_t, 3> face;
-      for (int j = 0; j < 3; ++j) {
-        face[j] = c->vertex(Delaunay::vertex_triple_index(i, j))->info().id;
-      }
-      // Rotate so the smallest id leads (keeps orientation), for a canonical order.
-      std::rotate(face.begin(), std::min_element(face.begin(), face.end()), face.end());
-      faces.push_back(face);
+      // Normals towards O (free space).
+      if (!labels_.InO(c->neighbor(i))) faces.push_back(FaceIntoCell(c, i));
     }
   }
   std::sort(faces.begin(), faces.end());
@@ -913,15 +917,10 @@ Mesh DelaunayManifold::Impl::ExtractFreeSpaceBoundary() const {
     if (!labels_.IsFree(c)) continue;
     for (int i = 0; i < 4; ++i) {
       if (labels_.IsFree(c->neighbor(i))) continue;
-      // Oriented and rotated as in ExtractSurface: the normal points into the free cell c.
-      std::array<int32_t, 3> face;
-      for (int j = 0; j < 3; ++j) {
-        const Vertex_handle v = c->vertex(Delaunay::vertex_triple_index(i, j));
-        face[j] = v->info().id;
-        used.emplace_back(face[j], v->point());
+      faces.push_back(FaceIntoCell(c, i));  // normal into the free cell c
+      for (int j = 0; j < 4; ++j) {
+        if (j != i) used.emplace_back(c->vertex(j)->info().id, c->vertex(j)->point());
       }
-      std::rotate(face.begin(), std::min_element(face.begin(), face.end()), face.end());
-      faces.push_back(face);
     }
   }
   const auto by_id = [](const auto& a, const auto& b) { return a.first < b.first; };
