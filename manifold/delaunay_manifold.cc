@@ -51,6 +51,32 @@ std::array<int32_t, 3> FaceIntoCell(const manifold_detail::Cell_handle& c, int i
   return face;
 }
 
+// The mesh of `faces` (by vertex id): the vertices of `used` (sorted by id, each once) in id
+// order, the faces sorted. Every face's vertices must be in `used`.
+Mesh MeshByIds(const std::vector<std::pair<int32_t, manifold_detail::Vertex_handle>>& used,
+               std::vector<std::array<int32_t, 3>> faces) {
+  const int32_t lowest = used.empty() ? 0 : used.front().first;
+  const int32_t highest = used.empty() ? -1 : used.back().first;
+  std::vector<int32_t> index_of(static_cast<size_t>(int64_t{highest} - lowest + 1), -1);
+  Mesh mesh;
+  mesh.vertices.reserve(used.size());
+  for (const auto& [id, v] : used) {
+    index_of[id - lowest] = static_cast<int32_t>(mesh.vertices.size());
+    mesh.vertices.emplace_back(v->point().x(), v->point().y(), v->point().z());
+  }
+  std::sort(faces.begin(), faces.end());
+  mesh.faces.reserve(faces.size());
+  for (const auto& f : faces) {
+    std::array<int32_t, 3> face;
+    for (int j = 0; j < 3; ++j) {
+      face[j] = f[j] >= lowest && f[j] <= highest ? index_of[f[j] - lowest] : -1;
+      MS_CHECK(face[j] >= 0) << "vertex " << f[j] << " of a face is not among the mesh's";
+    }
+    mesh.faces.push_back(face);
+  }
+  return mesh;
+}
+
 }  // namespace
 
 DelaunayManifold::Impl::Impl(std::vector<ManifoldCamera> cameras, const ManifoldOptions& options)
@@ -871,19 +897,6 @@ Mesh DelaunayManifold::Impl::ExtractSurface(SurfaceInfo* info) const {
   }
   std::sort(used.begin(), used.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
-  const int32_t lowest = used.empty() ? 0 : used.front().first;
-  const int32_t highest = used.empty() ? -1 : used.back().first;
-  std::vector<int32_t> index_of(static_cast<size_t>(int64_t{highest} - lowest + 1), -1);
-  Mesh mesh;
-  mesh.vertices.reserve(used.size());
-  std::vector<int32_t> ids;
-  ids.reserve(used.size());
-  for (const auto& [id, v] : used) {
-    index_of[id - lowest] = static_cast<int32_t>(mesh.vertices.size());
-    const Point& p = v->point();
-    mesh.vertices.emplace_back(p.x(), p.y(), p.z());
-    ids.push_back(id);
-  }
   std::vector<std::array<int32_t, 3>> faces;  // by vertex id
   for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
     if (!c->info().outside) continue;
@@ -892,57 +905,36 @@ Mesh DelaunayManifold::Impl::ExtractSurface(SurfaceInfo* info) const {
       if (!labels_.InO(c->neighbor(i))) faces.push_back(FaceIntoCell(c, i));
     }
   }
-  std::sort(faces.begin(), faces.end());
-  mesh.faces.reserve(faces.size());
-  for (const auto& f : faces) {
-    std::array<int32_t, 3> face;
-    for (int j = 0; j < 3; ++j) {
-      face[j] = index_of[f[j] - lowest];
-      MS_CHECK(face[j] >= 0) << "a vertex of the surface counts no surface face";
-    }
-    mesh.faces.push_back(face);
-  }
+  // A face's vertex missing from `used` is a vertex whose surface-face count is wrong.
+  Mesh mesh = MeshByIds(used, std::move(faces));
   if (info != nullptr) {
-    info->vertex_ids = ids;
-    info->steiner_vertices =
-        std::count_if(ids.begin(), ids.end(), [](int32_t id) { return id < 0; });
+    info->vertex_ids.clear();
+    for (const auto& [id, v] : used) info->vertex_ids.push_back(id);
+    info->steiner_vertices = std::count_if(info->vertex_ids.begin(), info->vertex_ids.end(),
+                                           [](int32_t id) { return id < 0; });
   }
   return mesh;
 }
 
 Mesh DelaunayManifold::Impl::ExtractFreeSpaceBoundary() const {
-  std::vector<std::pair<int32_t, Point>> used;  // (vertex id, position), repeated
-  std::vector<std::array<int32_t, 3>> faces;    // by vertex id
+  std::vector<std::pair<int32_t, Vertex_handle>> used;  // the faces' vertices, repeated
+  std::vector<std::array<int32_t, 3>> faces;            // by vertex id
   for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
     if (!labels_.IsFree(c)) continue;
     for (int i = 0; i < 4; ++i) {
       if (labels_.IsFree(c->neighbor(i))) continue;
       faces.push_back(FaceIntoCell(c, i));  // normal into the free cell c
       for (int j = 0; j < 4; ++j) {
-        if (j != i) used.emplace_back(c->vertex(j)->info().id, c->vertex(j)->point());
+        if (j != i) used.emplace_back(c->vertex(j)->info().id, c->vertex(j));
       }
     }
   }
-  const auto by_id = [](const auto& a, const auto& b) { return a.first < b.first; };
-  std::sort(used.begin(), used.end(), by_id);
+  std::sort(used.begin(), used.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
   used.erase(std::unique(used.begin(), used.end(),
                          [](const auto& a, const auto& b) { return a.first == b.first; }),
              used.end());
-  std::sort(faces.begin(), faces.end());
-  Mesh mesh;
-  mesh.vertices.reserve(used.size());
-  for (const auto& [id, p] : used) mesh.vertices.emplace_back(p.x(), p.y(), p.z());
-  mesh.faces.reserve(faces.size());
-  for (const auto& f : faces) {
-    std::array<int32_t, 3> face;
-    for (int j = 0; j < 3; ++j) {
-      const auto at =
-          std::lower_bound(used.begin(), used.end(), std::make_pair(f[j], Point()), by_id);
-      face[j] = static_cast<int32_t>(at - used.begin());
-    }
-    mesh.faces.push_back(face);
-  }
-  return mesh;
+  return MeshByIds(used, std::move(faces));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -361,9 +361,6 @@ TEST(DelaunayManifold, JoiningPocketsLeavesLessFreeSpaceInside) {
   EXPECT_GT(joined, 0);  // so the comparisons above are made
 }
 
-// A pocket can be kept out of O by a few matter cells crossed by no ray that pinch one of its
-// vertices (a sliver from a ground point up to a facade, seen on the street after sweeping);
-// they join with the pocket, and the surface stays a closed 2-manifold with O maximal.
 // Faces as their corners' positions, rotated so the smallest corner leads (keeps orientation).
 std::set<std::array<double, 9>> FacesByPosition(const Mesh& mesh) {
   std::set<std::array<double, 9>> faces;
@@ -414,6 +411,9 @@ TEST(DelaunayManifold, FreeSpaceBoundaryDiffersFromTheSurfaceByTheFreeCellsLeftO
   EXPECT_GE(scenes, 2) << "pinching slivers joined in the scenes: the test is void";
 }
 
+// A pocket can be kept out of O by a few matter cells crossed by no ray that pinch one of its
+// vertices (a sliver from a ground point up to a facade, seen on the street after sweeping);
+// they join with the pocket, and the surface stays a closed 2-manifold with O maximal.
 TEST(DelaunayManifold, PinchingSliversJoinWithTheirPocket) {
   int64_t slivers = 0, pockets = 0;
   for (uint32_t seed = 1; seed <= 6; ++seed) {
