@@ -842,8 +842,11 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
     for (const Cell_handle& seed : seeds) {
       std::vector<Cell_handle> pocket = grow_shrink_.Pocket(seed, kMaxPocketCells, stamp);
       if (pocket.empty()) continue;  // joined, or found from an earlier seed
-      const std::vector<Cell_handle> flipped_cells =
+      std::vector<Cell_handle> flipped_cells =
           grow_shrink_.JoinPocket(pocket, star_min_weight, &tried);
+      if (flipped_cells.empty() && options_.pocket_pinch_rounds > 0) {
+        flipped_cells = grow_shrink_.JoinPocketWithPinches(pocket, options_.pocket_pinch_rounds);
+      }
       if (flipped_cells.empty()) {
         refused_now.push_back({std::move(pocket), labels_.relabels()});
         continue;
