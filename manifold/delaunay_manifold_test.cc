@@ -370,10 +370,10 @@ TEST(DelaunayManifold, PocketsJoinWithThePiecesThatPinchThem) {
   for (uint32_t seed = 1; seed <= 4; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     const RandomScene scene = SphereScene(150, 10, seed, 1.0);
-    ManifoldOptions pinch_options;
-    pinch_options.pocket_pinch_rounds = 2;
-    DelaunayManifold with_pinches(scene.cameras, pinch_options);
-    DelaunayManifold alone(scene.cameras, ManifoldOptions{});
+    ManifoldOptions alone_options;
+    alone_options.pocket_pinch_rounds = 0;
+    DelaunayManifold with_pinches(scene.cameras, ManifoldOptions{});
+    DelaunayManifold alone(scene.cameras, alone_options);
     with_pinches.Build(scene.points);
     alone.Build(scene.points);
     const std::vector<RayPoint> near_cameras = SphereScene(60, 10, seed + 10, 1.03).points;
@@ -416,7 +416,9 @@ TEST(DelaunayManifold, FreeSpaceBoundaryDiffersFromTheSurfaceByTheFreeCellsLeftO
   for (const auto& [points, cameras, seed] :
        std::vector<std::array<int, 3>>{{40, 30, 2}, {40, 30, 3}, {100, 12, 1}, {100, 30, 1}}) {
     const RandomScene scene = SphereScene(points, cameras, seed, 1.0);
-    DelaunayManifold manifold(scene.cameras, ManifoldOptions{});
+    ManifoldOptions options;
+    options.pocket_pinch_rounds = 0;  // it joins matter: O would hold cells no ray made free
+    DelaunayManifold manifold(scene.cameras, options);
     const BuildStats stats = manifold.Build(scene.points);
     if (stats.slivers_joined > 0) continue;  // O then holds cells no ray made free
     ++scenes;
@@ -615,7 +617,9 @@ TEST_P(RandomInsertions, KeepTheSurfaceManifold) {
       ASSERT_EQ(manifold.Validate(true), "") << "seed " << seed << " batch " << batch;
       ASSERT_EQ(SurfaceProblems(manifold.ExtractSurface()), "") << "seed " << seed;
     }
-    EXPECT_GT(inserted, 75) << "seed " << seed;
+    // Of 210 points, 69-89 go in with the default shrinking (more are in conflict once pinched
+    // pockets join O), 147-178 with the wider neighbourhoods: enough to exercise insertion.
+    EXPECT_GT(inserted, 60) << "seed " << seed;
     EXPECT_EQ(manifold.num_points(), 150 + inserted);
   }
 }

@@ -440,7 +440,8 @@ std::vector<Cell_handle> GrowShrink::PinchingPieces(
 
 std::vector<Cell_handle> GrowShrink::JoinPocketWithPinches(const std::vector<Cell_handle>& pocket,
                                                            int rounds,
-                                                           std::vector<Cell_handle>* read) {
+                                                           std::vector<Cell_handle>* read,
+                                                           bool whole_pieces) {
   std::vector<Cell_handle> matter;
   for (int round = 0; round < rounds; ++round) {
     const TrialFlips trial = FlipIntoO(pocket, matter);
@@ -453,7 +454,7 @@ std::vector<Cell_handle> GrowShrink::JoinPocketWithPinches(const std::vector<Cel
     // Matter pinches first; where O touches itself, the whole piece only when nothing else is left.
     const auto any = [](const Cell_handle&, size_t) { return true; };
     std::vector<Cell_handle> pieces = PinchingPieces(trial.cells, irregular, false, any);
-    if (pieces.empty()) {
+    if (pieces.empty() && whole_pieces) {
       pieces = PinchingPieces(trial.cells, irregular, true, any);
       whole_pieces_tried_ += !pieces.empty();
     }

@@ -90,8 +90,8 @@ MS_OPTION(bool, join_pockets, true, "join-pockets",
 // pieces that pinch its vertices, found again for up to this many rounds: on the pyramids a
 // point swept a few centimetres into free space left a fin of free cells out of O, standing from
 // the scene's edge to a box point in front of a camera (docs/accuracy.md, "Fins in front of the
-// cameras"). Off by default until the street and the real sets are measured with it.
-MS_OPTION(int, pocket_pinch_rounds, 0, "pocket-pinch-rounds",
+// cameras").
+MS_OPTION(int, pocket_pinch_rounds, 2, "pocket-pinch-rounds",
           "rounds of pinching matter pieces joined with a free pocket that cannot join O alone "
           "(0 = the pocket alone)",
           InRange(0, 8))
