@@ -441,7 +441,7 @@ std::vector<Cell_handle> GrowShrink::PinchingPieces(
 std::vector<Cell_handle> GrowShrink::JoinPocketWithPinches(const std::vector<Cell_handle>& pocket,
                                                            int rounds,
                                                            std::vector<Cell_handle>* read,
-                                                           bool whole_pieces) {
+                                                           size_t max_piece_cells) {
   std::vector<Cell_handle> matter;
   for (int round = 0; round < rounds; ++round) {
     const TrialFlips trial = FlipIntoO(pocket, matter);
@@ -452,10 +452,10 @@ std::vector<Cell_handle> GrowShrink::JoinPocketWithPinches(const std::vector<Cel
       return trial.cells;
     }
     // Matter pinches first; where O touches itself, the whole piece only when nothing else is left.
-    const auto any = [](const Cell_handle&, size_t) { return true; };
-    std::vector<Cell_handle> pieces = PinchingPieces(trial.cells, irregular, false, any);
-    if (pieces.empty() && whole_pieces) {
-      pieces = PinchingPieces(trial.cells, irregular, true, any);
+    const auto small = [&](const Cell_handle&, size_t size) { return size <= max_piece_cells; };
+    std::vector<Cell_handle> pieces = PinchingPieces(trial.cells, irregular, false, small);
+    if (pieces.empty()) {
+      pieces = PinchingPieces(trial.cells, irregular, true, small);
       whole_pieces_tried_ += !pieces.empty();
     }
     UndoFlips(trial);

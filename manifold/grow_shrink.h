@@ -94,11 +94,11 @@ class GrowShrink {
   // piece by piece for up to `rounds` rounds while vertices stay irregular. Returns the cells
   // flipped (the pocket's free cells first), empty when it failed. With `read`, a failure
   // appends the pieces it tried (see JoinPocket).
-  // Without `whole_pieces`, only matter pieces that pinch a vertex join, never a vertex's whole
-  // piece outside O where O would touch itself (a free pocket that is not a camera's).
+  // With `max_piece_cells`, only pieces of at most that many cells join (a free pocket that is
+  // not a camera's: a large piece is a part of the scene).
   std::vector<Cell_handle> JoinPocketWithPinches(const std::vector<Cell_handle>& pocket, int rounds,
                                                  std::vector<Cell_handle>* read = nullptr,
-                                                 bool whole_pieces = true);
+                                                 size_t max_piece_cells = SIZE_MAX);
   // Matter cells joined by JoinPocket and JoinPocketWithPinches with their pocket so far.
   int64_t slivers_joined() const { return slivers_joined_; }
   // Rounds of JoinPocketWithPinches that took a whole piece where O touches itself, so far.
