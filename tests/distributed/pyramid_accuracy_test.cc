@@ -137,12 +137,16 @@ Outcome Reconstruct(const std::string& scene_name, const gl::GlContext& gl, doub
   return outcome;
 }
 
-// One row of Table 1 and its regression bounds, about 5% above the measured values
-// (docs/accuracy.md; the runs are deterministic: the points are inserted sorted by camera and
-// pixel). The workers run the CPU kernel, auto's choice on a CPU machine, named so that a GPU
-// machine measures the same thing; other kernels give other figures within about +-0.003
-// (docs/sweep.md, "Which kernel auto picks"), and so do other CPUs (docs/accuracy.md). The
-// closed mesh is the headline (every pixel); the surface proper covers fewer.
+// One row of Table 1 and its regression bounds. A run is deterministic (the points are
+// inserted sorted by camera and pixel), but its trajectory depends on the last bits of its input:
+// the rows without noise are bounded about 5% above the worst of ten variants that must not
+// matter (bench/accuracy_variants.py: seeds 1-4, scene.h5, COLMAP text and binary, NVM;
+// docs/accuracy.md, "One run is a draw"), of which this test runs one (seed 1, scene.h5); the
+// noisy rows about 5% above their one measured run. The workers run the CPU kernel, auto's
+// choice on a CPU machine, named so that a GPU machine measures the same thing; other kernels give
+// other figures within about +-0.003 (docs/sweep.md, "Which kernel auto picks"), and so do other
+// CPUs (docs/accuracy.md). The closed mesh is the headline (every pixel); the surface proper covers
+// fewer.
 struct Table1Row {
   const char* scene;
   double image_noise;  // grey levels
@@ -169,48 +173,46 @@ void ExpectTable1Row(const Table1Row& row) {
   }
 }
 
-// Measured, closed / surface proper (coverage), default options: 0.0048 / 0.0029 (92.7%) since
-// tile winners must move and need both neighbours (docs/accuracy.md, "Winners that move the
-// surface"); 0.0128 / 0.0115 (92.9%) with the paper's rule (below). Paper: 0.108 -> 0.013.
+// Ten variants, closed / surface proper (coverage), default options: median 0.0059 / 0.0031,
+// worst 0.0085 / 0.0036 (92.7%); this run 0.0058 / 0.0027 (93.0%). Paper: 0.108 -> 0.013.
 TEST(PyramidAccuracy, DownwardPyramidReproducesTable1) {
-  ExpectTable1Row({"pyramid-down", 0, 0, 0.07, 0.0051, 0.0031, 0.92});
+  ExpectTable1Row({"pyramid-down", 0, 0, 0.07, 0.0089, 0.0038, 0.92});
 }
 
-// Measured: 0.0044 / 0.0019 (93.3%); 0.0081 / 0.0040 (90.4%) with the paper's rule. Paper:
-// 0.135 -> 0.028.
+// Ten variants: median 0.0043 / 0.0021, worst 0.0060 / 0.0035 (92.2%); this run 0.0053 / 0.0022
+// (92.2%). Paper: 0.135 -> 0.028.
 TEST(PyramidAccuracy, UpwardPyramidReproducesTable1) {
-  ExpectTable1Row({"pyramid-up", 0, 0, 0.09, 0.0047, 0.0020, 0.925});
+  ExpectTable1Row({"pyramid-up", 0, 0, 0.09, 0.0063, 0.0037, 0.92});
 }
 
 // With 2 grey levels of Gaussian noise in every image (docs/accuracy.md, "Table 1 with noisy
 // inputs"), which the sweep smooths away before matching (docs/sweep.md, "Noisy images"), and
 // with 5 grey levels plus sparse points moved by 1% of the viewing distance (0.03). Before the
 // smoothing the upward pyramid with 5 grey levels found no point at all (closed MAE 0.1139).
-// Measured, closed / surface proper (coverage): 0.0054 / 0.0049 (97.1%); 0.0134 / 0.0132
-// (98.0%) with the paper's rule.
+// Measured, closed / surface proper (coverage): 0.0043 / 0.0037 (97.1%).
 TEST(PyramidAccuracy, DownwardPyramidWithImageNoise) {
   ExpectTable1Row({"pyramid-down", 2, 0, 0.07, 0.0057, 0.0052, 0.965});
 }
 
-// Measured: 0.0074 / 0.0024 (95.2%); 0.0104 / 0.0042 (91.4%) with the paper's rule.
+// Measured: 0.0028 / 0.0025 (96.8%).
 TEST(PyramidAccuracy, UpwardPyramidWithImageNoise) {
   ExpectTable1Row({"pyramid-up", 2, 0, 0.09, 0.0078, 0.0026, 0.945});
 }
 
-// Measured: 0.0078 / 0.0071 (96.2%); 0.0136 / 0.0120 (94.9%) with the paper's rule.
+// Measured: 0.0070 / 0.0070 (96.3%).
 TEST(PyramidAccuracy, DownwardPyramidWithStrongImageNoiseAndNoisyPoints) {
   ExpectTable1Row({"pyramid-down", 5, 0.03, 0.07, 0.0082, 0.0075, 0.955});
 }
 
-// Measured: 0.0053 / 0.0045 (95.4%); 0.0095 / 0.0083 (94.7%) with the paper's rule.
+// Measured: 0.0055 / 0.0050 (95.8%).
 TEST(PyramidAccuracy, UpwardPyramidWithStrongImageNoiseAndNoisyPoints) {
-  ExpectTable1Row({"pyramid-up", 5, 0.03, 0.09, 0.0056, 0.0048, 0.945});
+  ExpectTable1Row({"pyramid-up", 5, 0.03, 0.09, 0.0058, 0.0053, 0.945});
 }
 
 // The paper's rule: k = 0 competes like any offset, and a pixel fewer neighbours see needs only
 // those. Its loop stalls on points it already has (docs/accuracy.md, "Winners that move the
-// surface"). Measured, closed / surface proper (coverage): 0.0128 / 0.0115 (92.9%) downward,
-// 0.0081 / 0.0040 (90.4%) upward.
+// surface"). Measured, closed / surface proper (coverage): 0.0121 / 0.0107 (92.9%) downward,
+// 0.0078 / 0.0040 (90.9%) upward.
 constexpr const char* kPaperRule = "--sweep.winners-must-move=false --sweep.strict-support=false";
 
 TEST(PyramidAccuracy, DownwardPyramidWithThePapersRule) {
