@@ -78,9 +78,11 @@ class DelaunayManifold::Impl {
   // the star changed; null: growing on starts from a scan of all cells.
   int64_t FreeEnclosedCameras(manifold_detail::GrowShrink::Refusals* boundary);
   // Joins the pockets of free space next to O (from the cells BoundarySeeds(which, changed_in)
-  // gives) that growing could not enter, and grows on from them; returns the joins.
-  // `boundary` as for FreeEnclosedCameras: the last growing then starts from what changed.
-  int64_t JoinFreePockets(RegrowSeeds which, uint32_t changed_in,
+  // gives) that growing could not enter, and grows on from them; returns the joins. With
+  // `pinch_rounds` > 0 a pocket may take the small matter pieces that pinch it (after an
+  // insertion only: --manifold.pocket-pinch-rounds). `boundary` as for FreeEnclosedCameras: the
+  // last growing then starts from what changed.
+  int64_t JoinFreePockets(RegrowSeeds which, uint32_t changed_in, int pinch_rounds,
                           manifold_detail::GrowShrink::Refusals* boundary = nullptr);
   void LogCameraStars(int64_t completed) const;
   // Cameras none of whose start cells is in O (manifold.h).
