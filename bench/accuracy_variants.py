@@ -119,7 +119,8 @@ def main():
         run(cmd, log)
         row = {"seed": seed, "format": fmt, "seconds": round(time.monotonic() - start, 1)}
         with open(os.path.join(out, "summary.json")) as f:
-            row["iterations"] = json.load(f).get("iterations")
+            # The sweep iterations run (summary.json lists each one's statistics).
+            row["iterations"] = max(i["iteration"] for i in json.load(f)["iterations"])
         for name in ["initial", "final", "final_surface"] + ([] if a.no_refine else ["refined"]):
             row[name] = evaluate(manisweep, dataset, os.path.join(out, f"{name}.ply"),
                                  os.path.join(out, f"eval_{name}.json"), log)
