@@ -316,8 +316,8 @@ void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
   grow_shrink_.GrowFromHeaviest();
   const int64_t slivers_before = grow_shrink_.slivers_joined();
   stats->camera_stars_completed = FreeEnclosedCameras(nullptr);
-  // Without the pinch joins: on the street's sparse points they took matter into O (the
-  // 2·10^4-point initial manifold 0.254 -> 0.287 m); the fins they mend follow insertions.
+  // Without the pinch joins: on sparse SfM points they take real matter into O, and the fins
+  // they mend come from insertions (docs/accuracy.md, "Fins in front of the cameras").
   stats->pockets_joined = JoinFreePockets(RegrowSeeds::kBoundary, 0, /*pinch_rounds=*/0);
   stats->slivers_joined = grow_shrink_.slivers_joined() - slivers_before;
   stats->outside_cells = labels_.outside_count();
@@ -803,9 +803,8 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
   // 1.6 points of photo-consistency; the street keeps its gain without them (docs/manifold.md).
   const double star_min_weight = 2 * options_.free_threshold;
   // A free pocket joins with the matter that pinches it (--manifold.pocket-pinch-rounds) only
-  // piece by piece of at most this many cells: larger pieces are the scene. Measured: with 8 a
-  // fin of the upward pyramid stays (0.031 m against 0.004), with 32 and more the street's
-  // initial manifold takes buildings into O (0.366 m against 0.285; docs/accuracy.md).
+  // piece by piece of at most this many cells: larger pieces are the scene. Fewer leave fins on
+  // the pyramids, more take the street's buildings into O (docs/accuracy.md measures both).
   constexpr size_t kMaxPinchPieceCells = 16;
   struct Refused {
     std::vector<Cell_handle> pocket;

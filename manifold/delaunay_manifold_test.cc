@@ -416,9 +416,7 @@ TEST(DelaunayManifold, FreeSpaceBoundaryDiffersFromTheSurfaceByTheFreeCellsLeftO
   for (const auto& [points, cameras, seed] :
        std::vector<std::array<int, 3>>{{40, 30, 2}, {40, 30, 3}, {100, 12, 1}, {100, 30, 1}}) {
     const RandomScene scene = SphereScene(points, cameras, seed, 1.0);
-    ManifoldOptions options;
-    options.pocket_pinch_rounds = 0;  // it joins matter: O would hold cells no ray made free
-    DelaunayManifold manifold(scene.cameras, options);
+    DelaunayManifold manifold(scene.cameras, ManifoldOptions{});
     const BuildStats stats = manifold.Build(scene.points);
     if (stats.slivers_joined > 0) continue;  // O then holds cells no ray made free
     ++scenes;
@@ -617,8 +615,8 @@ TEST_P(RandomInsertions, KeepTheSurfaceManifold) {
       ASSERT_EQ(manifold.Validate(true), "") << "seed " << seed << " batch " << batch;
       ASSERT_EQ(SurfaceProblems(manifold.ExtractSurface()), "") << "seed " << seed;
     }
-    // Of 210 points, 69-89 go in with the default shrinking (more are in conflict once pinched
-    // pockets join O), 147-178 with the wider neighbourhoods: enough to exercise insertion.
+    // Of 210 points, 69-89 go in with the default shrinking (pinched pockets joined into O put
+    // more in conflict), 147-178 with the wider neighbourhoods: enough to exercise insertion.
     EXPECT_GT(inserted, 60) << "seed " << seed;
     EXPECT_EQ(manifold.num_points(), 150 + inserted);
   }

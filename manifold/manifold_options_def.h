@@ -86,14 +86,14 @@ MS_OPTION(RegrowSeeds, regrow_seeds, RegrowSeeds::kBoundary, "regrow-seeds",
 MS_OPTION(bool, join_pockets, true, "join-pockets",
           "after growing, join pockets of free space that growing cannot enter one cell at a time",
           AnyValue())
-// A free pocket that cannot join alone (a vertex would not stay regular) joins with the matter
-// pieces (of at most 16 cells) that pinch its vertices, found again for up to this many rounds:
-// on the pyramids a point swept a few centimetres into free space left a fin of free cells out
-// of O, standing from the scene's edge to a box point in front of a camera (docs/accuracy.md,
+// After an insertion, a free pocket that cannot join alone (a vertex would not stay regular)
+// joins with the matter pieces (of at most 16 cells) that pinch its vertices, found again for up
+// to this many rounds: a point swept a few centimetres into free space can leave a fin of free
+// cells out of O, from the scene's edge to a box point in front of a camera (docs/accuracy.md,
 // "Fins in front of the cameras").
 MS_OPTION(int, pocket_pinch_rounds, 2, "pocket-pinch-rounds",
-          "rounds of pinching matter pieces joined with a free pocket that cannot join O alone "
-          "(0 = the pocket alone)",
+          "after an insertion, rounds of pinching matter pieces joined with a free pocket that "
+          "cannot join O alone (0 = the pocket alone)",
           InRange(0, 8))
 MS_OPTION(bool, grow_all_components, false, "grow-all-components",
           "grow every free-space component, not only the heaviest cell's", AnyValue())

@@ -182,10 +182,7 @@ struct ManifoldTestAccess {
   static manifold_internal::PinchJoinCounts JoinPocketsWithPinches(
       const std::vector<ManifoldCamera>& cameras, const std::vector<RayPoint>& points,
       uint32_t seed) {
-    // Build without the pinch joins of free pockets, which would take the pockets tried below.
-    ManifoldOptions options;
-    options.pocket_pinch_rounds = 0;
-    DelaunayManifold::Impl impl(cameras, options);
+    DelaunayManifold::Impl impl(cameras, ManifoldOptions{});
     impl.Build(points);
     uint64_t state = seed * 2654435761u + 7;
     std::vector<Cell_handle> o_cells;
