@@ -766,7 +766,8 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* bounda
         std::vector<Cell_handle> read = {start};
         joined = grow_shrink_.JoinPocket(pocket, /*star_min_weight=*/0, &tried, &read);
         if (joined.empty())
-          joined = grow_shrink_.JoinPocketWithPinches(pocket, kMaxPinchRounds, &read);
+          joined = grow_shrink_.JoinPocketWithPinches(pocket, kMaxPinchRounds, &read, SIZE_MAX,
+                                                      INT32_MAX);
         if (!joined.empty()) break;
         failed[key] = {labels_.relabels(), std::move(read)};
       }

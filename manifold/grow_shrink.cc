@@ -306,7 +306,7 @@ GrowShrink::TrialFlips GrowShrink::FlipIntoO(const std::vector<Cell_handle>& cel
     if (labels_.FreeOutsideO(c)) flipped.push_back(c);
   }
   for (const Cell_handle& c : matter) {
-    if (!dt_.is_infinite(c) && !c->info().outside && !labels_.IsFree(c)) flipped.push_back(c);
+    if (!dt_.is_infinite(c) && !c->info().outside) flipped.push_back(c);
   }
   // Most vertices of a small pocket belong to one of its cells; each such vertex is decided
   // now, while the labels around it are those the local test reasons from.
@@ -353,7 +353,8 @@ bool GrowShrink::CompleteFreeStar(const Vertex_handle& v, double min_weight) {
 }
 
 bool GrowShrink::AllRegularAfterTrial(const TrialFlips& trial,
-                                      std::unordered_set<const void*>* irregular) {
+                                      std::unordered_set<const void*>* irregular,
+                                      int32_t max_star) {
   // A vertex's link depends only on the labels of its own cells: the vertices of the flipped
   // cells are tested, each with the flipped cells around it.
   const std::vector<std::pair<Vertex_handle, Cell_handle>>& touched = trial.touched;
@@ -368,7 +369,7 @@ bool GrowShrink::AllRegularAfterTrial(const TrialFlips& trial,
     near.clear();
     for (; k < touched.size() && touched[k].first == w; ++k) near.push_back(touched[k].second);
     // Once one is irregular, only the stars `irregular` collects are worth a test.
-    if (!all_regular && w->info().cells > kMaxSliverStar) continue;
+    if (!all_regular && w->info().cells > max_star) continue;
     bool regular;
     if (near.size() == 1) {
       regular = trial.single_regular[first];
@@ -380,7 +381,7 @@ bool GrowShrink::AllRegularAfterTrial(const TrialFlips& trial,
     if (regular) continue;
     all_regular = false;
     if (irregular == nullptr) break;
-    if (w->info().cells <= kMaxSliverStar) irregular->insert(&*w);
+    if (w->info().cells <= max_star) irregular->insert(&*w);
   }
   return all_regular;
 }
@@ -438,16 +439,33 @@ std::vector<Cell_handle> GrowShrink::PinchingPieces(
   return pieces;
 }
 
+bool GrowShrink::FreeOutweighsMatter(const std::vector<Cell_handle>& cells) const {
+  double free_volume = 0, matter_volume = 0;
+  for (const Cell_handle& c : cells) {
+    if (dt_.is_infinite(c)) continue;
+    const double volume = std::abs(CGAL::to_double(
+        CGAL::volume(c->vertex(0)->point(), c->vertex(1)->point(), c->vertex(2)->point(),
+                     c->vertex(3)->point())));
+    (labels_.IsFree(c) ? free_volume : matter_volume) += volume;
+  }
+  return matter_volume <= free_volume;
+}
+
 std::vector<Cell_handle> GrowShrink::JoinPocketWithPinches(const std::vector<Cell_handle>& pocket,
                                                            int rounds,
                                                            std::vector<Cell_handle>* read,
-                                                           size_t max_piece_cells) {
+                                                           size_t max_piece_cells,
+                                                           int32_t max_star) {
   std::vector<Cell_handle> matter;
   for (int round = 0; round < rounds; ++round) {
     const TrialFlips trial = FlipIntoO(pocket, matter);
     if (trial.cells.empty()) return {};
     std::unordered_set<const void*> irregular;
-    if (AllRegularAfterTrial(trial, &irregular)) {
+    if (AllRegularAfterTrial(trial, &irregular, max_star)) {
+      if (max_piece_cells != SIZE_MAX && !FreeOutweighsMatter(trial.cells)) {
+        UndoFlips(trial);
+        return {};
+      }
       slivers_joined_ += static_cast<int64_t>(trial.cells.size() - pocket.size());
       return trial.cells;
     }

@@ -90,15 +90,20 @@ class GrowShrink {
                                       std::unordered_set<const void*>* tried,
                                       std::vector<Cell_handle>* read = nullptr);
   // JoinPocket's last resort for a camera's pocket (a camera stands in free space): the pocket
-  // with every matter piece that would pinch one of its vertices, whatever its size or weight,
+  // with every piece of cells not in O (matter, or another free pocket) that would pinch one of
+  // its vertices, whatever its size or weight,
   // piece by piece for up to `rounds` rounds while vertices stay irregular. Returns the cells
   // flipped (the pocket's free cells first), empty when it failed. With `read`, a failure
   // appends the pieces it tried (see JoinPocket).
-  // With `max_piece_cells`, only pieces of at most that many cells join (a free pocket that is
-  // not a camera's: a large piece is a part of the scene).
+  // With `max_piece_cells`, only pieces of at most that many cells join, and only where the
+  // pocket's free volume is at least the matter's (a free pocket that is not a camera's: a large
+  // piece is a part of the scene, and the shell behind noisy points is matter). Pinches at
+  // vertices whose star has more than `max_star` cells are not looked for (a camera's pocket
+  // looks at every one: a box point's star can be the last pinch between a camera and O).
   std::vector<Cell_handle> JoinPocketWithPinches(const std::vector<Cell_handle>& pocket, int rounds,
                                                  std::vector<Cell_handle>* read = nullptr,
-                                                 size_t max_piece_cells = SIZE_MAX);
+                                                 size_t max_piece_cells = SIZE_MAX,
+                                                 int32_t max_star = kMaxSliverStar);
   // Matter cells joined by JoinPocket and JoinPocketWithPinches with their pocket so far.
   int64_t slivers_joined() const { return slivers_joined_; }
   // Rounds of JoinPocketWithPinches that took a whole piece where O touches itself, so far.
@@ -133,8 +138,9 @@ class GrowShrink {
     std::vector<std::pair<Vertex_handle, Cell_handle>> touched;
     std::vector<char> single_regular;
   };
-  // Puts into O, in this order, the free cells of `cells` and the matter cells of `matter` that
-  // are not in O yet, and returns them for UndoFlips.
+  // Puts into O, in this order, the free cells of `cells` and the cells of `matter` (matter, or
+  // free cells of another pocket that pinches this one) that are not in O yet, and returns them
+  // for UndoFlips.
   TrialFlips FlipIntoO(const std::vector<Cell_handle>& cells,
                        const std::vector<Cell_handle>& matter = {});
   // Pinches at vertices of larger stars (the box's Steiner points) are left alone: their pieces
@@ -142,8 +148,9 @@ class GrowShrink {
   static constexpr int32_t kMaxSliverStar = 256;
   // Whether every vertex of trial.cells (flipped into O on trial) is regular. Stops at the
   // first that is not, unless `irregular` is given: then it gets every irregular vertex whose
-  // star has at most kMaxSliverStar cells.
-  bool AllRegularAfterTrial(const TrialFlips& trial, std::unordered_set<const void*>* irregular);
+  // star has at most `max_star` cells.
+  bool AllRegularAfterTrial(const TrialFlips& trial, std::unordered_set<const void*>* irregular,
+                            int32_t max_star = kMaxSliverStar);
   // Around each vertex of `irregular` (vertices of `joined`, cells in O on trial), the cells not
   // in O split into face-connected pieces: the finite cells of every piece but the largest that
   // accept(cell, piece size) takes. A pinch that O closes through such a piece goes away when
@@ -157,6 +164,9 @@ class GrowShrink {
   // their last-flip marks: a trial that is undone is no change around them, so growing and the
   // pocket joins do not test again what it touched (most of their tests on a street).
   void UndoFlips(const TrialFlips& trial);
+  // Whether the free cells of `cells` hold at least the volume of its matter cells: a pocket
+  // that would take more matter into O than the free space it brings is left out.
+  bool FreeOutweighsMatter(const std::vector<Cell_handle>& cells) const;
 
   const Delaunay& dt_;
   const ManifoldOptions& options_;
