@@ -443,9 +443,9 @@ bool GrowShrink::FreeOutweighsMatter(const std::vector<Cell_handle>& cells) cons
   double free_volume = 0, matter_volume = 0;
   for (const Cell_handle& c : cells) {
     if (dt_.is_infinite(c)) continue;
-    const double volume = std::abs(CGAL::to_double(
-        CGAL::volume(c->vertex(0)->point(), c->vertex(1)->point(), c->vertex(2)->point(),
-                     c->vertex(3)->point())));
+    const double volume =
+        std::abs(CGAL::to_double(CGAL::volume(c->vertex(0)->point(), c->vertex(1)->point(),
+                                              c->vertex(2)->point(), c->vertex(3)->point())));
     (labels_.IsFree(c) ? free_volume : matter_volume) += volume;
   }
   return matter_volume <= free_volume;
