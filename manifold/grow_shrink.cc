@@ -439,16 +439,21 @@ std::vector<Cell_handle> GrowShrink::PinchingPieces(
   return pieces;
 }
 
-bool GrowShrink::FreeOutweighsMatter(const std::vector<Cell_handle>& cells) const {
-  double free_volume = 0, matter_volume = 0;
+bool GrowShrink::FreeOutweighsObservedMatter(const std::vector<Cell_handle>& cells) const {
+  double free_volume = 0, observed_matter_volume = 0;
   for (const Cell_handle& c : cells) {
     if (dt_.is_infinite(c)) continue;
     const double volume =
         std::abs(CGAL::to_double(CGAL::volume(c->vertex(0)->point(), c->vertex(1)->point(),
                                               c->vertex(2)->point(), c->vertex(3)->point())));
-    (labels_.IsFree(c) ? free_volume : matter_volume) += volume;
+    if (labels_.IsFree(c)) {
+      free_volume += volume;
+    } else if (c->vertex(0)->info().id >= 0 && c->vertex(1)->info().id >= 0 &&
+               c->vertex(2)->info().id >= 0 && c->vertex(3)->info().id >= 0) {
+      observed_matter_volume += volume;
+    }
   }
-  return matter_volume <= free_volume;
+  return observed_matter_volume <= free_volume;
 }
 
 std::vector<Cell_handle> GrowShrink::JoinPocketWithPinches(const std::vector<Cell_handle>& pocket,
@@ -462,7 +467,7 @@ std::vector<Cell_handle> GrowShrink::JoinPocketWithPinches(const std::vector<Cel
     if (trial.cells.empty()) return {};
     std::unordered_set<const void*> irregular;
     if (AllRegularAfterTrial(trial, &irregular, max_star)) {
-      if (max_piece_cells != SIZE_MAX && !FreeOutweighsMatter(trial.cells)) {
+      if (max_piece_cells != SIZE_MAX && !FreeOutweighsObservedMatter(trial.cells)) {
         UndoFlips(trial);
         return {};
       }

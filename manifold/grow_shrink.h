@@ -96,8 +96,8 @@ class GrowShrink {
   // flipped (the pocket's free cells first), empty when it failed. With `read`, a failure
   // appends the pieces it tried (see JoinPocket).
   // With `max_piece_cells`, only pieces of at most that many cells join, and only where the
-  // pocket's free volume is at least the matter's (a free pocket that is not a camera's: a large
-  // piece is a part of the scene, and the shell behind noisy points is matter). Pinches at
+  // pocket's free volume is at least the observed matter's (a free pocket that is not a camera's:
+  // a large piece is a part of the scene, and the shell behind noisy points is matter). Pinches at
   // vertices whose star has more than `max_star` cells are not looked for (a camera's pocket
   // looks at every one: a box point's star can be the last pinch between a camera and O).
   std::vector<Cell_handle> JoinPocketWithPinches(const std::vector<Cell_handle>& pocket, int rounds,
@@ -164,9 +164,11 @@ class GrowShrink {
   // their last-flip marks: a trial that is undone is no change around them, so growing and the
   // pocket joins do not test again what it touched (most of their tests on a street).
   void UndoFlips(const TrialFlips& trial);
-  // Whether the free cells of `cells` hold at least the volume of its matter cells: a pocket
-  // that would take more matter into O than the free space it brings is left out.
-  bool FreeOutweighsMatter(const std::vector<Cell_handle>& cells) const;
+  // Whether the free cells of `cells` hold at least the volume of its matter cells spanned by
+  // input points alone (the shell between observed points; a cell with a Steiner vertex is matter
+  // by default, not by observation): a pocket that would take more of that matter into O than
+  // the free space it brings stays out.
+  bool FreeOutweighsObservedMatter(const std::vector<Cell_handle>& cells) const;
 
   const Delaunay& dt_;
   const ManifoldOptions& options_;
