@@ -187,8 +187,8 @@ TEST(PyramidAccuracy, UpwardPyramidReproducesTable1) {
 
 // With 2 grey levels of Gaussian noise in every image (docs/accuracy.md, "Table 1 with noisy
 // inputs"), which the sweep smooths away before matching (docs/sweep.md, "Noisy images"), and
-// with 5 grey levels plus sparse points moved by 1% of the viewing distance (0.03). Before the
-// smoothing the upward pyramid with 5 grey levels found no point at all (closed MAE 0.1139).
+// with 5 grey levels plus sparse points moved by 1% of the viewing distance (0.03). Without the
+// smoothing (--sweep.image-noise-target 0) the upward pyramid with 5 grey levels finds no point.
 // One run each (the noisy rows are not yet distributions), closed mesh: 0.0044.
 TEST(PyramidAccuracy, DownwardPyramidWithImageNoise) {
   ExpectTable1Row({"pyramid-down", 2, 0, 0.07, 0.0057, 0.0052, 0.965});
@@ -199,8 +199,7 @@ TEST(PyramidAccuracy, UpwardPyramidWithImageNoise) {
   ExpectTable1Row({"pyramid-up", 2, 0, 0.09, 0.0078, 0.0028, 0.945});
 }
 
-// Measured, closed (surface proper's coverage): 0.0103 (95.4%); 0.0070 when every pinched
-// pocket joined O, whatever matter it took (docs/accuracy.md, "Fins in front of the cameras").
+// Measured, closed (surface proper's coverage): 0.0103 (95.4%).
 TEST(PyramidAccuracy, DownwardPyramidWithStrongImageNoiseAndNoisyPoints) {
   ExpectTable1Row({"pyramid-down", 5, 0.03, 0.07, 0.0108, 0.0075, 0.945});
 }
