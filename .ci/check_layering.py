@@ -20,6 +20,7 @@ LAYERS = [
     ["manifold", "sweep"],
     ["refine"],
     ["coordinator", "worker", "tools"],
+    ["report"],
     ["app"],
     ["bench", "tests"],
 ]

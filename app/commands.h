@@ -35,5 +35,6 @@ void RegisterWorkerCommand(CLI::App& app);
 void RegisterKeygenCommand(CLI::App& app);
 void RegisterColmapTriangulateCommand(CLI::App& app);
 void RegisterRefineCommand(CLI::App& app);
+void RegisterReportCommand(CLI::App& app);
 
 }  // namespace ms::app

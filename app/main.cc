@@ -78,6 +78,7 @@ int main(int argc, char** argv) {
   ms::app::RegisterWorkerCommand(app);
   ms::app::RegisterKeygenCommand(app);
   ms::app::RegisterColmapTriangulateCommand(app);
+  ms::app::RegisterReportCommand(app);
   ms::app::RegisterRefineCommand(app);
 
   try {

@@ -25,6 +25,7 @@
 #include "gl/context.h"
 #include "mesh/mesh_io.h"
 #include "proto/zmq_transport.h"
+#include "report/run_report.h"
 #include "scene/scene_io.h"
 #include "sweep/sweep_kernel_factory.h"
 #include "tools/evaluate.h"
@@ -76,6 +77,8 @@ struct ReconstructCommandOptions {
   int max_restarts = -1;
   bool refine = true;  // refine final.ply into refined.ply at the end (docs/refine.md)
   RefineOptions refine_options;
+  bool report = true;  // write report.html at the end (docs/report.md)
+  ReportOptions report_options;
 };
 
 class WorkerPool {
@@ -162,6 +165,7 @@ void RunReconstruct(ReconstructCommandOptions& options) {
         dir);
   }
   setup.Check();
+  options.report_options.Check();
   InstallStopSignals();
 
   ZmqServerOptions server;
@@ -254,6 +258,14 @@ void RunReconstruct(ReconstructCommandOptions& options) {
     stop_workers();
   }
   if (default_scene) ReportDefaultSceneAccuracy(setup.output_dir, default_dir);
+  if (options.report) {
+    // The meshes are written: a report that cannot be made is a warning, not a failed run.
+    try {
+      WriteRunReport(setup.output_dir, options.report_options);
+    } catch (const std::exception& e) {
+      spdlog::warn("the run report was not written: {}", e.what());
+    }
+  }
 }
 
 }  // namespace
@@ -288,6 +300,10 @@ void RegisterReconstructCommand(CLI::App& app) {
                 "keeping it a closed 2-manifold (docs/refine.md); --no-refine stops at final.ply");
   AddRunOptions(cmd, &options->coordinator);
   AddOptionGroup(cmd, &options->refine_options);
+  cmd->add_flag("--report,!--no-report", options->report,
+                "write report.html, the run report, into the output folder at the end "
+                "(docs/report.md); --no-report skips it");
+  AddOptionGroup(cmd, &options->report_options);
   cmd->callback([options] { RunReconstruct(*options); });
 }
 

@@ -157,7 +157,7 @@ void RefineMeshFile(const std::string& input, const std::string& mesh_path,
   write_options.binary = !ascii;
   WriteMesh(mesh, output, write_options);
   RemoveRefineCheckpoint(output);
-  WriteRefineDone(output, done_fingerprint);
+  WriteRefineDone(output, done_fingerprint, stats, OptionGroupValues(refine));
   const MeshReport after = CheckMesh(mesh);
   std::printf("refined %s -> %s: %d iterations, %.1f s, final energy %.4f; check-mesh: %s\n",
               mesh_path.c_str(), output.c_str(), static_cast<int>(stats.iterations.size()),

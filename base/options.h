@@ -132,13 +132,25 @@ void CheckOptionGroup(const Options& options) {
       options, [](const auto& value, const OptionSpec& spec) { CheckOptionValue(value, spec); });
 }
 
+// {"manifold.w1", "4"}, ...: every option of the group with its value as the user types it,
+// in declaration order (summary.json and the run report record them).
+using OptionValues = std::vector<std::pair<std::string, std::string>>;
+template <typename Options>
+OptionValues OptionGroupValues(const Options& options) {
+  OptionValues values;
+  Options::ForEachOption(options, [&](const auto& value, const OptionSpec& spec) {
+    values.emplace_back(spec.Key(), OptionValueText(value));
+  });
+  return values;
+}
+
 // "manifold.w1=4 manifold.w2=0.5 ...": every option of the group, for fingerprints and logs.
 template <typename Options>
 std::string OptionGroupText(const Options& options) {
   std::string text;
-  Options::ForEachOption(options, [&](const auto& value, const OptionSpec& spec) {
-    text += fmt::format("{}{}={}", text.empty() ? "" : " ", spec.Key(), OptionValueText(value));
-  });
+  for (const auto& [key, value] : OptionGroupValues(options)) {
+    text += fmt::format("{}{}={}", text.empty() ? "" : " ", key, value);
+  }
   return text;
 }
 

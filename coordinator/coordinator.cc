@@ -56,6 +56,16 @@ std::string OptionsFingerprint(const CoordinatorOptions& o) {
   return HashHex(HashBytes(text));
 }
 
+OptionValues CoordinatorOptionValues(const CoordinatorOptions& o) {
+  OptionValues values;
+  for (OptionValues group :
+       {OptionGroupValues(o.run), OptionGroupValues(o.manifold), OptionGroupValues(o.neighbours),
+        OptionGroupValues(o.visible), OptionGroupValues(o.sweep), OptionGroupValues(o.scheduler)}) {
+    values.insert(values.end(), group.begin(), group.end());
+  }
+  return values;
+}
+
 class Coordinator::Impl {
  public:
   Impl(const CoordinatorOptions& options, ServerTransport* transport)

@@ -63,6 +63,9 @@ struct CoordinatorResult {
 // Options that change the result, as a fingerprint stored in checkpoints: a resumed run must
 // use the same ones.
 std::string OptionsFingerprint(const CoordinatorOptions& options);
+// Every option of the groups a run takes (run, manifold, neighbours, visible, sweep, scheduler)
+// with its value, in declaration order: summary.json records them for the run report.
+OptionValues CoordinatorOptionValues(const CoordinatorOptions& options);
 
 class Coordinator {
  public:

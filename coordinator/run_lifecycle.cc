@@ -416,6 +416,10 @@ RunSummaryInfo RunLifecycle::SummaryInfo(const std::string& status) const {
   RunSummaryInfo info;
   info.status = status;
   info.input = options_.input;
+  if (!options_.input.empty()) {
+    info.input_absolute = std::filesystem::absolute(options_.input).lexically_normal().string();
+  }
+  info.options = CoordinatorOptionValues(options_);
   info.seconds = process_timer_.Seconds();
   info.resumed = resumed_;
   if (status == "finished") {

@@ -303,6 +303,9 @@ void WriteSummaryJson(const RunRecord& record, const RunSummaryInfo& info,
   json j;
   j["status"] = info.status;
   j["input"] = info.input;
+  j["input_absolute"] = info.input_absolute;
+  j["options"] = json::object();
+  for (const auto& [key, value] : info.options) j["options"][key] = value;
   j["resumed"] = info.resumed;
   j["stop_reason"] = record.stop_reason;
   j["scene"] = {{"views", record.scene.views.size()},

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "base/options.h"
 #include "manifold/delaunay_manifold.h"
 #include "scene/scene.h"
 
@@ -110,10 +111,12 @@ RunRecord ReadRunFile(const std::string& path);
 
 // summary.json: scene, options, per-iteration statistics, worker counts, final mesh.
 struct RunSummaryInfo {
-  std::string status;      // "running", "finished", "interrupted", "failed"
-  std::string input;       // the scene file
-  std::string final_mesh;  // path, when finished
-  std::string mesh_check;  // one line from CheckMesh of the final mesh
+  std::string status;          // "running", "finished", "interrupted", "failed"
+  std::string input;           // the scene file, as given
+  std::string input_absolute;  // the same, absolute (the report finds it from anywhere)
+  OptionValues options;        // every option of the run (CoordinatorOptionValues)
+  std::string final_mesh;      // path, when finished
+  std::string mesh_check;      // one line from CheckMesh of the final mesh
   bool final_is_closed_manifold = false;
   double seconds = 0;  // wall time of this process
   bool resumed = false;

@@ -19,7 +19,9 @@ PACKAGES=(
   # tests, benchmarks, fuzzing
   libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
   # independent tools: mesh reader + Poisson baseline, SfM for camera-only datasets, cluster
-  python3 python3-numpy python3-open3d colmap slurm-wlm
+  python3 python3-numpy python3-open3d python3-pil colmap slurm-wlm
+  # the run report's browser test
+  chromium
   # benchmark plots (bench/scalability)
   python3-matplotlib
 )

@@ -90,13 +90,27 @@ void RemoveRefineCheckpoint(const std::string& output) {
   }
 }
 
-void WriteRefineDone(const std::string& output, const std::string& fingerprint) {
+std::string RefineDonePath(const std::string& output) { return DonePath(output); }
+
+void WriteRefineDone(const std::string& output, const std::string& fingerprint,
+                     const RefineStats& stats, const OptionValues& options) {
   const FileHash hash = HashFile(output);
-  const nlohmann::json j = {{"format", "manisweep refine done"},
-                            {"version", 1},
-                            {"fingerprint", fingerprint},
-                            {"size", hash.size},
-                            {"hash", HashHex(hash.hash)}};
+  nlohmann::json j = {{"format", "manisweep refine done"},  {"version", 1},
+                      {"fingerprint", fingerprint},         {"size", hash.size},
+                      {"hash", HashHex(hash.hash)},         {"seconds", stats.seconds},
+                      {"final_energy", stats.final_energy}, {"splits", stats.splits},
+                      {"collapses", stats.collapses},       {"flips", stats.flips}};
+  j["options"] = nlohmann::json::object();
+  for (const auto& [key, value] : options) j["options"][key] = value;
+  j["iterations"] = nlohmann::json::array();
+  for (const RefineIteration& it : stats.iterations) {
+    j["iterations"].push_back({{"level", it.level},
+                               {"iteration", it.iteration},
+                               {"energy", it.energy},
+                               {"rejected", it.rejected},
+                               {"moved", it.moved},
+                               {"seconds", it.seconds}});
+  }
   WriteFileAtomically(
       DonePath(output), [&](std::ostream& os) { os << j.dump(2) << "\n"; }, false);
 }

@@ -33,9 +33,13 @@ std::optional<RefineCheckpoint> ReadRefineCheckpoint(const std::string& output,
 void RemoveRefineCheckpoint(const std::string& output);
 
 // A finished refinement's record beside the output O, O.done.json: the fingerprint (which
-// should name the starting mesh's content) and O's size and content hash. `--resume` on a
+// should name the starting mesh's content), O's size and content hash, the options and the
+// iterations of the process that finished it (the run report plots them). `--resume` on a
 // finished run skips the refinement when RefineIsDone says the output is that record's.
-void WriteRefineDone(const std::string& output, const std::string& fingerprint);
+void WriteRefineDone(const std::string& output, const std::string& fingerprint,
+                     const RefineStats& stats, const OptionValues& options);
+// O.done.json's path.
+std::string RefineDonePath(const std::string& output);
 bool RefineIsDone(const std::string& output, const std::string& fingerprint);
 
 }  // namespace ms

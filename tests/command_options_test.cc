@@ -13,6 +13,7 @@
 #include "coordinator/coordinator.h"
 #include "manifold/manifold_options.h"
 #include "mesh/visible_mesh.h"
+#include "report/report_options.h"
 #include "scene/view_selection.h"
 #include "sweep/sweep_options.h"
 #include "worker/worker_process.h"
@@ -76,6 +77,11 @@ TEST(CommandOptions, CoordinatorTakesEveryOptionOfARun) {
   ExpectHelpListsEveryFlag(
       "coordinator", FlagsOf<RunOptions, ManifoldOptions, NeighbourOptions, VisibleMeshOptions,
                              SchedulerOptions, SweepOptions>());
+}
+
+TEST(CommandOptions, ReportAndReconstructTakeEveryReportOption) {
+  ExpectHelpListsEveryFlag("report", FlagsOf<ReportOptions>());
+  ExpectHelpListsEveryFlag("reconstruct", FlagsOf<ReportOptions>());
 }
 
 TEST(CommandOptions, ManifoldTakesEveryManifoldOption) {
