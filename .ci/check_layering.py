@@ -3,7 +3,7 @@
 
 The layers, bottom to top. A folder may include its own files and those of folders in lower
 layers; folders in the same layer never include each other (the coordinator and the worker,
-the manifold and the sweep). docs/architecture.md shows the same order (checked here too).
+the manifold and the sweep). docs/design/architecture.md shows the same order (checked here too).
 """
 import pathlib
 import re
@@ -29,7 +29,7 @@ INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_0-9]+)/')
 
 
 def layer_line():
-    """The order as docs/architecture.md writes it."""
+    """The order as docs/design/architecture.md writes it."""
     parts = [g[0] if len(g) == 1 else "{" + ", ".join(g) + "}" for g in LAYERS]
     return " → ".join(parts)
 
@@ -55,9 +55,10 @@ def main():
             if level[target] >= level[folder]:
                 how = "the same layer" if level[target] == level[folder] else "a higher layer"
                 problems.append(f"{name}:{number}: includes {target}/, {how} than {folder}/")
-    docs = (root / "docs" / "architecture.md").read_text()
+    docs = (root / "docs" / "design" / "architecture.md").read_text()
     if layer_line() not in docs:
-        problems.append(f"docs/architecture.md does not show the layer order: {layer_line()}")
+        problems.append(
+            f"docs/design/architecture.md does not show the layer order: {layer_line()}")
     for problem in problems:
         print(problem)
     print(f"layering: {len(files)} files, {len(problems)} problems")

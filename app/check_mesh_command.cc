@@ -16,7 +16,7 @@ namespace ms::app {
 namespace {
 
 // Exit code for "read fine, not a valid manifold" (0 valid, 2 unreadable; see
-// docs/mesh-checker.md).
+// docs/reference/mesh-checker.md).
 constexpr int kExitNotManifold = 3;
 
 struct CheckMeshCommandOptions {

@@ -1,6 +1,6 @@
 // `manisweep colmap-triangulate`: the documented route from cameras with known poses (Strecha,
 // Middlebury, or any scene format) to a sparse point cloud with visibility, through Debian's
-// colmap. See docs/colmap-route.md and tools/colmap_triangulate.h.
+// colmap. See docs/reference/colmap-route.md and tools/colmap_triangulate.h.
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 

@@ -1,5 +1,5 @@
 // `manisweep convert`: reads a scene in one format and writes it in another (see
-// docs/formats.md for what each format holds and what a conversion loses).
+// docs/reference/formats.md for what each format holds and what a conversion loses).
 #include <memory>
 #include <string>
 

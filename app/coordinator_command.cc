@@ -1,7 +1,7 @@
 // `manisweep coordinator`: the coordinator process of a distributed run. Binds a ZeroMQ ROUTER,
 // builds the initial manifold, hands sweep jobs to the workers that connect, inserts their
-// points, checkpoints after every iteration (docs/distributed.md, proto/PROTOCOL.md); with
-// --refine, the same workers then compute the refinement's gradients (docs/refine.md).
+// points, checkpoints after every iteration (docs/design/distributed.md, proto/PROTOCOL.md); with
+// --refine, the same workers then compute the refinement's gradients (docs/design/refine.md).
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -25,7 +25,7 @@ struct CoordinatorCommandOptions {
   std::string curve_secret_key;
   std::string curve_public_keys;
   bool insecure = false;
-  bool refine = false;  // refine final.ply into refined.ply on the workers (docs/refine.md)
+  bool refine = false;  // refine final.ply into refined.ply on the workers (docs/design/refine.md)
   RefineOptions refine_options;
 };
 

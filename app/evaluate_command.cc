@@ -1,5 +1,5 @@
 // `manisweep evaluate`: depth-map accuracy of meshes against a ground-truth mesh, as in the
-// paper's section 3 (tools/evaluate.h, docs/evaluation.md).
+// paper's section 3 (tools/evaluate.h, docs/reference/evaluation.md).
 #include <cstdio>
 #include <filesystem>
 #include <memory>

@@ -75,9 +75,9 @@ struct ReconstructCommandOptions {
   int worker_threads = 0;
   std::string kernel = "auto";
   int max_restarts = -1;
-  bool refine = true;  // refine final.ply into refined.ply at the end (docs/refine.md)
+  bool refine = true;  // refine final.ply into refined.ply at the end (docs/design/refine.md)
   RefineOptions refine_options;
-  bool report = true;  // write report.html at the end (docs/report.md)
+  bool report = true;  // write report.html at the end (docs/guides/report.md)
   ReportOptions report_options;
 };
 
@@ -177,7 +177,7 @@ void RunReconstruct(ReconstructCommandOptions& options) {
   const int workers = options.workers > 0 ? options.workers : cores;
   // One thread more than the worker's share of the cores: the CPU kernel hands offsets out one
   // at a time, so while every worker sweeps they share the cores, and a job left alone at the
-  // end of an iteration also takes the core its neighbour freed (docs/performance.md).
+  // end of an iteration also takes the core its neighbour freed (docs/design/performance.md).
   const int threads = options.worker_threads > 0
                           ? options.worker_threads
                           : std::min(cores, std::max(1, cores / workers) + 1);

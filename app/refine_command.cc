@@ -1,5 +1,5 @@
-// `manisweep refine`: photometric refinement of a mesh (refine/refiner.h, docs/refine.md) that
-// keeps it a closed 2-manifold without self-intersections. The per-pair gradients run on this
+// `manisweep refine`: photometric refinement of a mesh (refine/refiner.h, docs/design/refine.md)
+// that keeps it a closed 2-manifold without self-intersections. The per-pair gradients run on this
 // machine's cores, or on workers (RefineWorkers: `reconstruct --refine`, `coordinator --refine`).
 #include <fmt/format.h>
 

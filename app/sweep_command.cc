@@ -1,6 +1,6 @@
-// `manisweep sweep`: one camera's mesh sweep (paper section 2.2, docs/sweep.md), for debugging
-// and benchmarking: reads the scene and the mesh, picks the camera's neighbours and the part of
-// the mesh it sees, sweeps, and writes the points found (PLY, NCC as the "quality" scalar).
+// `manisweep sweep`: one camera's mesh sweep (paper section 2.2, docs/design/sweep.md), for
+// debugging and benchmarking: reads the scene and the mesh, picks the camera's neighbours and the
+// part of the mesh it sees, sweeps, and writes the points found (PLY, NCC as the "quality" scalar).
 #include <fmt/ranges.h>
 
 #include <memory>

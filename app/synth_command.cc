@@ -1,5 +1,5 @@
 // `manisweep synth <scene> --output DIR`: a synthetic dataset with exact ground truth
-// (tools/synth.h, docs/synth.md).
+// (tools/synth.h, docs/reference/synth.md).
 #include <memory>
 #include <optional>
 

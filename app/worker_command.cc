@@ -1,6 +1,6 @@
 // `manisweep worker`: a sweep worker. Connects to a coordinator, pulls jobs, runs the sweep
 // kernel, returns points; reconnects when the coordinator goes away, exits on its Shutdown
-// (docs/distributed.md, proto/PROTOCOL.md).
+// (docs/design/distributed.md, proto/PROTOCOL.md).
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 

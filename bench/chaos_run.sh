@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The long chaos run (docs/reliability.md): tests/distributed/chaos_test.py for several seeds with
+# The long chaos run (docs/design/reliability.md): tests/distributed/chaos_test.py for several seeds with
 # many kills each, 15 iterations; prints the kills survived per seed and fails on the first run
 # whose final mesh differs from the undisturbed one.
 #

@@ -1,4 +1,4 @@
-// Throughput of the manifold reconstruction steps (docs/performance.md):
+// Throughput of the manifold reconstruction steps (docs/design/performance.md):
 //   manifold_bench [points ...] [--insert=N] [--export=DIR] [--graded-steiner=hidden|on|off]
 //                  [--steiner-grid=N] [--steiner-min-spacing=X] [--steiner-clearance=X]
 //                  [--regrow-seeds=boundary|changed] [--join-pockets=on|off] [--threads=N]

@@ -3,7 +3,7 @@
 #   bench/manifold_vs_poisson.sh [BUILD_DIR] [sizes...]      default: build 10000 100000 1000000
 # Time and peak memory of each; check-mesh (the project's independent checker) on both
 # outputs: exact topology only here (--no-self-intersections; --allow-float-issues, which the
-# Poisson meshes would fail as well), the comparison being about manifoldness. Numbers go to docs/performance.md.
+# Poisson meshes would fail as well), the comparison being about manifoldness. Numbers go to docs/design/performance.md.
 set -euo pipefail
 BUILD=${1:-build}; shift || true
 SIZES=${*:-10000 100000 1000000}

@@ -1,5 +1,5 @@
 // The multiply-add rate of one core: the ceiling the CPU sweep kernel's NCC is measured against
-// (docs/performance.md, "What 100 M hypotheses/s per core would take"). Twelve independent
+// (docs/design/performance.md, "What 100 M hypotheses/s per core would take"). Twelve independent
 // chains of vector multiply-adds (more than the latency times the pipes), 8 floats per
 // instruction (AVX2) and, where the processor has it, 16 (AVX-512, as the kernel's passes use);
 // one thread, best of three runs.

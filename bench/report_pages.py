@@ -1,8 +1,8 @@
 #!/usr/bin/python3
-"""The run report's cost and weight (docs/report.md): for each run folder, `manisweep report`'s
+"""The run report's cost and weight (docs/guides/report.md): for each run folder, `manisweep report`'s
 wall time and peak memory, the page's size, and how long Chromium (headless) takes to load it,
 with the page's own check (images decoded, script errors). Writes one JSON (machine, commit,
-date, command) and prints the markdown table docs/report.md shows.
+date, command) and prints the markdown table docs/guides/report.md shows.
 
   bench/report_pages.py --out docs/results/report_pages.json LABEL=RUN_DIR [LABEL=RUN_DIR ...]
   bench/report_pages.py --table docs/results/report_pages.json

@@ -7,7 +7,7 @@
 //
 // Per kernel and size: hypotheses per second of wall time (what one worker delivers) and per
 // second of process CPU time (per core), the stage seconds (CPU seconds, summed over threads)
-// and the tile winners shared with the reference where it ran. Numbers: docs/performance.md.
+// and the tile winners shared with the reference where it ran. Numbers: docs/design/performance.md.
 //
 //   sweep_kernels_bench [--sizes 640x480,1536x1024,3072x2048] [--kernels cpu,cpu:2,reference,glsl]
 //                       [--rounds 3] [--output results.tsv] [--sweep.winners-must-move ...]

@@ -3,7 +3,7 @@
 // per iteration extracts the surface, sends one sweep job per camera to the workers, collects
 // their points, sorts them by (camera, pixel) and inserts them, writes statistics and a
 // checkpoint, and stops when no point was inserted or after max_iterations
-// (docs/distributed.md, proto/PROTOCOL.md).
+// (docs/design/distributed.md, proto/PROTOCOL.md).
 //
 // The network loop runs on the calling thread and never blocks on the manifold: building,
 // inserting, extracting and checkpointing run on a background thread meanwhile, so heartbeats

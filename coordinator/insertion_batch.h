@@ -50,7 +50,7 @@ constexpr double kPixelTolerance = 0.5;
 // that does not list C first, lists a camera twice or one that is not C or its neighbours; a
 // pixel outside C's image; a position that does not project to its pixel (within
 // kPixelTolerance) or lies outside the swept depth range. A worker can thus only return points
-// of the kind the sweep of that job could find (docs/distributed.md).
+// of the kind the sweep of that job could find (docs/design/distributed.md).
 std::string ValidateResultPoints(const wire::Result& result, const JobBounds& job,
                                  std::vector<FoundPoint>* points);
 

@@ -3,10 +3,10 @@
 // hash) that workers read directly or fetch from the coordinator (image_catalog.h).
 //
 // Jobs are built when they are handed out, not all at once: an iteration's jobs together are
-// about half as large as the manifold (docs/scalability.md, "Memory per point"), and building
-// them while the first ones are swept takes the building off the coordinator's serial path. A
-// job is a function of the iteration's mesh and the scene only, so a job built again (its lease
-// expired, its worker died) is the same message.
+// about half as large as the manifold (docs/design/scalability.md, "Memory per point"), and
+// building them while the first ones are swept takes the building off the coordinator's serial
+// path. A job is a function of the iteration's mesh and the scene only, so a job built again (its
+// lease expired, its worker died) is the same message.
 #pragma once
 
 #include <cstdint>

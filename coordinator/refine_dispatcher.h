@@ -1,4 +1,4 @@
-// Photometric refinement on the workers (docs/refine.md "Distributed"): every refinement
+// Photometric refinement on the workers (docs/design/refine.md "Distributed"): every refinement
 // iteration, one job per camera pair (the pair, the whole mesh, the pyramid level, the refine
 // options) goes to the workers of a bound transport, which return the pair's gradient
 // (refine/refine_wire.h); the refiner sums them in pair order, so the refined mesh is the same

@@ -141,7 +141,7 @@ class RunLifecycle {
   double early_seconds_ = 0;
   // The closed manifold (from Extract until the iteration's meshes are written), and the surface
   // proper (without the Steiner faces that close it): what the sweep jobs are built from
-  // (docs/manifold.md), shared with the iteration's job source.
+  // (docs/design/manifold.md), shared with the iteration's job source.
   Mesh mesh_;
   std::shared_ptr<const Mesh> surface_;
   SurfaceInfo surface_info_;  // of mesh_

@@ -1,4 +1,5 @@
-// What a coordinator run leaves in its output directory and how it resumes (docs/distributed.md):
+// What a coordinator run leaves in its output directory and how it resumes
+// (docs/design/distributed.md):
 //
 //   initial.ply          the surface after Build (the paper's initial manifold)
 //   iteration_NN.ply     the surface after iteration NN (with --save-iterations)

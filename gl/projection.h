@@ -5,8 +5,9 @@
 // GlProjection maps image y straight to window y (y_window = y_image), so framebuffer row r
 // holds image row r: read-backs need no flip and a texture made from an image is sampled at
 // v = y / height. Consequence: the picture is mirrored vertically in GL's own terms, so a face
-// that is counter-clockwise seen from the camera (the project's "front", docs/conventions.md)
-// is clockwise in window space: cull with glFrontFace(GL_CW) + glCullFace(GL_BACK).
+// that is counter-clockwise seen from the camera (the project's "front",
+// docs/reference/conventions.md) is clockwise in window space: cull with glFrontFace(GL_CW) +
+// glCullFace(GL_BACK).
 //
 // Depth: the camera-space z of a fragment is affine in the triangle, so it is interpolated
 // exactly (perspective-correct) and shaders write it to a float target; the hardware depth

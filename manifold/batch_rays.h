@@ -1,5 +1,5 @@
 // BatchRays: the insertion's per-ray bookkeeping for the recount of the cells it creates
-// (docs/manifold.md, "Incremental insertion"). Internal to manifold/; no CGAL.
+// (docs/design/manifold.md, "Incremental insertion"). Internal to manifold/; no CGAL.
 #pragma once
 
 #include <cstddef>
@@ -10,7 +10,7 @@ namespace ms::manifold_detail {
 
 // What an insertion batch knows of each ray in the index (by its id), stored only for the
 // rays it touched: most rays are never marked in a batch, and three values for every ray
-// were 120 bytes a point at 10 rays a point (docs/scalability.md, "Memory per point").
+// were 120 bytes a point at 10 rays a point (docs/design/scalability.md, "Memory per point").
 class BatchRays {
  public:
   struct State {

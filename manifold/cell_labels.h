@@ -1,4 +1,4 @@
-// The labels and weights of the cells (paper section 2.1, docs/manifold.md): the visibility
+// The labels and weights of the cells (paper section 2.1, docs/design/manifold.md): the visibility
 // weight of a cell from the rays counted on it and its neighbours, whether it is free space,
 // and the set O of outside cells with the per-vertex counts that keep the manifold tests
 // (regularity.h) local. Internal to manifold/.
@@ -61,7 +61,7 @@ class CellLabels {
     if (dt_.is_infinite(c)) return false;
     // With graded Steiner points, a cell of Steiner points only is empty space (no input point
     // in its circumsphere): free without rays, so the free space stays one region around the
-    // cameras instead of narrow cones that growing cannot carve (docs/manifold.md).
+    // cameras instead of narrow cones that growing cannot carve (docs/design/manifold.md).
     if (graded_ && c->vertex(0)->info().id < 0 && c->vertex(1)->info().id < 0 &&
         c->vertex(2)->info().id < 0 && c->vertex(3)->info().id < 0) {
       return true;

@@ -1,7 +1,7 @@
 // Stateless exact predicates on one cell of the triangulation and a segment a -> b (a viewing
 // ray: camera -> point): which faces the end points are beyond, whether the open segment meets
 // the open cell, through which face it leaves. Every decision is a CGAL orientation test (exact);
-// docs/manifold.md derives them. Internal to manifold/.
+// docs/design/manifold.md derives them. Internal to manifold/.
 //
 // Inline: the ray walks (ray_walker.h) call them in every step, and they stay inlined into the
 // walks' inner loops as they were when everything sat in one file.

@@ -1,5 +1,5 @@
 // DelaunayManifold: Build and Insert as short lists of named steps over the pieces listed in
-// manifold_impl.h, surface extraction, and the public class's forwarding (docs/manifold.md).
+// manifold_impl.h, surface extraction, and the public class's forwarding (docs/design/manifold.md).
 #include "manifold/delaunay_manifold.h"
 
 #include <algorithm>
@@ -317,7 +317,7 @@ void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
   const int64_t slivers_before = grow_shrink_.slivers_joined();
   stats->camera_stars_completed = FreeEnclosedCameras(nullptr);
   // Without the pinch joins: on sparse SfM points they take real matter into O, and the fins
-  // they mend come from insertions (docs/accuracy.md, "Fins in front of the cameras").
+  // they mend come from insertions (docs/design/accuracy.md, "Fins in front of the cameras").
   stats->pockets_joined = JoinFreePockets(RegrowSeeds::kBoundary, 0, /*pinch_rounds=*/0);
   stats->slivers_joined = grow_shrink_.slivers_joined() - slivers_before;
   stats->outside_cells = labels_.outside_count();
@@ -740,7 +740,7 @@ bool FlippedAroundSince(const std::vector<manifold_detail::Cell_handle>& cells, 
 int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* boundary) {
   constexpr size_t kMaxPocketCells = 1 << 16;
   // Rounds of pinching matter added to a camera's pocket (camera 5 of the upward pyramid with
-  // --sweep.winners-must-move took 3; docs/manifold.md "Known limits").
+  // --sweep.winners-must-move took 3; docs/design/manifold.md "Known limits").
   constexpr int kMaxPinchRounds = 8;
   // A camera's pocket that could not join, with the cells its trial read: it fails again
   // until a cell around their vertices flips. Each star completed used to try every camera
@@ -788,7 +788,7 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* bounda
 
 // Growing adds one cell at a time, so a pocket of free space that touches O only where each
 // single cell would pinch the surface stays out of O, and with it what lies behind it: on open
-// scenes such pockets stand in front of the cameras as fins of matter (docs/manifold.md,
+// scenes such pockets stand in front of the cameras as fins of matter (docs/design/manifold.md,
 // "Pockets of free space"). Each pocket next to O joins whole if every vertex stays regular,
 // else the free cells around one of its surface vertices at a time (each vertex tried once a
 // round, and only if those cells are well crossed); growing goes on from what joined. Later rounds
@@ -801,11 +801,12 @@ int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t chan
   constexpr size_t kMaxPocketCells = 1 << 16;
   // A vertex's free cells join only if each weighs twice the free threshold (two crossing
   // rays): on castle-P30, whose sparse points are noisy, joining singly-crossed cells too cost
-  // 1.6 points of photo-consistency; the street keeps its gain without them (docs/manifold.md).
+  // 1.6 points of photo-consistency; the street keeps its gain without them
+  // (docs/design/manifold.md).
   const double star_min_weight = 2 * options_.free_threshold;
   // A free pocket joins with the matter that pinches it (--manifold.pocket-pinch-rounds) only
   // piece by piece of at most this many cells: larger pieces are the scene. Fewer leave fins on
-  // the pyramids, more take the street's buildings into O (docs/accuracy.md measures both).
+  // the pyramids, more take the street's buildings into O (docs/design/accuracy.md measures both).
   constexpr size_t kMaxPinchPieceCells = 16;
   struct Refused {
     std::vector<Cell_handle> pocket;

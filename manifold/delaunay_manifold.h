@@ -1,6 +1,6 @@
 // The coordinator's core state: a 3D Delaunay triangulation of the points (CGAL, exact
 // predicates), the visibility weights of its cells, and the set O of "outside" cells whose
-// boundary is the manifold surface (paper section 2.1 and 2.3, docs/manifold.md).
+// boundary is the manifold surface (paper section 2.1 and 2.3, docs/design/manifold.md).
 //
 //   DelaunayManifold manifold(cameras, options);
 //   manifold.Build(points);              // Delaunay, ray tracing, growing
@@ -157,7 +157,7 @@ class DelaunayManifold {
   // Insert, whose cost should follow the batch, does not report it; Build does.
   int64_t num_free_cells_inside() const;
   // Cameras whose centre lies in no cell of O: a camera stands in free space, so from such a
-  // camera the surface is seen from inside the matter (docs/manifold.md, "Known limits").
+  // camera the surface is seen from inside the matter (docs/design/manifold.md, "Known limits").
   // Locates only cameras whose start cell an insertion destroyed.
   std::vector<int32_t> CamerasInMatter();
   size_t MemoryBytes() const;  // estimate of the triangulation + ray data

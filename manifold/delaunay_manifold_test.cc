@@ -721,7 +721,7 @@ TEST(DelaunayManifold, DuplicatesOfNewPointsAddEachRayOnce) {
 // The paper's regrowing (from every free cell on the boundary of O) leaves O maximal after every
 // batch: no free cell next to O could still join it. Seeding only from cells the batch touched
 // misses cells that new rays freed far from the batch: here points found inside the sphere, whose
-// rays cross the old surface well before they reach the new vertex (docs/manifold.md).
+// rays cross the old surface well before they reach the new vertex (docs/design/manifold.md).
 TEST(DelaunayManifold, RegrowingFromTheWholeBoundaryLeavesOMaximal) {
   int64_t missed_by_changed = 0;
   for (uint32_t seed = 1; seed <= 3; ++seed) {
@@ -754,7 +754,7 @@ TEST(DelaunayManifold, RegrowingFromTheWholeBoundaryLeavesOMaximal) {
 
 // Refusals kept aside and woken by the flips around them give the same growing, cell for cell
 // and in the same order, as queueing every refusal again each time. (Leaving out the flips
-// between growings fails it; on these scenes, and on the street of docs/scalability.md, no
+// between growings fails it; on these scenes, and on the street of docs/design/scalability.md, no
 // refusal woken by a flip within a growing joined that a face neighbour's queueing missed.)
 TEST(DelaunayManifold, KeptRefusalsGrowLikeRequeuedOnes) {
   int64_t joins = 0, shrinks = 0, grown = 0;

@@ -1,5 +1,5 @@
-// Growing and shrinking of O (paper sections 2.1 and 2.3, docs/manifold.md): cells flip into O
-// heaviest first, or out of O around a new point's conflict region, each flip only where the
+// Growing and shrinking of O (paper sections 2.1 and 2.3, docs/design/manifold.md): cells flip into
+// O heaviest first, or out of O around a new point's conflict region, each flip only where the
 // boundary of O stays a 2-manifold (regularity.h). Internal to manifold/.
 #pragma once
 

@@ -1,4 +1,4 @@
-// DelaunayManifold's state and its steps (paper sections 2.1 and 2.3, docs/manifold.md).
+// DelaunayManifold's state and its steps (paper sections 2.1 and 2.3, docs/design/manifold.md).
 // Internal to manifold/ (and the test hooks, manifold_test_hooks.cc): it names CGAL types.
 //
 // The pieces it combines, bottom up:

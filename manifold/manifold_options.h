@@ -11,7 +11,7 @@
 
 namespace ms {
 
-// Which face neighbours of a crossed cell a viewing ray gives w2 to (docs/manifold.md).
+// Which face neighbours of a crossed cell a viewing ray gives w2 to (docs/design/manifold.md).
 enum class W2Rule {
   // Only neighbours on the camera's side of the shared face: between the camera and the
   // crossed cell, never beyond it (behind the observed surface). The default.
@@ -25,7 +25,8 @@ const std::vector<std::pair<const char*, W2Rule>>& OptionChoices(W2Rule);
 enum class GradedSteiner { kHidden, kOn, kOff };
 const std::vector<std::pair<const char*, GradedSteiner>>& OptionChoices(GradedSteiner);
 
-// Where regrowing starts after an insertion batch (--manifold.regrow-seeds, docs/manifold.md).
+// Where regrowing starts after an insertion batch (--manifold.regrow-seeds,
+// docs/design/manifold.md).
 enum class RegrowSeeds {
   // Every free cell sharing a face with O (the paper): any cell the batch made free, anywhere
   // along the new rays, is tried, so O is maximal again afterwards.

@@ -1,5 +1,5 @@
-// The options of the manifold reconstruction (paper sections 2.1 and 2.3, docs/manifold.md), one
-// line each: MS_OPTION(type, name, default, flag, help, bound). Included by
+// The options of the manifold reconstruction (paper sections 2.1 and 2.3, docs/design/manifold.md),
+// one line each: MS_OPTION(type, name, default, flag, help, bound). Included by
 // manifold/manifold_options.h only (no include guard on purpose).
 
 // Ray tracing: every cell crossed by a camera->point segment gets w1, and its face neighbours
@@ -27,7 +27,7 @@ MS_OPTION(int, steiner_grid, 3, "steiner-grid",
 // (inside objects, under the ground: they keep long cells from joining a facade to the far box
 // points, which rays then carve through) and those in open air that rays cross densely
 // (manifold/steiner_sight.h), the default at every size; off: the paper's box grid only
-// (docs/manifold.md compares them).
+// (docs/design/manifold.md compares them).
 MS_OPTION(GradedSteiner, steiner_graded, GradedSteiner::kHidden, "graded-steiner",
           "graded Steiner points in the empty space: hidden (those behind what every camera "
           "sees, and in open air far from the points), on (all, cells of Steiner points only "
@@ -45,7 +45,7 @@ MS_OPTION(double, steiner_min_spacing, 6.0, "steiner-min-spacing",
 // checker's default float tolerance (1e-6 of a mesh's diagonal, and every mesh lies in the box), so
 // no merged pair is one the checker flags. Without merging, SfM tracks triangulated 1e-8 apart and
 // swept points on top of vertices make faces that floating-point tools see as self-intersecting
-// (docs/manifold.md).
+// (docs/design/manifold.md).
 MS_OPTION(double, merge_pixels, 0.5, "merge-pixels",
           "input points closer than this fraction of a pixel's footprint at their depth are one "
           "point",
@@ -68,29 +68,29 @@ MS_OPTION(bool, float_cleanup, true, "float-cleanup",
 // Incremental insertion: E, the cells shrunk out of O before inserting a point, is the conflict
 // region D plus its face neighbours (0), every cell sharing a vertex with D (1), or the face
 // neighbours first and, only if D still meets O, the stars of D's vertices that are points, not
-// Steiner points (2; docs/accuracy.md "Both as options").
+// Steiner points (2; docs/design/accuracy.md "Both as options").
 MS_OPTION(int, shrink_neighbourhood, 0, "shrink-neighbourhood",
           "cells shrunk before an insertion: 0 = conflict region + face neighbours, 1 = + every "
           "cell sharing a vertex, 2 = 0, then the stars of its points (not Steiner points) "
           "where 0 is not enough",
           InRange(0, 2))
 // Regrowing after an insertion batch: from every free cell on the boundary of O (the paper) or
-// only from those with a vertex the batch touched (docs/manifold.md compares them).
+// only from those with a vertex the batch touched (docs/design/manifold.md compares them).
 MS_OPTION(RegrowSeeds, regrow_seeds, RegrowSeeds::kBoundary, "regrow-seeds",
           "where regrowing starts after an insertion batch: boundary (every free cell on the "
           "boundary of O, the paper) or changed (only cells with a vertex the batch touched)",
           AnyValue())
 // Growing adds one cell at a time; a pocket of free space that touches O only where any single
 // cell would pinch the surface joins whole, or a surface vertex's free cells at a time
-// (docs/manifold.md, "Pockets of free space").
+// (docs/design/manifold.md, "Pockets of free space").
 MS_OPTION(bool, join_pockets, true, "join-pockets",
           "after growing, join pockets of free space that growing cannot enter one cell at a time",
           AnyValue())
 // After an insertion, a free pocket that cannot join alone (a vertex would not stay regular)
 // joins with the matter pieces (of at most 16 cells) that pinch its vertices, found again for up
 // to this many rounds: a point swept a few centimetres into free space can leave a fin of free
-// cells out of O, from the scene's edge to a box point in front of a camera (docs/accuracy.md,
-// "Fins in front of the cameras").
+// cells out of O, from the scene's edge to a box point in front of a camera
+// (docs/design/accuracy.md, "Fins in front of the cameras").
 MS_OPTION(int, pocket_pinch_rounds, 2, "pocket-pinch-rounds",
           "after an insertion, rounds of pinching matter pieces joined with a free pocket that "
           "cannot join O alone (0 = the pocket alone)",

@@ -1,4 +1,4 @@
-// Walks many viewing rays on several threads and counts their crossings (docs/manifold.md,
+// Walks many viewing rays on several threads and counts their crossings (docs/design/manifold.md,
 // "Ray tracing on several cores"). The walks only read the triangulation (RayWalker's *With
 // walks, a LocalMarks and a WalkScratch per thread) and count with atomic increments
 // (CellLabels::CountCrossingConcurrently). A count is a sum of ones, so the counts are exactly
@@ -55,7 +55,7 @@ class ParallelWalks {
     // Each thread walks the blocks of its own stretch of the rays, then helps the others with
     // theirs: threads far apart in the rays' order (camera by camera) rarely count on the same
     // cells at once. Alternate blocks of one camera's rays had both threads counting on the
-    // cells beside it, whose cache lines then pass between the cores (docs/manifold.md).
+    // cells beside it, whose cache lines then pass between the cores (docs/design/manifold.md).
     std::vector<Stretch> stretches(threads);
     for (size_t t = 0; t < threads; ++t) {
       stretches[t].next = blocks * t / threads;

@@ -6,8 +6,8 @@
 // box's nearest depth. Conservative: it may return rays that miss the box, never omits one
 // that hits it.
 //
-// Scale (docs/scalability.md): each camera's grid grows with its rays (about kRaysPerBucket a
-// bucket, up to `grid` per side), so thousands of cameras with a few thousand rays each do not
+// Scale (docs/design/scalability.md): each camera's grid grows with its rays (about kRaysPerBucket
+// a bucket, up to `grid` per side), so thousands of cameras with a few thousand rays each do not
 // each hold a full grid; and a query skips every camera whose rays' bounding box (the camera
 // centre and the end points) misses the box, so its cost follows the cameras near the box, not
 // all of them.

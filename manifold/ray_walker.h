@@ -1,5 +1,5 @@
 // Walks viewing rays (open segments camera -> point) through the triangulation and reports
-// every cell they cross, with the faces the ray spreads w2 across (docs/manifold.md, "Ray
+// every cell they cross, with the faces the ray spreads w2 across (docs/design/manifold.md, "Ray
 // tracing"): forwards from the camera (Walk), backwards from the point (WalkBack, for the
 // insertion's recount), and an exhaustive fallback for degenerate segments. Internal to
 // manifold/.

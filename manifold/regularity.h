@@ -1,5 +1,5 @@
-// The manifold tests of growing and shrinking (paper section 2.1, docs/manifold.md): does the
-// boundary of O stay a 2-manifold when one cell flips into or out of O? A fast (V,E,F) count
+// The manifold tests of growing and shrinking (paper section 2.1, docs/design/manifold.md): does
+// the boundary of O stay a 2-manifold when one cell flips into or out of O? A fast (V,E,F) count
 // first, then an exact link test per vertex; and the exhaustive vertex test that Validate and
 // the tests check the fast ones against. Internal to manifold/.
 #pragma once

@@ -1,4 +1,4 @@
-// Which graded Steiner points to keep, from what the cameras see (docs/manifold.md, "Steiner
+// Which graded Steiner points to keep, from what the cameras see (docs/design/manifold.md, "Steiner
 // points"). Inside objects, under the ground and behind walls a graded point breaks the long
 // cells that would otherwise join a facade to the far box points (viewing rays cross those
 // cells and carve the corners of buildings away). In front of the surface, where few rays go,

@@ -32,7 +32,8 @@ struct VertexInfo {
 };
 
 // 20 bytes, which CGAL's cell (8 handles and a byte of its own) lays out in 88 bytes: at 5 cells
-// a point every 4 bytes here cost 20 bytes a point (docs/scalability.md, "Memory per point").
+// a point every 4 bytes here cost 20 bytes a point (docs/design/scalability.md, "Memory per
+// point").
 struct CellInfo {
   // A spread count at this value lives in CellLabels' overflow table: only cells beside the
   // cameras of large scenes pass 65,534.

@@ -337,8 +337,8 @@ TEST(FloatCleanup, ProblemsPastTheChecksListLimitAreCleanedAlike) {
   EXPECT_EQ(mesh.faces, reference.faces);
 }
 
-// 74 faces cut from the 4,096-camera street's final mesh (metres; docs/scalability.md) around
-// two pairs that the cleanup could not separate: faces 1–3 cm across, crumpled, where every
+// 74 faces cut from the 4,096-camera street's final mesh (metres; docs/design/scalability.md)
+// around two pairs that the cleanup could not separate: faces 1–3 cm across, crumpled, where every
 // collapse of the pairs' own corners folds a face and every move does too. Collapsing an edge
 // of a neighbour changes their surroundings until the pairs go. (An open patch: the check's
 // tolerance and the collapse bound are set to the whole mesh's.)

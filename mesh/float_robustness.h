@@ -2,7 +2,7 @@
 // MeshLab, game and physics engines) will see in it, next to the exact verdict of the checker
 // (mesh/mesh_checker.h). A mesh can be a valid closed 2-manifold in exact arithmetic and still
 // have two distinct vertices 1e-7 m apart, or needle faces whose neighbours cross them after
-// rounding; such a mesh "self-intersects" in Open3D. See docs/mesh-checker.md.
+// rounding; such a mesh "self-intersects" in Open3D. See docs/reference/mesh-checker.md.
 //
 // Everything here is computed in double precision on purpose (no exact predicates).
 #pragma once

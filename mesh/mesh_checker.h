@@ -1,5 +1,6 @@
 // The independent manifold checker: reads only a Mesh (what a file holds), never the builder's
-// data structures, so tests of the builder cannot share its bugs. See docs/mesh-checker.md.
+// data structures, so tests of the builder cannot share its bugs. See
+// docs/reference/mesh-checker.md.
 //
 // A vertex is regular (the paper's Fig. 1, after Litvinov & Lhuillier) when the edges opposite
 // to it form one closed path without loops; with boundaries allowed, one open path is also

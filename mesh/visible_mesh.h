@@ -32,8 +32,8 @@ struct VisibleMesh {
 bool TriangleInFrustum(const View& view, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                        const Eigen::Vector3d& c, double margin_px = 0, double near = 0);
 
-// True if the face's front side (counter-clockwise side, docs/conventions.md) faces the camera
-// centre. Degenerate faces face nothing.
+// True if the face's front side (counter-clockwise side, docs/reference/conventions.md) faces the
+// camera centre. Degenerate faces face nothing.
 bool TriangleFacesCamera(const View& view, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                          const Eigen::Vector3d& c);
 

@@ -1,4 +1,4 @@
-// Moving the vertices of a mesh without breaking it (docs/refine.md "Keeping the manifold"):
+// Moving the vertices of a mesh without breaking it (docs/design/refine.md "Keeping the manifold"):
 // the thin-plate regulariser's gradient, and moves that are halved or refused where they would
 // make the mesh self-intersect, bring two faces (or two vertices) within the floating-point
 // tolerance, or turn a face too far. The faces are never changed, so a closed 2-manifold stays

@@ -133,7 +133,7 @@ PairGradient ComputePairGradientReference(const Mesh& mesh, const RefineView& re
   const cv::Mat sm = window(m), si = window(mi), sj = window(mj);
   const cv::Mat sii = window(mi.mul(I)), sjj = window(mj.mul(J)), sij = window(mi.mul(J));
 
-  // Per defined pixel p, the coefficients of dZNCC_p/dJ(q) (docs/refine.md):
+  // Per defined pixel p, the coefficients of dZNCC_p/dJ(q) (docs/design/refine.md):
   //   G(p - q) m(q) [a(p) (I(q) - mu_I(p)) - b(p) (J(q) - mu_J(p))],
   // a = 1 / (S_m sqrt(var_I var_J)), b = ZNCC / (S_m var_J).
   const int h = m.rows, w = m.cols;

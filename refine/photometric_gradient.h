@@ -1,5 +1,5 @@
 // The photometric energy of a mesh for one pair of cameras and its gradient with respect to the
-// mesh's vertices (docs/refine.md), in the image-domain form of Vu et al. (PAMI 2012) after
+// mesh's vertices (docs/design/refine.md), in the image-domain form of Vu et al. (PAMI 2012) after
 // Pons et al. (IJCV 2007): the neighbour's image is reprojected into the reference camera
 // through the mesh, and
 //   E = sum over the reference's pixels p with a defined ZNCC of (1 - ZNCC_p),

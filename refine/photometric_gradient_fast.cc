@@ -283,7 +283,7 @@ PairGradient ComputePairGradientFast(const Mesh& mesh, const RefineView& referen
   window(b, &gb);
   window(b_mu, &gb_mu);
 
-  // The chain rule (docs/refine.md), summed per face in pixel order, then per vertex in face
+  // The chain rule (docs/design/refine.md), summed per face in pixel order, then per vertex in face
   // order: dE/dv_k = sum_p dE/dd(p) phi_k(p) unit / cos(p).
   ws.sums.assign(mesh.faces.size(), FaceSums());
   const PixelRays rays(vi);

@@ -1,4 +1,5 @@
-// Checkpoints of `manisweep refine` (docs/refine.md "Checkpoints"): beside the output mesh O,
+// Checkpoints of `manisweep refine` (docs/design/refine.md "Checkpoints"): beside the output mesh
+// O,
 //   O.checkpoint.ply           the mesh as it stands (faces included: remeshing changes them)
 //   O.checkpoint.accepted.ply  the last accepted vertices (backtracking), when there are any
 //   O.checkpoint.json          the rest of RefineState, and the options it was made with

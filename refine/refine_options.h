@@ -1,5 +1,5 @@
-// Options of photometric refinement (docs/refine.md). The list is refine/refine_options_def.h;
-// base/options.h derives the checks and the command line from it.
+// Options of photometric refinement (docs/design/refine.md). The list is
+// refine/refine_options_def.h; base/options.h derives the checks and the command line from it.
 #pragma once
 
 #include <string>

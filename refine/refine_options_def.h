@@ -1,4 +1,4 @@
-// The options of photometric refinement (docs/refine.md), one line each:
+// The options of photometric refinement (docs/design/refine.md), one line each:
 //   MS_OPTION(type, name, default, flag, help, bound)
 // Expanded by base/option_group_members.h in refine/refine_options.h (no include guard).
 
@@ -6,7 +6,7 @@
 // images halved until they fit max_image_dimension (0: full size; 1600 as the sweep's default,
 // a quarter of the pixels of a 3072×2048 set at a quarter of the time). Iterations are split
 // evenly over the levels, the finest taking what is left over.
-// 30: on fountain-P11 most of 100 iterations' gain at 30% of the time (docs/refine.md).
+// 30: on fountain-P11 most of 100 iterations' gain at 30% of the time (docs/design/refine.md).
 MS_OPTION(int, iterations, 30, "iterations", "gradient steps in all, over all levels",
           InRange(0, 100000))
 MS_OPTION(int, levels, 3, "levels", "image scales, coarse to fine (each half the next)",
@@ -24,7 +24,7 @@ MS_OPTION(double, min_texture_variance, 1e-4, "min-texture-variance",
 // its camera z at most (1 + this) x the neighbour's depth map there.
 MS_OPTION(double, occlusion_tolerance, 0.01, "occlusion-tolerance",
           "relative depth tolerance of the visibility test in the neighbour", Above(0))
-// The step (docs/refine.md "Step"): a vertex moves by -step x g / H, where g is the energy's
+// The step (docs/design/refine.md "Step"): a vertex moves by -step x g / H, where g is the energy's
 // gradient and H the squared parallax rate of its pixels (a Gauss-Newton scale: one unit of
 // `step` moves a vertex by about one pixel of reprojection shift per unit of normalised
 // gradient), and never by more than max_step_px pixels of reprojection shift.

@@ -1,6 +1,6 @@
 // A camera pair's gradient on the wire (proto/manisweep.proto PairGradient): the refinement
-// jobs that workers compute (docs/refine.md "Distributed"). Only the vertices the pair touches
-// travel; summing the unpacked gradients in pair order gives the bits the local sum gives.
+// jobs that workers compute (docs/design/refine.md "Distributed"). Only the vertices the pair
+// touches travel; summing the unpacked gradients in pair order gives the bits the local sum gives.
 #pragma once
 
 #include <cstddef>

@@ -55,7 +55,7 @@ PairGradient SumPairs(const Mesh& mesh, const std::vector<RefineView>& views, in
   return total;
 }
 
-// The step of docs/refine.md: -step x g / H per vertex (a Gauss-Newton scale), at most
+// The step of docs/design/refine.md: -step x g / H per vertex (a Gauss-Newton scale), at most
 // max_step_px pixels of reprojection shift, plus the thin plate's -smoothness x dE_s/dv; all
 // times `scale` (backtracking, in (0, 1]). The thin plate moves only vertices the images move
 // (H > 0): alone it shrinks what no camera sees, such as the closed mesh's matter above the
@@ -109,7 +109,7 @@ double Footprint(const std::vector<RefineView>& views, const Eigen::Vector3d& x)
   return best;
 }
 
-// Remeshing at the start of a level (docs/refine.md "Remeshing"): collapses, splits, flips,
+// Remeshing at the start of a level (docs/design/refine.md "Remeshing"): collapses, splits, flips,
 // with edge lengths in pixels of `views`.
 void Remesh(Mesh* mesh, const std::vector<RefineView>& views, const RefineOptions& options,
             double tolerance, RefineStats* stats) {

@@ -1,5 +1,5 @@
 // Photometric refinement of a mesh that keeps it a closed 2-manifold without self-intersections
-// (docs/refine.md): coarse-to-fine gradient descent on the pairwise ZNCC energy
+// (docs/design/refine.md): coarse-to-fine gradient descent on the pairwise ZNCC energy
 // (refine/photometric_gradient.h) plus a thin-plate term, every step applied by
 // MoveVerticesSafely (refine/mesh_moves.h). The faces are never changed.
 //
@@ -75,7 +75,7 @@ RefineView RefineViewAtLevel(const SweepCamera& camera, int level);
 // The gradient of every pair of `pairs` for `mesh` at pyramid level `level`, in pair order
 // (the refiner sums them in that order). Returns false if interrupted: RefineMesh then throws
 // RefineInterrupted. The default computes them here on `threads`; the coordinator's
-// RefineDispatcher computes them on workers (docs/refine.md "Distributed").
+// RefineDispatcher computes them on workers (docs/design/refine.md "Distributed").
 using PairGradientSource =
     std::function<bool(const Mesh& mesh, int level, std::vector<PairGradient>* per_pair)>;
 

@@ -1,4 +1,4 @@
-// Remeshing during refinement (docs/refine.md "Remeshing"): edges longer than the image
+// Remeshing during refinement (docs/design/refine.md "Remeshing"): edges longer than the image
 // resolution asks for are split at their midpoints, so detail finer than the starting mesh can
 // appear; edges shorter than it resolves are collapsed; edges of nearly flat face pairs are
 // flipped where that rounds the faces. A split replaces

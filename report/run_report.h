@@ -2,7 +2,7 @@
 // self-contained HTML page, report.html in the run folder, holding the run's input and options,
 // per-iteration figures as charts, the initial, swept and refined meshes pictured from a few
 // cameras beside the photographs, check-mesh and photo-consistency per mesh, and the accuracy
-// table when the scene has a ground truth (docs/report.md).
+// table when the scene has a ground truth (docs/guides/report.md).
 #pragma once
 
 #include <string>

@@ -1,6 +1,6 @@
 // Calibrated camera: intrinsics (pinhole + radial/tangential distortion) and pose.
 //
-// Conventions (docs/conventions.md):
+// Conventions (docs/reference/conventions.md):
 // - Image coordinates put the top-left corner of the image at (0,0), so the centre of pixel
 //   (col,row) is (col+0.5, row+0.5) (COLMAP's convention, and OpenGL's window coordinates).
 //   Principal points are taken from each format as given.

@@ -5,7 +5,7 @@
 // (cx, cy) under FixedK, so image sizes come from the image files. The radial term k is
 // VisualSFM's own model on *measured* points, m_undistorted = m (1 + k |m|^2) in normalised
 // units; it is converted to OpenCV's (k1, k2, k3) by a least-squares fit over the image, whose
-// largest error is logged (exact when k = 0). See docs/formats.md.
+// largest error is logged (exact when k = 0). See docs/reference/formats.md.
 #pragma once
 
 #include <string>

@@ -6,8 +6,8 @@
 namespace ms {
 namespace {
 
-// Scene group layout (docs/hdf5.md). Per-view values are one 1-D dataset per field so that
-// h5py/h5dump users see names, not column indices.
+// Scene group layout (docs/reference/hdf5.md). Per-view values are one 1-D dataset per field so
+// that h5py/h5dump users see names, not column indices.
 constexpr const char* kViewDoubles[] = {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"};
 
 double* ViewDouble(Intrinsics& k, int i) {

@@ -1,4 +1,4 @@
-// The scene in HDF5 (scene.h5), manisweep's canonical scene store. Layout: docs/hdf5.md.
+// The scene in HDF5 (scene.h5), manisweep's canonical scene store. Layout: docs/reference/hdf5.md.
 //
 // Everything round-trips bit for bit: doubles as IEEE float64, pixel coordinates as float32
 // (NaN included), colours as uint8. Reading checks the format version, every shape and the

@@ -1,5 +1,5 @@
 #version 430 core
-// Photometric gradient, last pass: the chain rule per pixel (docs/refine.md "Its gradient"):
+// Photometric gradient, last pass: the chain rule per pixel (docs/design/refine.md "Its gradient"):
 // dE/dd = -(I G*a - G*(a mu_I) - J G*b + G*(b mu_J)) dJ/dd, written with what the vertices need
 // from the pixel: (dE/dd / cos, parallax^2 / cos^2, phi0, phi1). The CPU sums them per face.
 layout(local_size_x = 16, local_size_y = 8) in;

@@ -1,5 +1,5 @@
 #version 430 core
-// Photometric gradient, first pass (docs/refine.md "The energy"): for every reference pixel
+// Photometric gradient, first pass (docs/design/refine.md "The energy"): for every reference pixel
 // that sees a face, the neighbour's image through the mesh (bilinear, with its exact
 // derivatives), where the neighbour sees the point and the ray meets the face steeply enough.
 // Writes the window's inputs m, mI, mJ, mI^2 / mJ^2, mIJ, dJ/dd, |d(neighbour pixel)/dd|^2 and

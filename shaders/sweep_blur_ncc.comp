@@ -1,5 +1,5 @@
 #version 430 core
-// NCC, second pass (docs/sweep.md "NCC"): Gaussian sums along columns of the row pass's sums,
+// NCC, second pass (docs/design/sweep.md "NCC"): Gaussian sums along columns of the row pass's sums,
 // then the weighted NCC per pixel, in double as the reference:
 //   W = G(m), mu_I = G(mI)/W, var_I = G(mI^2)/W - mu_I^2, likewise J, cov = G(mIJ)/W - mu_I mu_J,
 //   NCC = cov / sqrt(var_I var_J) clamped to [-1, 1],

@@ -1,5 +1,5 @@
 #version 430 core
-// NCC, first pass (docs/sweep.md "NCC"): Gaussian sums along image rows of
+// NCC, first pass (docs/design/sweep.md "NCC"): Gaussian sums along image rows of
 // m, m I, m J, m I^2, m J^2, m I J (I, J shifted by -0.5) from the reprojection (layer u_layer of
 // the batch's reprojection array, written by sweep_reproject.comp).
 // Written transposed when TRANSPOSED (the column pass then reads rows again: contiguous memory,

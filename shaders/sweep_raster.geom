@@ -1,5 +1,5 @@
 #version 430 core
-// Mesh sweeping (paper section 2.2, docs/sweep.md "Sweeping"): every facet is moved as a whole
+// Mesh sweeping (paper section 2.2, docs/design/sweep.md "Sweeping"): every facet is moved as a whole
 // along C's viewing rays, v' = v + alpha_k |cos(theta)| d with d = (v - C)/|v - C| and
 // cos(theta) = n.d, n the facet's unit normal from its unswept vertices (zero for a degenerate
 // facet, which then does not move). Positive k moves a facet away from C whatever its

@@ -1,5 +1,5 @@
 #version 430 core
-// Mesh sweeping, rasterization (worker/glsl_sweep.cc, docs/sweep.md): the job's mesh, vertices
+// Mesh sweeping, rasterization (worker/glsl_sweep.cc, docs/design/sweep.md): the job's mesh, vertices
 // relative to the kernel's origin (float precision far from the world origin). One instance per
 // offset k of the batch; the geometry shader sweeps each facet and routes it to layer
 // gl_InstanceID of the layered target.

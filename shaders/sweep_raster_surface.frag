@@ -1,5 +1,5 @@
 #version 430 core
-// Swept mesh M_k seen from C (sweep/glsl_sweep.cc, docs/sweep.md): camera z and face index of
+// Swept mesh M_k seen from C (sweep/glsl_sweep.cc, docs/design/sweep.md): camera z and face index of
 // the nearest surface, 8 bytes a fragment. World positions and reprojections are computed
 // afterwards, once per pixel, by sweep_reproject.comp: GPUs built for compute (H100) have few
 // raster output units, and writing them here (48 bytes a fragment, overdrawn ones included)

@@ -1,5 +1,5 @@
 #version 430 core
-// Per pixel of C and offset of the batch (sweep/glsl_sweep.cc, docs/sweep.md): the world
+// Per pixel of C and offset of the batch (sweep/glsl_sweep.cc, docs/design/sweep.md): the world
 // position of the surface C sees (on C's ray through the pixel centre, at the camera z of
 // sweep_raster_surface.frag) with its face, and each neighbour's image reprojected through it
 // (sweep_reproject.glsl). Runs over the padded width: outside the image, and where C sees no

@@ -1,4 +1,4 @@
-// I_k^j: neighbour j's image reprojected into C through the swept mesh M_k (docs/sweep.md,
+// I_k^j: neighbour j's image reprojected into C through the swept mesh M_k (docs/design/sweep.md,
 // "Reprojection"), for C's surface point `world` (relative to the origin) on layer `layer`.
 // Valid if the point is in front of the neighbour, projects to (u, v) within
 // [0.5, W-0.5] x [0.5, H-0.5] (between texel centres: no clamping needed) and its depth is at

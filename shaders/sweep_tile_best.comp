@@ -1,5 +1,5 @@
 #version 430 core
-// Tile-best reduction of one batch of offsets (docs/sweep.md "Tile-best"): one work group per
+// Tile-best reduction of one batch of offsets (docs/design/sweep.md "Tile-best"): one work group per
 // tile finds the pixel with the highest NCC over the batch's offsets and all neighbours, ties to
 // the smaller k, then the earlier neighbour, then the earlier pixel in row-major order, and
 // replaces the tile's running best if strictly higher (running bests start at t_NCC; batches run

@@ -154,7 +154,7 @@ __attribute__((target("avx2,fma"))) void ReprojectRowAvx2(
     GatherPairs(image, pair_index, &e, &f);
     // C's next row reads the neighbour's rows just below these (where the cameras are upright):
     // ask for them now. Without this the gathers wait on memory: the hardware prefetchers do not
-    // foresee a path that crosses the neighbour's rows at a slant (measured: docs/sweep.md).
+    // foresee a path that crosses the neighbour's rows at a slant (measured: docs/design/sweep.md).
     PrefetchRowBelow(image, pair_index, p.width, last_image);
     PrefetchRowBelow(shadow, shadow_index, p.width, last_image);
     a = _mm256_blendv_ps(a, b, at_last);

@@ -1,5 +1,5 @@
-// The fast CPU sweep kernel (docs/sweep.md "The fast CPU kernel"): the reference's hypotheses and
-// tile-best rule (sweep/reference_sweep.h) computed for speed:
+// The fast CPU sweep kernel (docs/design/sweep.md "The fast CPU kernel"): the reference's
+// hypotheses and tile-best rule (sweep/reference_sweep.h) computed for speed:
 // - span rasterisation of 1/z and face ids in float (sweep/span_raster.h), the same coverage;
 // - reprojection through C's 1/z in float, branch-free so that it vectorises (AVX2 gathers);
 // - the Gaussian-weighted NCC by Deriche's recursive Gaussian in O(1) per pixel, fused into two

@@ -1,7 +1,7 @@
 // The fast CPU kernel (sweep/cpu_sweep.h) against the exact reference, piece by piece: the
 // recursive Gaussian against GaussianWindow, the span rasteriser against SoftwareRasterizer, the
 // recursive NCC against WeightedNcc, and end to end the same tile winners on the parity scenes
-// (the GLSL kernel's, sweep/glsl_sweep_test.cc). Tolerances are those of docs/sweep.md.
+// (the GLSL kernel's, sweep/glsl_sweep_test.cc). Tolerances are those of docs/design/sweep.md.
 #include "sweep/cpu_sweep.h"
 
 #include <gtest/gtest.h>
@@ -50,7 +50,7 @@ TEST(RecursiveGaussian, TapsFollowTheTruncatedGaussian) {
     }
     EXPECT_NEAR(sum, 1.0, 1e-12);
     EXPECT_EQ(g.Tap(g.radius + 1), 0);
-    EXPECT_LT(worst, 6e-4 * peak);  // docs/sweep.md
+    EXPECT_LT(worst, 6e-4 * peak);  // docs/design/sweep.md
     EXPECT_LT(l1, 1e-3);
   }
 }

@@ -1,5 +1,5 @@
-// The GLSL mesh-sweeping kernel (paper section 2.2; docs/sweep.md "The GLSL kernel"): the same
-// hypotheses, conventions and tie-breaking as the C++ reference (sweep/reference_sweep.h), on
+// The GLSL mesh-sweeping kernel (paper section 2.2; docs/design/sweep.md "The GLSL kernel"): the
+// same hypotheses, conventions and tie-breaking as the C++ reference (sweep/reference_sweep.h), on
 // the GPU through a headless EGL context (NVIDIA's driver, or Mesa's llvmpipe without a GPU).
 //
 // Per batch of offsets k (texture arrays, one layer per offset): one instanced draw whose

@@ -1,5 +1,5 @@
-// The GLSL sweep kernel against the C++ reference (docs/sweep.md "The GLSL kernel"): per stage
-// (swept mesh seen from C, shadow maps, reprojection, NCC) and end to end, for both blur
+// The GLSL sweep kernel against the C++ reference (docs/design/sweep.md "The GLSL kernel"): per
+// stage (swept mesh seen from C, shadow maps, reprojection, NCC) and end to end, for both blur
 // variants, on llvmpipe in CI (on a GPU where there is one). Tolerances are those of the docs.
 #include "sweep/glsl_sweep.h"
 
@@ -53,7 +53,7 @@ class GlslSweepTest : public gl::SharedGlContextTest {
 GlslSweepKernel* GlslSweepTest::loops_ = nullptr;
 GlslSweepKernel* GlslSweepTest::unrolled_ = nullptr;
 
-// The reference's steps for offset k (docs/sweep.md), as ReferenceSweepKernel runs them.
+// The reference's steps for offset k (docs/design/sweep.md), as ReferenceSweepKernel runs them.
 struct ReferenceStages {
   PreparedSweep prep;
   std::unique_ptr<SoftwareRasterizer> camera;

@@ -1,4 +1,4 @@
-// Image noise and the smoothing that keeps t_NCC meaningful under it (docs/sweep.md, "Noisy
+// Image noise and the smoothing that keeps t_NCC meaningful under it (docs/design/sweep.md, "Noisy
 // images"). With texture variance v and noise variance n in both images, the NCC of a perfect
 // match is about v / (v + n): at 5 grey levels of noise few true matches reach the paper's
 // t_NCC = 0.98. Smoothing both images with a Gaussian of sigma s divides white noise's variance
@@ -24,7 +24,7 @@ inline constexpr double kSmoothingStepPx = 0.05;
 // [1 -2 1; -2 4 -2; 1 -2 1], here over each block of kNoiseBlockPx^2 interior pixels, and the
 // kNoiseQuantile quantile of the blocks' figures (5-10% under the truth on pure noise). Flat
 // (clipped, synthetic) regions read as 0. Well-exposed photographs give 0.3-0.4 grey levels
-// (docs/sweep.md). 0 for images smaller than 3 x 3.
+// (docs/design/sweep.md). 0 for images smaller than 3 x 3.
 double EstimateNoiseSigma(const cv::Mat& gray);
 
 // The Gaussian's sigma (pixels) that brings white noise of `noise_sigma` down to about

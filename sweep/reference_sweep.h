@@ -1,5 +1,6 @@
 // The C++ reference of the mesh-sweeping kernel: exactly the paper's math (section 2.2) on the
-// CPU with OpenCV, written for clarity and as the yardstick of the GLSL kernel (docs/sweep.md).
+// CPU with OpenCV, written for clarity and as the yardstick of the GLSL kernel
+// (docs/design/sweep.md).
 #pragma once
 
 #include <Eigen/Core>

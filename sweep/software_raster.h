@@ -1,7 +1,7 @@
-// A small software rasterizer with the rules the GLSL sweep must follow (docs/sweep.md), so the
-// two can be compared pixel by pixel:
+// A small software rasterizer with the rules the GLSL sweep must follow (docs/design/sweep.md), so
+// the two can be compared pixel by pixel:
 // - pinhole projection u = fx x/z + cx, v = fy y/z + cy; pixel (col, row) is sampled at its
-//   centre (col + 0.5, row + 0.5) (corner-origin convention, docs/conventions.md);
+//   centre (col + 0.5, row + 0.5) (corner-origin convention, docs/reference/conventions.md);
 // - triangles are clipped against the near plane z = near in camera space, never culled;
 // - coverage by edge functions with the top-left fill rule (in y-down image coordinates), so
 //   triangles sharing an edge never both cover a pixel and leave no gap;

@@ -1,6 +1,6 @@
-// The mesh-sweeping kernel (paper section 2.2, docs/sweep.md): given a camera C, its neighbour
-// cameras, their images and the part of the mesh C sees, sweep every facet along C's viewing
-// rays, match C's image against each neighbour's image reprojected through every swept mesh
+// The mesh-sweeping kernel (paper section 2.2, docs/design/sweep.md): given a camera C, its
+// neighbour cameras, their images and the part of the mesh C sees, sweep every facet along C's
+// viewing rays, match C's image against each neighbour's image reprojected through every swept mesh
 // (Gaussian-weighted NCC) and return the best point of every image tile.
 //
 // This header holds what every implementation shares: the job, its options and result, the
@@ -155,7 +155,7 @@ void SmoothNoisyImages(const SweepOptions& options, PreparedSweep* prep);
 // Checks the job (CheckSweepJob), picks the pyramid level, resizes images (cv::INTER_AREA) and
 // scales intrinsics (fx, cx by the width ratio, fy, cy by the height ratio: exact with the
 // corner-origin convention), smooths noisy images (SmoothNoisyImages), and derives alpha
-// (docs/sweep.md).
+// (docs/design/sweep.md).
 PreparedSweep PrepareSweep(const SweepJob& job);
 
 // The stats every kernel knows before sweeping: the swept resolution, level, alpha, median

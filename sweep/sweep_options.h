@@ -1,5 +1,5 @@
-// Options of the mesh sweep (paper section 2.2, docs/sweep.md), sent with every job. The list is
-// sweep/sweep_options_def.h; base/options.h derives the checks, the command line, the
+// Options of the mesh sweep (paper section 2.2, docs/design/sweep.md), sent with every job. The
+// list is sweep/sweep_options_def.h; base/options.h derives the checks, the command line, the
 // fingerprint and the wire codec from it.
 #pragma once
 

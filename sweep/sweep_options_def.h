@@ -1,4 +1,4 @@
-// The options of the mesh sweep (paper section 2.2, docs/sweep.md), one line each:
+// The options of the mesh sweep (paper section 2.2, docs/design/sweep.md), one line each:
 //   MS_OPTION(type, name, default, flag, help, bound)
 // Expanded by base/option_group_members.h in sweep/sweep_options.h (no include guard); the wire
 // message ms.wire.SweepOptions in proto/manisweep.proto has one field of the same name per line.
@@ -20,8 +20,8 @@ MS_OPTION(double, alpha_parallax_px, 1.0, "alpha-parallax-px",
 MS_OPTION(double, ncc_threshold, 0.98, "ncc-threshold", "t_NCC: keep tile winners above this",
           InRange(-1, 1))
 // A pixel matched by one neighbour alone is an outlier 5-50 times as often as one matched by
-// two (docs/sweep.md "Matching neighbours"). 0 and 1 both mean any one neighbour (the paper);
-// jobs with fewer neighbours, or pixels fewer neighbours see, need all of theirs.
+// two (docs/design/sweep.md "Matching neighbours"). 0 and 1 both mean any one neighbour (the
+// paper); jobs with fewer neighbours, or pixels fewer neighbours see, need all of theirs.
 MS_OPTION(int, min_matching_neighbours, 2, "min-matching-neighbours",
           "a tile's winning pixel needs this many neighbours to support it at its offset: its own "
           "above t_NCC, the others above --sweep.support-ncc (fewer where fewer see the pixel, "
@@ -29,8 +29,8 @@ MS_OPTION(int, min_matching_neighbours, 2, "min-matching-neighbours",
           InRange(0, 64))
 // Also where the other neighbours do not see the pixel: single-neighbour points were the
 // street's outliers (1.07% beyond Sigma against 0.11%). With winners that must move, which
-// insert 2-3 times as many points, the street needs it (docs/accuracy.md "Winners that move the
-// surface").
+// insert 2-3 times as many points, the street needs it (docs/design/accuracy.md "Winners that move
+// the surface").
 MS_OPTION(bool, strict_support, true, "strict-support",
           "a neighbour that does not see a pixel counts as not supporting it, so "
           "min-matching-neighbours binds everywhere (on by default; =false: where fewer "
@@ -41,7 +41,8 @@ MS_OPTION(bool, strict_support, true, "strict-support",
 // before, and all went as duplicates or conflicts: the loop stalls. With this, k = 0 competes for
 // nothing and a pixel competes at k != 0 only where it matches the neighbour better than the
 // unswept mesh does there. With strict support Table 1's errors fall 1.4-2.7 times and the
-// street ends 39-53% below its initial mesh (docs/accuracy.md "Winners that move the surface").
+// street ends 39-53% below its initial mesh (docs/design/accuracy.md "Winners that move the
+// surface").
 MS_OPTION(bool, winners_must_move, true, "winners-must-move",
           "tile winners only at offsets k != 0 that match better than the unswept mesh (k = 0) "
           "at their pixel (on by default; =false: the paper's rule, k = 0 competes like any "
@@ -60,7 +61,7 @@ MS_OPTION(int, tile_size_px, 100, "tile-size-px",
           "tile size (swept-resolution pixels); one point per tile at most", AtLeast(1))
 // Tiles counted per image instead, the same at any swept resolution: the longer side has this
 // many. 16 halves Table 1's downward error but stalls the upward pyramid's sweep with noisy
-// images (docs/accuracy.md "Tiles counted per image"), so it is not the default.
+// images (docs/design/accuracy.md "Tiles counted per image"), so it is not the default.
 MS_OPTION(int, tiles_across, 0, "tiles-across",
           "tiles along the image's longer side, overriding tile-size-px (0 = use tile-size-px)",
           InRange(0, 4096))
@@ -75,7 +76,7 @@ MS_OPTION(double, occlusion_tolerance, 0.01, "occlusion-tolerance",
           "relative depth tolerance of the neighbours' shadow maps", AtLeast(0))
 // Noisy images are smoothed (one Gaussian for the job's images) until Immerkaer's estimate of
 // their noise is about this; at 0.5 photographs as the real sets' stay as they are
-// (sweep/image_noise.h, docs/sweep.md "Noisy images").
+// (sweep/image_noise.h, docs/design/sweep.md "Noisy images").
 MS_OPTION(double, image_noise_target, 0.5, "image-noise-target",
           "smooth noisier images to about this noise before matching (grey levels of 255; 0 = "
           "never smooth)",

@@ -1,5 +1,5 @@
-// The parity check of a sweep kernel against the C++ reference (docs/sweep.md): the same tile
-// winners (pixel and offset) in nearly every tile, and where they agree the same face and
+// The parity check of a sweep kernel against the C++ reference (docs/design/sweep.md): the same
+// tile winners (pixel and offset) in nearly every tile, and where they agree the same face and
 // cameras, NCC and position within tolerance. Test-only, header-only (gtest).
 #pragma once
 

@@ -3,7 +3,7 @@
 // Debian's `colmap` (3.8): CPU SIFT feature extraction, exhaustive or sequential matching, then
 // `point_triangulator` on a model holding the KNOWN poses and intrinsics, and imports the
 // triangulated points. Poses and intrinsics never change; colmap only adds points.
-// See docs/colmap-route.md for the commands run, the options and measured timings.
+// See docs/reference/colmap-route.md for the commands run, the options and measured timings.
 #pragma once
 
 #include <cstdint>

@@ -1,6 +1,6 @@
 // The replay kernel (`manisweep worker --kernel replay`): instead of sweeping, it hands back the
 // points an earlier run of the same scene found for the same iteration and camera, after a set
-// delay. Jobs are deterministic (docs/distributed.md), so a run driven by replaying workers
+// delay. Jobs are deterministic (docs/design/distributed.md), so a run driven by replaying workers
 // inserts exactly the recorded batches and builds exactly the recorded jobs: it is the real
 // coordinator at the speed of a GPU cluster, on any machine, with no images (coordinator
 // --no-images). bench/scalability/capacity.sh measures the coordinator's capacity with it.

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Time per step against the number of cameras (the paper's Figure 9; docs/scalability.md).
+"""Time per step against the number of cameras (the paper's Figure 9; docs/design/scalability.md).
 
 One command: for each camera count N, a complete `manisweep reconstruct` (coordinator + sweeping
 workers on this machine) of

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The coordinator's capacity without the compute (docs/scalability.md, "Capacity").
+"""The coordinator's capacity without the compute (docs/design/scalability.md, "Capacity").
 
 One command: synthesises a city (`manisweep synth city`, small images), records a real run of
 it (`reconstruct`, sweeping workers), then drives the real coordinator through the same run

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The coordinator's memory and job messages on large scenes (docs/scalability.md, "Memory").
+"""The coordinator's memory and job messages on large scenes (docs/design/scalability.md, "Memory").
 
 For each SCENE (VIEWS:POINTS), synthesises a street with that many cameras and sparse points
 (`manisweep synth city --no-images`, reused when OUT/city_VIEWS_POINTS holds it already), then

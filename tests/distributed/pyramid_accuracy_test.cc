@@ -141,12 +141,12 @@ Outcome Reconstruct(const std::string& scene_name, const gl::GlContext& gl, doub
 // inserted sorted by camera and pixel), but its trajectory depends on the last bits of its input:
 // the rows without noise are bounded about 5% above the worst of ten variants that must not
 // matter (bench/accuracy_variants.py: seeds 1-4, scene.h5, COLMAP text and binary, NVM;
-// docs/accuracy.md, "One run is a draw"), of which this test runs one (seed 1, scene.h5); the
-// noisy rows about 5% above their one measured run. The workers run the CPU kernel, auto's
+// docs/design/accuracy.md, "One run is a draw"), of which this test runs one (seed 1, scene.h5);
+// the noisy rows about 5% above their one measured run. The workers run the CPU kernel, auto's
 // choice on a CPU machine, named so that a GPU machine measures the same thing; other kernels give
-// other figures within about +-0.003 (docs/sweep.md, "Which kernel auto picks"), and so do other
-// CPUs (docs/accuracy.md). The closed mesh is the headline (every pixel); the surface proper covers
-// fewer.
+// other figures within about +-0.003 (docs/design/sweep.md, "Which kernel auto picks"), and so do
+// other CPUs (docs/design/accuracy.md). The closed mesh is the headline (every pixel); the surface
+// proper covers fewer.
 struct Table1Row {
   const char* scene;
   double image_noise;  // grey levels
@@ -185,9 +185,9 @@ TEST(PyramidAccuracy, UpwardPyramidReproducesTable1) {
   ExpectTable1Row({"pyramid-up", 0, 0, 0.09, 0.0055, 0.0039, 0.92});
 }
 
-// With 2 grey levels of Gaussian noise in every image (docs/accuracy.md, "Table 1 with noisy
-// inputs"), which the sweep smooths away before matching (docs/sweep.md, "Noisy images"), and
-// with 5 grey levels plus sparse points moved by 1% of the viewing distance (0.03). Without the
+// With 2 grey levels of Gaussian noise in every image (docs/design/accuracy.md, "Table 1 with noisy
+// inputs"), which the sweep smooths away before matching (docs/design/sweep.md, "Noisy images"),
+// and with 5 grey levels plus sparse points moved by 1% of the viewing distance (0.03). Without the
 // smoothing (--sweep.image-noise-target 0) the upward pyramid with 5 grey levels finds no point.
 // One run each (the noisy rows are not yet distributions), closed mesh: 0.0044.
 TEST(PyramidAccuracy, DownwardPyramidWithImageNoise) {
@@ -210,7 +210,7 @@ TEST(PyramidAccuracy, UpwardPyramidWithStrongImageNoiseAndNoisyPoints) {
 }
 
 // The paper's rule: k = 0 competes like any offset, and a pixel fewer neighbours see needs only
-// those. Its loop stalls on points it already has (docs/accuracy.md, "Winners that move the
+// those. Its loop stalls on points it already has (docs/design/accuracy.md, "Winners that move the
 // surface"). Measured, closed / surface proper (coverage): 0.0121 / 0.0107 (92.9%) downward,
 // 0.0078 / 0.0040 (90.9%) upward.
 constexpr const char* kPaperRule = "--sweep.winners-must-move=false --sweep.strict-support=false";

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """End-to-end test of `manisweep check-mesh`: exit codes and JSON on files written here by hand
 (not by manisweep's writers). Exit 0 when every case behaves as documented in
-docs/mesh-checker.md: 0 valid, 3 readable but not valid, 2 unreadable.
+docs/reference/mesh-checker.md: 0 valid, 3 readable but not valid, 2 unreadable.
 """
 import argparse
 import json

@@ -8,7 +8,7 @@ python3-open3d) and checks that
   - the face pairs check-mesh finds intersecting in double precision are exactly the pairs of
     Open3D's get_self_intersecting_triangles(), so is_self_intersecting() agrees;
   - a mesh check-mesh calls valid is watertight for Open3D (is_watertight());
-  - each hand-made case gets the verdicts docs/mesh-checker.md describes.
+  - each hand-made case gets the verdicts docs/reference/mesh-checker.md describes.
 Exit 0: all agree; 1: a disagreement; 77: Open3D is not importable (CTest SKIP_RETURN_CODE).
 """
 import argparse

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""End-to-end test of `manisweep refine` (docs/refine.md): on a small synthetic pyramid,
+"""End-to-end test of `manisweep refine` (docs/design/refine.md): on a small synthetic pyramid,
 `reconstruct --refine` writes a refined mesh that is valid for check-mesh and for Open3D
 (watertight, no self-intersecting pair), with a lower photometric energy and a lower depth error
 than the swept mesh it started from, and one interrupted and resumed ends as one that was not;

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""End-to-end test of the run report (docs/report.md) in a real headless browser: on a small
+"""End-to-end test of the run report (docs/guides/report.md) in a real headless browser: on a small
 synthetic pyramid, `reconstruct` (sweep and refinement) writes report.html; Chromium loads it
 with no script error and every image decoded, its screenshot is not blank, the page names no
 network resource, and it holds the accuracy table of the synth dataset and a valid check-mesh
