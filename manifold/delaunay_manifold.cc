@@ -743,8 +743,8 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* bounda
   // --sweep.winners-must-move took 3; docs/design/manifold.md "Known limits").
   constexpr int kMaxPinchRounds = 8;
   // A camera's pocket that could not join, with the cells its trial read: it fails again
-  // until a cell around their vertices flips. Each star completed used to try every camera
-  // still in the matter again (1,800 failed trials, 1.8 s of 2.3, on a 2,048-camera street).
+  // until a cell around their vertices flips. Trying every camera still in the matter again
+  // after each star completed costs 1,800 failed trials, 1.8 s of 2.3, on a 2,048-camera street.
   struct Failed {
     uint32_t relabels;
     std::vector<Cell_handle> read;

@@ -68,7 +68,7 @@ MS_OPTION(bool, float_cleanup, true, "float-cleanup",
 // Incremental insertion: E, the cells shrunk out of O before inserting a point, is the conflict
 // region D plus its face neighbours (0), every cell sharing a vertex with D (1), or the face
 // neighbours first and, only if D still meets O, the stars of D's vertices that are points, not
-// Steiner points (2; docs/design/accuracy.md "Both as options").
+// Steiner points (2; docs/design/accuracy.md "What does not work").
 MS_OPTION(int, shrink_neighbourhood, 0, "shrink-neighbourhood",
           "cells shrunk before an insertion: 0 = conflict region + face neighbours, 1 = + every "
           "cell sharing a vertex, 2 = 0, then the stars of its points (not Steiner points) "

@@ -168,7 +168,7 @@ void ExpectAgreesWithTheReference(PairGradientKernel& kernel, const KernelBounds
   }
 }
 
-// Measured (2026-11-25): equal pixel counts, energies within 1.1e-5, gradients 1.8e-5,
+// Measured: equal pixel counts, energies within 1.1e-5, gradients 1.8e-5,
 // parallax rates 1.2e-9 (float storage), weights 2e-15.
 TEST(PhotometricGradient, FastKernelAgreesWithTheReference) {
   const std::unique_ptr<PairGradientKernel> fast = MakePairGradientKernel("cpu");
@@ -176,7 +176,7 @@ TEST(PhotometricGradient, FastKernelAgreesWithTheReference) {
 }
 
 // The GLSL kernel on this machine's GL (llvmpipe without a GPU): GL's own rasteriser, rays,
-// projections and barycentric weights in float. Measured on llvmpipe (2026-11-25): equal pixel
+// projections and barycentric weights in float. Measured on llvmpipe: equal pixel
 // counts, energies within 2.7e-5, gradients 4.0e-5, parallax rates 9.0e-6, weights 1.9e-7.
 TEST(PhotometricGradient, GlslKernelAgreesWithTheReference) {
   const std::unique_ptr<PairGradientKernel> glsl = MakePairGradientKernel("glsl");

@@ -27,22 +27,20 @@ MS_OPTION(int, min_matching_neighbours, 2, "min-matching-neighbours",
           "above t_NCC, the others above --sweep.support-ncc (fewer where fewer see the pixel, "
           "unless --sweep.strict-support; 1 = the paper's rule)",
           InRange(0, 64))
-// Also where the other neighbours do not see the pixel: single-neighbour points were the
-// street's outliers (1.07% beyond Sigma against 0.11%). With winners that must move, which
-// insert 2-3 times as many points, the street needs it (docs/design/accuracy.md "Winners that move
-// the surface").
+// Also where the other neighbours do not see the pixel: on the noisy street, points one
+// neighbour matched where the other did not see lie beyond Sigma 10 times as often (1.07%
+// against 0.11%), and winners that must move insert 2-3 times as many points
+// (docs/design/accuracy.md "Winners that move the surface").
 MS_OPTION(bool, strict_support, true, "strict-support",
           "a neighbour that does not see a pixel counts as not supporting it, so "
           "min-matching-neighbours binds everywhere (on by default; =false: where fewer "
           "neighbours see the pixel, all of those)",
           AnyValue())
-// The unswept mesh (k = 0) is where the surface already is. From the second iteration on, 450
-// of the downward pyramid's 467 tile winners per iteration were at k = 0, the same pixels as
-// before, and all went as duplicates or conflicts: the loop stalls. With this, k = 0 competes for
+// The unswept mesh (k = 0) is where the surface already is. If it competes, from the second
+// iteration on nearly every tile winner of the pyramids is at k = 0, at an earlier winner's
+// pixel, and goes as a duplicate or conflict: the loop stalls. With this, k = 0 competes for
 // nothing and a pixel competes at k != 0 only where it matches the neighbour better than the
-// unswept mesh does there. With strict support Table 1's errors fall 1.4-2.7 times and the
-// street ends 39-53% below its initial mesh (docs/design/accuracy.md "Winners that move the
-// surface").
+// unswept mesh does there (docs/design/accuracy.md "Winners that move the surface").
 MS_OPTION(bool, winners_must_move, true, "winners-must-move",
           "tile winners only at offsets k != 0 that match better than the unswept mesh (k = 0) "
           "at their pixel (on by default; =false: the paper's rule, k = 0 competes like any "
@@ -60,8 +58,8 @@ MS_OPTION(double, gaussian_sigma_px, 8, "gaussian-sigma-px",
 MS_OPTION(int, tile_size_px, 100, "tile-size-px",
           "tile size (swept-resolution pixels); one point per tile at most", AtLeast(1))
 // Tiles counted per image instead, the same at any swept resolution: the longer side has this
-// many. 16 halves Table 1's downward error but stalls the upward pyramid's sweep with noisy
-// images (docs/design/accuracy.md "Tiles counted per image"), so it is not the default.
+// many. 16 stalls the upward pyramid's sweep with noisy images (docs/design/accuracy.md "What
+// does not work"), so it is not the default.
 MS_OPTION(int, tiles_across, 0, "tiles-across",
           "tiles along the image's longer side, overriding tile-size-px (0 = use tile-size-px)",
           InRange(0, 4096))

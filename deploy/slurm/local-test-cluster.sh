@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A throw-away single-node Slurm cluster on this machine, to try manisweep.sbatch for real
-# (docs/design/distributed.md "Slurm, tried for real"). Needs root (munged and slurmd run as root here),
+# (docs/guides/cluster.md "Slurm"). Needs root (munged and slurmd run as root here),
 # Debian's slurm-wlm and munge; touches nothing in /etc: state, logs, sockets and the config live
 # in $DIR (default /tmp/manisweep-slurm). Ports 16817/16818.
 #
