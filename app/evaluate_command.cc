@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "app/commands.h"
+#include "app/option_registration.h"
 #include "base/error.h"
 #include "base/file_util.h"
 #include "base/log.h"
@@ -30,7 +31,7 @@ struct EvaluateCommandOptions {
   std::string json;
   std::string error_image;
   std::string plot;
-  std::string gl_backend = "auto";
+  gl::GlBackendOption gl;
 };
 
 void RunEvaluate(const EvaluateCommandOptions& o) {
@@ -61,7 +62,7 @@ void RunEvaluate(const EvaluateCommandOptions& o) {
   }
   const Scene scene = ReadScene(o.input);
   gl::GlContextOptions gl_options;
-  gl_options.backend = gl::ParseGlBackend(o.gl_backend);
+  gl_options.backend = o.gl.gl_backend;
   const gl::GlContext context(gl_options);
   spdlog::info("OpenGL: {}", context.info().Summary());
 
@@ -84,7 +85,7 @@ void RegisterEvaluateCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "evaluate",
       "Depth-map accuracy of meshes against a ground-truth mesh from the scene's cameras: MAE, "
-      "MRE, RMS, coverage and the cumulative error distribution (docs/evaluation.md)");
+      "MRE, RMS, coverage and the cumulative error distribution (docs/reference/evaluation.md)");
   cmd->add_option("-m,--mesh", o->meshes, "mesh(es) to evaluate (.ply/.obj); repeat to compare")
       ->required();
   cmd->add_option("--label", o->labels,
@@ -116,10 +117,7 @@ void RegisterEvaluateCommand(CLI::App& app) {
                   "error shown as the top of the colour scale; 0: 5 Sigma")
       ->capture_default_str();
   cmd->add_option("--plot", o->plot, "write a PNG plot of the cumulative error distribution");
-  cmd->add_option("--gl-backend", o->gl_backend,
-                  "OpenGL through EGL: auto (GPU device, else Mesa surfaceless), device or "
-                  "surfaceless")
-      ->capture_default_str();
+  AddOptionGroup(cmd, &o->gl);
   cmd->callback([o] { RunEvaluate(*o); });
 }
 

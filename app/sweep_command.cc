@@ -26,22 +26,23 @@ struct SweepCommandOptions {
   std::string mesh;
   int camera = 0;
   std::string output;
-  std::string kernel = "auto";
+  SweepKernelChoice kernel;
   bool reference = false;
-  std::string gl_backend = "auto";
+  gl::GlBackendOption gl;
   NeighbourOptions neighbours;
   SweepOptions sweep;
 };
 
 void RunSweep(const SweepCommandOptions& options) {
   options.sweep.Check();
+  options.kernel.Check();
   options.neighbours.Check();
   GlslSweepKernelOptions glsl;
-  glsl.context.backend = gl::ParseGlBackend(options.gl_backend);
+  glsl.context.backend = options.gl.gl_backend;
   // The GL context (and its shaders) before reading anything: a missing driver fails fast.
   std::string why;
   std::unique_ptr<SweepKernel> kernel =
-      MakeSweepKernel(options.reference ? "reference" : options.kernel, glsl, &why);
+      MakeSweepKernel(options.reference ? "reference" : options.kernel.kernel, glsl, &why);
   spdlog::info("sweep: {} kernel ({})", kernel->Name(), why);
   if (const auto* g = dynamic_cast<const GlslSweepKernel*>(kernel.get())) {
     spdlog::info("sweep: GLSL kernel on {}", g->gl_info().Summary());
@@ -96,17 +97,9 @@ void RegisterSweepCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("-o,--output", options->output, "points found (.ply, NCC as 'quality')")
       ->required();
-  cmd->add_option("--kernel", options->kernel,
-                  "sweep kernel: glsl (OpenGL 4.3 through EGL: the GPU, else Mesa's llvmpipe), "
-                  "cpu (the fast CPU kernel), reference (the exact C++ reference, slow) or auto "
-                  "(glsl on a GPU, else cpu)")
-      ->check(CLI::IsMember(SweepKernelNames()))
-      ->capture_default_str();
+  AddOptionGroup(cmd, &options->kernel);
   cmd->add_flag("--reference", options->reference, "same as --kernel reference");
-  cmd->add_option("--gl-backend", options->gl_backend,
-                  "OpenGL through EGL: auto (GPU device, else Mesa surfaceless), device or "
-                  "surfaceless")
-      ->capture_default_str();
+  AddOptionGroup(cmd, &options->gl);
   AddOptionGroup(cmd, &options->neighbours);
   AddOptionGroup(cmd, &options->sweep);
   cmd->callback([options] { RunSweep(*options); });

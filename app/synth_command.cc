@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "app/commands.h"
+#include "app/option_registration.h"
 #include "base/log.h"
 #include "gl/context.h"
 #include "tools/synth.h"
@@ -15,7 +16,7 @@ struct SynthCommandOptions {
   SynthOptions synth;
   std::string output;
   bool no_images = false;
-  std::string gl_backend = "auto";
+  gl::GlBackendOption gl;
 };
 
 void RunSynth(SynthCommandOptions options) {
@@ -25,7 +26,7 @@ void RunSynth(SynthCommandOptions options) {
   std::optional<gl::GlContext> context;
   if (options.synth.render_images) {
     gl::GlContextOptions gl_options;
-    gl_options.backend = gl::ParseGlBackend(options.gl_backend);
+    gl_options.backend = options.gl.gl_backend;
     context.emplace(gl_options);
     spdlog::info("OpenGL: {}", context->info().Summary());
   }
@@ -47,7 +48,7 @@ void RegisterSynthCommand(CLI::App& app) {
       "synth",
       "Write a synthetic dataset with exact ground truth: rendered images, cameras, a sparse "
       "cloud with visibility (COLMAP text in sparse/, scene.h5) and the ground-truth mesh "
-      "(gt.ply). See docs/synth.md");
+      "(gt.ply). See docs/reference/synth.md");
   cmd->add_option("scene", s.scene, "pyramid-down, pyramid-up (the paper's), blob or city")
       ->required()
       ->check(CLI::IsMember({"pyramid-down", "pyramid-up", "blob", "city"}));
@@ -85,10 +86,7 @@ void RegisterSynthCommand(CLI::App& app) {
                   "texture, e.g. ../shared/data/fountain-P11/images");
   cmd->add_flag("--no-images", options->no_images,
                 "write cameras, points and meshes only (no rendering, no OpenGL needed)");
-  cmd->add_option("--gl-backend", options->gl_backend,
-                  "OpenGL through EGL: auto (GPU device, else Mesa surfaceless), device or "
-                  "surfaceless")
-      ->capture_default_str();
+  AddOptionGroup(cmd, &options->gl);
   cmd->callback([options] { RunSynth(*options); });
 }
 

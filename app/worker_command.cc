@@ -27,19 +27,15 @@ struct WorkerCommandOptions {
   WorkerOptions worker;
   ReplayKernelOptions replay;
   std::string connect;
-  std::string kernel = "auto";
+  SweepKernelChoice kernel;
   int threads = 0;
-  double max_message_mb = 64;
   double image_cache_mb = 2048;
   std::string curve_server_key;
   std::string curve_secret_key;
 };
 
 void RunWorker(WorkerCommandOptions& options) {
-  if (!(options.max_message_mb >= 0.0625 && options.max_message_mb <= 2048)) {
-    throw InputError(
-        fmt::format("--max-message-mb must be in [0.0625, 2048], got {}", options.max_message_mb));
-  }
+  options.kernel.Check(true);
   if (!(options.image_cache_mb >= 0)) {
     throw InputError(fmt::format("--image-cache-mb must be >= 0, got {}", options.image_cache_mb));
   }
@@ -47,13 +43,13 @@ void RunWorker(WorkerCommandOptions& options) {
     throw InputError(fmt::format("--threads must be >= 0, got {}", options.threads));
   }
   WorkerOptions& w = options.worker;
-  w.limits = WireLimitsFromMiB(options.max_message_mb);
+  w.limits = WireLimitsFromMiB(w.max_message_mb);
   w.cache.memory_bytes = static_cast<uint64_t>(options.image_cache_mb * 1048576);
   w.Check();
   if (options.threads > 0) cv::setNumThreads(options.threads);
   std::string why;
   std::unique_ptr<SweepKernel> kernel;
-  if (options.kernel == "replay") {
+  if (options.kernel.kernel == "replay") {
     options.replay.Check();
     RunRecord recorded = ReadRunFile(options.replay.run);
     why = fmt::format("{} recorded iterations of {}, {:.2f} s per job",
@@ -61,7 +57,7 @@ void RunWorker(WorkerCommandOptions& options) {
     kernel = std::make_unique<ReplayKernel>(options.replay, std::move(recorded.scene.views),
                                             std::move(recorded.batches));
   } else {
-    kernel = MakeSweepKernel(options.kernel, {}, &why);
+    kernel = MakeSweepKernel(options.kernel.kernel, {}, &why);
   }
   ZmqClientOptions client;
   client.connect = options.connect;
@@ -80,7 +76,7 @@ void RunWorker(WorkerCommandOptions& options) {
       w, [client] { return MakeZmqClient(client); }, std::move(kernel));
   InitLogging("worker " + worker.id());
   spdlog::info("worker {} connecting to {} (kernel {} for --kernel {}: {}; image cache {})",
-               worker.id(), options.connect, kernel_name, options.kernel, why,
+               worker.id(), options.connect, kernel_name, options.kernel.kernel, why,
                w.cache.directory.empty() ? "default" : w.cache.directory);
   const WorkerSummary summary = worker.Run([] { return StopRequested(); });
   if (summary.exit_reason == "stopped by signal") throw CommandExit(kExitInterrupted);
@@ -95,11 +91,7 @@ void RegisterWorkerCommand(CLI::App& app) {
   cmd->add_option("-c,--connect", options->connect,
                   "the coordinator's address, e.g. tcp://node01:5555")
       ->required();
-  cmd->add_option("--kernel", options->kernel,
-                  fmt::format("sweep kernel: {} (auto = the best available), or replay: "
-                              "hand back an earlier run's points (--replay.run)",
-                              fmt::join(SweepKernelNames(), ", ")))
-      ->capture_default_str();
+  AddOptionGroup(cmd, &options->kernel);
   cmd->add_option("--threads", options->threads, "threads for the kernel (0 = all cores)")
       ->capture_default_str();
   cmd->add_option("--cache-dir", options->worker.cache.directory,
@@ -107,9 +99,6 @@ void RegisterWorkerCommand(CLI::App& app) {
                   "$TMPDIR/manisweep-image-cache-UID)");
   cmd->add_option("--image-cache-mb", options->image_cache_mb,
                   "decoded images kept in memory (MiB)")
-      ->capture_default_str();
-  cmd->add_option("--max-message-mb", options->max_message_mb,
-                  "largest protocol message in MiB (use the coordinator's value)")
       ->capture_default_str();
   cmd->add_option("--curve-server-key", options->curve_server_key,
                   "CURVE: the coordinator's public key file (NAME.key)");

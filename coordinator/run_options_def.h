@@ -12,12 +12,9 @@ MS_OPTION(bool, save_iteration_meshes, false, "save-iterations",
           "also write iteration_NN.ply after every iteration", AnyValue())
 MS_OPTION(double, progress_interval_s, 5, "progress-interval",
           "seconds between progress lines while sweeping", Above(0))
-// A job carries the mesh the camera sees (24 bytes per vertex, 12 per face: a 1M-face visible
-// mesh is ~18 MiB); protobuf's own limit is 2 GiB.
-MS_OPTION(double, max_message_mb, 64, "max-message-mb",
-          "largest protocol message in MiB (jobs carry the visible mesh); larger ones are logged "
-          "and dropped",
-          InRange(0.0625, 2048))
+#define MS_LINK_MESSAGE_SIZE_OPTION
+#include "proto/link_options_def.h"
+#undef MS_LINK_MESSAGE_SIZE_OPTION
 // The capacity benchmark drives the coordinator with replaying workers on scenes without images.
 MS_OPTION(bool, no_images, false, "no-images",
           "do not hash or serve image files: jobs carry none, so only workers with --kernel "

@@ -162,6 +162,14 @@ GlBackend ParseGlBackend(const std::string& name, const std::string& field) {
                    "' (use auto, device or surfaceless)");
 }
 
+const std::vector<std::pair<const char*, GlBackend>>& OptionChoices(GlBackend) {
+  static const std::vector<std::pair<const char*, GlBackend>> choices = {
+      {"auto", GlBackend::kAuto},
+      {"device", GlBackend::kDevice},
+      {"surfaceless", GlBackend::kSurfaceless}};
+  return choices;
+}
+
 std::string GlBackendName(GlBackend backend) {
   switch (backend) {
     case GlBackend::kAuto:

@@ -12,6 +12,10 @@
 
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
+
+#include "base/options.h"
 
 namespace ms::gl {
 
@@ -20,6 +24,16 @@ enum class GlBackend { kAuto, kDevice, kSurfaceless };
 // "auto", "device", "surfaceless"; throws InputError naming `field` otherwise.
 GlBackend ParseGlBackend(const std::string& name, const std::string& field = "--gl-backend");
 std::string GlBackendName(GlBackend backend);
+// The names of GlBackend's values, for option groups (base/options.h).
+const std::vector<std::pair<const char*, GlBackend>>& OptionChoices(GlBackend);
+
+// --gl-backend, declared once for every command that takes it.
+struct GlBackendOption {
+  static constexpr const char* kOptionGroup = "";
+#define MS_OPTION_LIST "gl/gl_backend_option_def.h"
+#include "base/option_group_members.h"
+  void Check() const { CheckOptionGroup(*this); }  // throws InputError naming the flag
+};
 
 struct GlContextOptions {
   GlBackend backend = GlBackend::kAuto;  // see the list above

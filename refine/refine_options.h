@@ -13,18 +13,7 @@ struct RefineOptions {
   static constexpr const char* kOptionGroup = "refine";
 #define MS_OPTION_LIST "refine/refine_options_def.h"
 #include "base/option_group_members.h"
-  // Throws InputError naming the flag.
-  void Check() const {
-    CheckOptionGroup(*this);
-    if (kernel != "auto" && kernel != "glsl" && kernel != "cpu" && kernel != "reference") {
-      throw InputError("--refine.kernel: must be one of auto, glsl, cpu, reference, got '" +
-                       kernel + "'");
-    }
-    if (max_edge_px > 0 && min_edge_px >= max_edge_px / 2) {
-      throw InputError("--refine.min-edge-px: must be below half of --refine.max-edge-px (" +
-                       std::to_string(max_edge_px) + "), or a split edge's halves collapse again");
-    }
-  }
+  void Check() const;  // throws InputError naming the flag
 };
 
 }  // namespace ms

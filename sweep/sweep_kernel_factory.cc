@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
+
 #include "base/error.h"
 #include "base/log.h"
 #include "sweep/cpu_sweep.h"
@@ -11,6 +13,14 @@
 namespace ms {
 
 std::vector<std::string> SweepKernelNames() { return {"auto", "glsl", "cpu", "reference"}; }
+
+void SweepKernelChoice::Check(bool replay_too) const {
+  const std::vector<std::string> names = SweepKernelNames();
+  if (std::find(names.begin(), names.end(), kernel) != names.end()) return;
+  if (replay_too && kernel == "replay") return;
+  throw InputError(fmt::format("--kernel: '{}' is not one of: {}{}", kernel, fmt::join(names, ", "),
+                               replay_too ? ", replay" : ""));
+}
 
 std::unique_ptr<SweepKernel> MakeSweepKernel(const std::string& name,
                                              const GlslSweepKernelOptions& glsl, std::string* why) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "base/options.h"
 #include "sweep/glsl_sweep.h"
 #include "sweep/sweep_kernel.h"
 
@@ -20,7 +21,17 @@ std::unique_ptr<SweepKernel> MakeSweepKernel(const std::string& name,
                                              const GlslSweepKernelOptions& glsl = {},
                                              std::string* why = nullptr);
 
-// The names MakeSweepKernel accepts, "auto" first: "auto", "glsl", "reference".
+// The names MakeSweepKernel accepts, "auto" first: "auto", "glsl", "cpu", "reference".
 std::vector<std::string> SweepKernelNames();
+
+// --kernel, declared once for every command that sweeps.
+struct SweepKernelChoice {
+  static constexpr const char* kOptionGroup = "";
+#define MS_OPTION_LIST "sweep/sweep_kernel_choice_def.h"
+#include "base/option_group_members.h"
+  // Throws InputError naming --kernel unless it is one of SweepKernelNames() (or "replay" where
+  // `replay_too`: the worker's recorded-run kernel).
+  void Check(bool replay_too = false) const;
+};
 
 }  // namespace ms

@@ -3,12 +3,11 @@
 
 MS_OPTION(std::string, id, "", "id",
           "name in the coordinator's logs and statistics (default host:pid)", AnyValue())
-// The coordinator is presumed gone after liveness x interval without a message.
-MS_OPTION(double, heartbeat_interval_s, 1.0, "heartbeat-interval",
-          "seconds between heartbeats (use the coordinator's value)", InRange(0.01, 3600))
-MS_OPTION(int, liveness, 5, "liveness",
-          "the coordinator is presumed gone after this many silent heartbeat intervals",
-          InRange(2, 1000))
+#define MS_LINK_HEARTBEAT_OPTIONS
+#define MS_LINK_MESSAGE_SIZE_OPTION
+#include "proto/link_options_def.h"
+#undef MS_LINK_HEARTBEAT_OPTIONS
+#undef MS_LINK_MESSAGE_SIZE_OPTION
 MS_OPTION(double, reconnect_initial_s, 0.5, "reconnect-initial",
           "first back-off before reconnecting (seconds); doubles each time", Above(0))
 MS_OPTION(double, reconnect_max_s, 16, "reconnect-max",
