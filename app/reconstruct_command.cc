@@ -73,7 +73,7 @@ struct ReconstructCommandOptions {
   CoordinatorOptions coordinator;
   int workers = 0;
   int worker_threads = 0;
-  std::string kernel = "auto";
+  SweepKernelChoice kernel;
   int max_restarts = -1;
   bool refine = true;  // refine final.ply into refined.ply at the end (docs/design/refine.md)
   RefineOptions refine_options;
@@ -131,41 +131,83 @@ class WorkerPool {
   int restarts_ = 0;
 };
 
-void RunReconstruct(ReconstructCommandOptions& options) {
+// The options' checks that need more than one group.
+void CheckReconstructOptions(ReconstructCommandOptions& options) {
   if (options.workers < 0 || options.workers > 1024) {
     throw InputError("--workers: must be in [0, 1024]");
   }
   if (options.worker_threads < 0) throw InputError("--worker-threads: must be >= 0");
-  const std::vector<std::string> kernels = SweepKernelNames();
-  if (std::find(kernels.begin(), kernels.end(), options.kernel) == kernels.end()) {
-    throw InputError(
-        fmt::format("--kernel: '{}' is not one of: {}", options.kernel, fmt::join(kernels, ", ")));
-  }
-  InitLogging("reconstruct");
-  CoordinatorOptions& setup = options.coordinator;
-  setup.CheckGroups();
-  if (setup.run.no_images) {
+  options.kernel.Check();
+  options.coordinator.CheckGroups();
+  if (options.coordinator.run.no_images) {
     throw InputError(
         "--no-images: reconstruct's workers sweep images; replaying a recorded run takes "
         "`manisweep coordinator --no-images` and `manisweep worker --kernel replay`");
   }
-  if (setup.output_dir.empty()) throw InputError("--output: required");
-  const bool have_checkpoint = fs::exists(fs::path(setup.output_dir) / "run.h5");
-  const std::string default_dir = (fs::path(setup.output_dir) / "default_scene").string();
-  const bool default_scene = setup.input.empty();
-  if (setup.input.empty() && setup.run.resume && have_checkpoint) {
-    setup.input = (fs::path(default_dir) / "scene.h5").string();
-  }
-  if (setup.input.empty()) {
-    const std::string& dir = default_dir;
-    setup.input = MakeDefaultScene(dir);
-    spdlog::info(
-        "no --input: reconstructing the embedded default scene (a synthetic textured "
-        "pyramid) written to {}",
-        dir);
-  }
-  setup.Check();
+  if (options.coordinator.output_dir.empty()) throw InputError("--output: required");
   options.report_options.Check();
+}
+
+// Without --input, the embedded default scene, written into the output folder (or found there
+// on --resume). Returns its folder, or "" when the user gave an input.
+std::string PrepareDefaultScene(CoordinatorOptions& setup) {
+  if (!setup.input.empty()) return "";
+  const std::string dir = (fs::path(setup.output_dir) / "default_scene").string();
+  if (setup.run.resume && fs::exists(fs::path(setup.output_dir) / "run.h5")) {
+    setup.input = (fs::path(dir) / "scene.h5").string();
+    return dir;
+  }
+  setup.input = MakeDefaultScene(dir);
+  spdlog::info(
+      "no --input: reconstructing the embedded default scene (a synthetic textured pyramid) "
+      "written to {}",
+      dir);
+  return dir;
+}
+
+// Kernel threads per worker process. One thread more than the worker's share of the cores:
+// the CPU kernel hands offsets out one at a time, so while every worker sweeps they share the
+// cores, and a job left alone at the end of an iteration also takes the core its neighbour
+// freed (docs/design/performance.md).
+int KernelThreadsPerWorker(const ReconstructCommandOptions& options, int workers) {
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return options.worker_threads > 0 ? options.worker_threads
+                                    : std::min(cores, std::max(1, cores / workers) + 1);
+}
+
+// The command line of each worker process: the coordinator's endpoint, its heartbeat settings
+// and message limit.
+std::vector<std::string> WorkerArgs(const ReconstructCommandOptions& options, int threads,
+                                    const std::string& endpoint) {
+  const CoordinatorOptions& setup = options.coordinator;
+  const spdlog::level::level_enum level = spdlog::get_level();
+  const std::string worker_level = level <= spdlog::level::debug
+                                       ? std::string(spdlog::level::to_string_view(level).data())
+                                       : "warn";
+  const SchedulerOptions& s = setup.scheduler;
+  const double give_up = std::max(30.0, 10 * s.liveness * s.heartbeat_interval_s);
+  const std::vector<std::pair<std::string, std::string>> worker_options = {
+      {"--connect", endpoint},
+      {"--kernel", options.kernel.kernel},
+      {"--threads", std::to_string(threads)},
+      {"--heartbeat-interval", std::to_string(s.heartbeat_interval_s)},
+      {"--liveness", std::to_string(s.liveness)},
+      {"--give-up-after", std::to_string(give_up)},
+      {"--max-message-mb", std::to_string(setup.run.max_message_mb)}};
+  std::vector<std::string> args = {"--log-level", worker_level, "worker"};
+  for (const auto& [option, value] : worker_options) {
+    args.push_back(option);
+    args.push_back(value);
+  }
+  return args;
+}
+
+void RunReconstruct(ReconstructCommandOptions& options) {
+  CheckReconstructOptions(options);
+  InitLogging("reconstruct");
+  CoordinatorOptions& setup = options.coordinator;
+  const std::string default_dir = PrepareDefaultScene(setup);
+  setup.Check();
   InstallStopSignals();
 
   ZmqServerOptions server;
@@ -173,34 +215,11 @@ void RunReconstruct(ReconstructCommandOptions& options) {
   server.max_message_bytes = setup.Limits().max_message_bytes;
   std::unique_ptr<ServerTransport> transport = MakeZmqServer(server);
 
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const int workers = options.workers > 0 ? options.workers : cores;
-  // One thread more than the worker's share of the cores: the CPU kernel hands offsets out one
-  // at a time, so while every worker sweeps they share the cores, and a job left alone at the
-  // end of an iteration also takes the core its neighbour freed (docs/design/performance.md).
-  const int threads = options.worker_threads > 0
-                          ? options.worker_threads
-                          : std::min(cores, std::max(1, cores / workers) + 1);
-  const spdlog::level::level_enum level = spdlog::get_level();
-  const std::string worker_level = level <= spdlog::level::debug
-                                       ? std::string(spdlog::level::to_string_view(level).data())
-                                       : "warn";
-  const SchedulerOptions& s = setup.scheduler;
-  const double give_up = std::max(30.0, 10 * s.liveness * s.heartbeat_interval_s);
-  // Option/value pairs; the workers use the coordinator's heartbeat settings and message limit.
-  const std::vector<std::pair<std::string, std::string>> worker_options = {
-      {"--connect", transport->Endpoint()},
-      {"--kernel", options.kernel},
-      {"--threads", std::to_string(threads)},
-      {"--heartbeat-interval", std::to_string(s.heartbeat_interval_s)},
-      {"--liveness", std::to_string(s.liveness)},
-      {"--give-up-after", std::to_string(give_up)},
-      {"--max-message-mb", std::to_string(setup.run.max_message_mb)}};
-  std::vector<std::string> worker_args = {"--log-level", worker_level, "worker"};
-  for (const auto& [option, value] : worker_options) {
-    worker_args.push_back(option);
-    worker_args.push_back(value);
-  }
+  const int workers = options.workers > 0
+                          ? options.workers
+                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int threads = KernelThreadsPerWorker(options, workers);
+  const std::vector<std::string> worker_args = WorkerArgs(options, threads, transport->Endpoint());
   spdlog::info("starting {} worker processes ({} kernel threads each) on {}", workers, threads,
                transport->Endpoint());
   WorkerPool pool(worker_args, workers,
@@ -257,7 +276,7 @@ void RunReconstruct(ReconstructCommandOptions& options) {
     }
     stop_workers();
   }
-  if (default_scene) ReportDefaultSceneAccuracy(setup.output_dir, default_dir);
+  if (!default_dir.empty()) ReportDefaultSceneAccuracy(setup.output_dir, default_dir);
   if (options.report) {
     // The meshes are written: a report that cannot be made is a warning, not a failed run.
     try {
@@ -288,21 +307,19 @@ void RegisterReconstructCommand(CLI::App& app) {
   cmd->add_option("--worker-threads", options->worker_threads,
                   "kernel threads per worker (0 = cores / workers + 1, at most the cores)")
       ->capture_default_str();
-  cmd->add_option("--kernel", options->kernel,
-                  fmt::format("sweep kernel of the workers: {} (auto = the fastest available)",
-                              fmt::join(SweepKernelNames(), ", ")))
-      ->capture_default_str();
+  AddOptionGroup(cmd, &options->kernel);
   cmd->add_option("--max-restarts", options->max_restarts,
                   "restarts of workers that die (-1 = twice the number of workers)")
       ->capture_default_str();
-  cmd->add_flag("--refine,!--no-refine", options->refine,
-                "then refine final.ply photometrically into refined.ply on the same workers, "
-                "keeping it a closed 2-manifold (docs/refine.md); --no-refine stops at final.ply");
+  cmd->add_flag(
+      "--refine,!--no-refine", options->refine,
+      "then refine final.ply photometrically into refined.ply on the same workers, "
+      "keeping it a closed 2-manifold (docs/design/refine.md); --no-refine stops at final.ply");
   AddRunOptions(cmd, &options->coordinator);
   AddOptionGroup(cmd, &options->refine_options);
   cmd->add_flag("--report,!--no-report", options->report,
                 "write report.html, the run report, into the output folder at the end "
-                "(docs/report.md); --no-report skips it");
+                "(docs/guides/report.md); --no-report skips it");
   AddOptionGroup(cmd, &options->report_options);
   cmd->callback([options] { RunReconstruct(*options); });
 }

@@ -246,6 +246,286 @@ std::string WithRelative(double value, double diagonal) {
                       : fmt::format("{:.3g}", value);
 }
 
+// What CheckMesh's steps share: the faces' states and the vertices they reference.
+struct FaceTable {
+  std::vector<Point> points;        // the vertices, for exact predicates
+  std::vector<uint8_t> state;       // FaceState per face
+  std::vector<uint8_t> zero_area;   // per face: three distinct but collinear corners
+  std::vector<uint8_t> referenced;  // per vertex: in a valid face
+};
+
+// Faces: validity, degeneracy (exact), references.
+FaceTable ClassifyFaces(const Mesh& mesh, int max_ex, MeshReport* r) {
+  const auto nv = static_cast<int64_t>(mesh.vertices.size());
+  const auto nf = static_cast<int64_t>(mesh.faces.size());
+  FaceTable t;
+  t.points.resize(nv);
+  std::vector<uint8_t> finite(nv);
+  for (int64_t v = 0; v < nv; ++v) {
+    const Eigen::Vector3d& x = mesh.vertices[v];
+    finite[v] = x.allFinite();
+    t.points[v] = Point(x.x(), x.y(), x.z());
+  }
+  t.state.assign(nf, kTopological);
+  t.zero_area.assign(nf, 0);
+  t.referenced.assign(nv, 0);
+  for (int64_t f = 0; f < nf; ++f) {
+    const auto& face = mesh.faces[f];
+    bool ok = true;
+    for (int32_t v : face) ok = ok && v >= 0 && v < nv && finite[v];
+    if (!ok) {
+      t.state[f] = kInvalid;
+      ++r->num_invalid_faces;
+      AddExample(&r->invalid_face_examples, f, max_ex);
+      continue;
+    }
+    for (int32_t v : face) t.referenced[v] = 1;
+    if (face[0] == face[1] || face[1] == face[2] || face[0] == face[2]) {
+      t.state[f] = kRepeated;
+    } else if (CGAL::collinear(t.points[face[0]], t.points[face[1]], t.points[face[2]])) {
+      t.zero_area[f] = 1;
+    }
+    if (t.state[f] == kRepeated || t.zero_area[f]) {
+      ++r->num_degenerate_faces;
+      AddExample(&r->degenerate_face_examples, f, max_ex);
+    }
+  }
+  for (int64_t v = 0; v < nv; ++v) {
+    if (!t.referenced[v]) {
+      ++r->num_unreferenced_vertices;
+      AddExample(&r->unreferenced_vertex_examples, static_cast<int32_t>(v), max_ex);
+    }
+  }
+  return t;
+}
+
+// Duplicate faces: the same vertex set (either orientation).
+void CountDuplicateFaces(const Mesh& mesh, const FaceTable& t, int max_ex, MeshReport* r) {
+  std::vector<std::pair<std::array<int32_t, 3>, int64_t>> keys;
+  keys.reserve(mesh.faces.size());
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    if (t.state[f] != kTopological) continue;
+    std::array<int32_t, 3> k = mesh.faces[f];
+    std::sort(k.begin(), k.end());
+    keys.emplace_back(k, static_cast<int64_t>(f));
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<int64_t> duplicates;
+  for (size_t i = 1; i < keys.size(); ++i) {
+    if (keys[i].first == keys[i - 1].first) duplicates.push_back(keys[i].second);
+  }
+  std::sort(duplicates.begin(), duplicates.end());
+  r->num_duplicate_faces = static_cast<int64_t>(duplicates.size());
+  for (int64_t f : duplicates) AddExample(&r->duplicate_face_examples, f, max_ex);
+}
+
+// Components: vertices joined by valid faces. Returns each referenced vertex's component, ids
+// compact in the order of their smallest vertex (-1 for unreferenced vertices).
+std::vector<int64_t> LabelComponents(const Mesh& mesh, const FaceTable& t,
+                                     int64_t* num_components) {
+  const auto nv = static_cast<int64_t>(mesh.vertices.size());
+  DisjointSets vertex_sets(nv);
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    if (t.state[f] == kInvalid) continue;
+    const auto& face = mesh.faces[f];
+    vertex_sets.Union(face[0], face[1]);
+    vertex_sets.Union(face[1], face[2]);
+  }
+  std::vector<int64_t> component_of(nv, -1);
+  *num_components = 0;
+  for (int64_t v = 0; v < nv; ++v) {
+    if (!t.referenced[v]) continue;
+    const size_t root = vertex_sets.Find(v);
+    if (component_of[root] < 0) component_of[root] = (*num_components)++;
+    component_of[v] = component_of[root];
+  }
+  return component_of;
+}
+
+// Edges: boundary, non-manifold, orientation.
+void CheckEdges(const Mesh& mesh, const FaceTable& t, const std::vector<int64_t>& component_of,
+                int max_ex, std::vector<ComponentAccumulator>* acc, MeshReport* r) {
+  const auto nf = static_cast<int64_t>(mesh.faces.size());
+  std::vector<HalfEdge> half_edges;
+  half_edges.reserve(3 * nf);
+  for (int64_t f = 0; f < nf; ++f) {
+    if (t.state[f] != kTopological) continue;
+    const auto& face = mesh.faces[f];
+    for (int k = 0; k < 3; ++k) {
+      const int32_t a = face[k], b = face[(k + 1) % 3];
+      half_edges.push_back({std::min(a, b), std::max(a, b), f, a < b});
+    }
+  }
+  std::sort(half_edges.begin(), half_edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    return std::tie(x.lo, x.hi, x.face) < std::tie(y.lo, y.hi, y.face);
+  });
+  ParitySets orientation(nf);
+  for (size_t i = 0; i < half_edges.size();) {
+    size_t j = i;
+    while (j < half_edges.size() && half_edges[j].lo == half_edges[i].lo &&
+           half_edges[j].hi == half_edges[i].hi) {
+      ++j;
+    }
+    const std::array<int32_t, 2> edge{half_edges[i].lo, half_edges[i].hi};
+    ComponentAccumulator& c = (*acc)[component_of[edge[0]]];
+    ++r->num_edges;
+    ++c.edges;
+    const size_t count = j - i;
+    if (count == 1) {
+      ++r->num_boundary_edges;
+      ++c.boundary_edges;
+      AddExample(&r->boundary_edge_examples, edge, max_ex);
+    } else if (count >= 3) {
+      ++r->num_non_manifold_edges;
+      ++c.non_manifold_edges;
+      AddExample(&r->non_manifold_edge_examples, edge, max_ex);
+    } else {
+      const bool same_direction = half_edges[i].forward == half_edges[i + 1].forward;
+      if (same_direction) {
+        ++r->num_inconsistent_edges;
+        ++c.inconsistent_edges;
+        AddExample(&r->inconsistent_edge_examples, edge, max_ex);
+      }
+      if (!orientation.Join(half_edges[i].face, half_edges[i + 1].face, same_direction ? 1 : 0)) {
+        c.orientation_conflict = true;
+      }
+    }
+    i = j;
+  }
+}
+
+// Vertices: the edges opposite to v must form one cycle (or one path on a boundary).
+void CheckVertexLinks(const Mesh& mesh, const FaceTable& t,
+                      const std::vector<int64_t>& component_of, int max_ex,
+                      std::vector<ComponentAccumulator>* acc, MeshReport* r) {
+  const auto nv = static_cast<int64_t>(mesh.vertices.size());
+  const auto nf = static_cast<int64_t>(mesh.faces.size());
+  std::vector<int64_t> offsets(nv + 1, 0);
+  for (int64_t f = 0; f < nf; ++f) {
+    if (t.state[f] != kTopological) continue;
+    for (int32_t v : mesh.faces[f]) ++offsets[v + 1];
+  }
+  std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+  std::vector<int64_t> incident(offsets[nv]);
+  std::vector<int64_t> fill(offsets.begin(), offsets.end() - 1);
+  for (int64_t f = 0; f < nf; ++f) {
+    if (t.state[f] != kTopological) continue;
+    for (int32_t v : mesh.faces[f]) incident[fill[v]++] = f;
+  }
+  std::vector<int32_t> nodes;
+  std::vector<std::array<int32_t, 2>> link;
+  std::vector<int> degree;
+  DisjointSets link_sets;  // reused: one per vertex would allocate a million times
+  for (int64_t v = 0; v < nv; ++v) {
+    const int64_t begin = offsets[v], end = offsets[v + 1];
+    if (begin == end) continue;
+    ComponentAccumulator& c = (*acc)[component_of[v]];
+    ++c.vertices;
+    nodes.clear();
+    link.clear();
+    for (int64_t k = begin; k < end; ++k) {
+      const auto& face = mesh.faces[incident[k]];
+      const int i = face[0] == v ? 0 : (face[1] == v ? 1 : 2);
+      link.push_back({face[(i + 1) % 3], face[(i + 2) % 3]});
+      nodes.push_back(face[(i + 1) % 3]);
+      nodes.push_back(face[(i + 2) % 3]);
+    }
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    degree.assign(nodes.size(), 0);
+    link_sets.Reset(nodes.size());
+    size_t link_components = nodes.size();
+    for (const auto& e : link) {
+      const size_t a = std::lower_bound(nodes.begin(), nodes.end(), e[0]) - nodes.begin();
+      const size_t b = std::lower_bound(nodes.begin(), nodes.end(), e[1]) - nodes.begin();
+      ++degree[a];
+      ++degree[b];
+      if (link_sets.Union(a, b)) --link_components;
+    }
+    int ends = 0;
+    bool regular = link_components == 1;
+    for (int d : degree) {
+      if (d == 1) {
+        ++ends;
+      } else if (d != 2) {
+        regular = false;
+      }
+    }
+    if (regular && ends == 2) {
+      ++r->num_boundary_vertices;
+    } else if (!regular || ends != 0) {
+      ++r->num_non_manifold_vertices;
+      ++c.non_manifold_vertices;
+      AddExample(&r->non_manifold_vertex_examples, static_cast<int32_t>(v), max_ex);
+    }
+  }
+}
+
+// Per-component topology and volume (relative to the box centre), largest component first.
+void SummarizeComponents(const Mesh& mesh, const FaceTable& t,
+                         const std::vector<int64_t>& component_of,
+                         std::vector<ComponentAccumulator>* acc, MeshReport* r) {
+  const auto nv = static_cast<int64_t>(mesh.vertices.size());
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  if (nv > 0) {
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+    for (int64_t v = 0; v < nv; ++v) {
+      if (!t.referenced[v]) continue;
+      lo = lo.cwiseMin(mesh.vertices[v]);
+      hi = hi.cwiseMax(mesh.vertices[v]);
+    }
+    if (lo.allFinite() && hi.allFinite()) origin = 0.5 * (lo + hi);
+  }
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    if (t.state[f] != kTopological) continue;
+    const auto& face = mesh.faces[f];
+    const Eigen::Vector3d a = mesh.vertices[face[0]] - origin, b = mesh.vertices[face[1]] - origin,
+                          c = mesh.vertices[face[2]] - origin;
+    (*acc)[component_of[face[0]]].volume6 += a.dot(b.cross(c));
+  }
+  r->num_components = static_cast<int64_t>(acc->size());
+  bool all_have_genus = !acc->empty();
+  int64_t genus_sum = 0;
+  for (const ComponentAccumulator& c : *acc) {
+    MeshComponent out;
+    out.num_vertices = c.vertices;
+    out.num_edges = c.edges;
+    out.num_faces = c.faces;
+    out.euler_characteristic = c.vertices - c.edges + c.faces;
+    out.closed = c.boundary_edges == 0;
+    out.manifold = c.non_manifold_edges == 0 && c.non_manifold_vertices == 0 &&
+                   c.repeated_faces == 0 && c.faces > 0;
+    out.oriented = out.manifold && c.inconsistent_edges == 0;
+    out.orientable = out.manifold && !c.orientation_conflict;
+    if (out.closed && out.manifold && out.orientable) {
+      out.genus = (2 - out.euler_characteristic) / 2;
+      genus_sum += *out.genus;
+    } else {
+      all_have_genus = false;
+    }
+    if (out.closed && out.oriented) out.signed_volume = c.volume6 / 6.0;
+    r->euler_characteristic += out.euler_characteristic;
+    r->components.push_back(out);
+  }
+  if (all_have_genus) r->genus = genus_sum;
+  std::stable_sort(
+      r->components.begin(), r->components.end(),
+      [](const MeshComponent& a, const MeshComponent& b) { return a.num_faces > b.num_faces; });
+}
+
+// The verdicts from the counts.
+void DecideValidity(const MeshCheckOptions& options, MeshReport* r) {
+  r->allow_float_issues = options.allow_float_issues;
+  r->is_float_robust = r->float_robustness.IsRobust();
+  const bool common = r->num_faces > 0 && r->num_invalid_faces == 0 &&
+                      r->num_non_manifold_edges == 0 && r->num_non_manifold_vertices == 0 &&
+                      r->num_inconsistent_edges == 0 && r->num_degenerate_faces == 0 &&
+                      r->num_duplicate_faces == 0 && r->num_self_intersections == 0;
+  r->is_closed_manifold = common && r->num_boundary_edges == 0 && r->num_boundary_vertices == 0;
+  r->is_valid = (options.allow_boundary ? common : r->is_closed_manifold) &&
+                (r->is_float_robust || options.allow_float_issues);
+}
+
 }  // namespace
 
 void MeshCheckOptions::Check() const {
@@ -265,274 +545,28 @@ MeshReport CheckMesh(const Mesh& mesh, const MeshCheckOptions& options) {
   const int max_ex = options.max_examples;
   MeshReport r;
   r.allow_boundary = options.allow_boundary;
-  const auto nv = static_cast<int64_t>(mesh.vertices.size());
-  const auto nf = static_cast<int64_t>(mesh.faces.size());
-  r.num_vertices = nv;
-  r.num_faces = nf;
-
-  // --- Faces: validity, degeneracy (exact), references. -----------------------------------
-  std::vector<Point> points(nv);
-  std::vector<uint8_t> finite(nv);
-  for (int64_t v = 0; v < nv; ++v) {
-    const Eigen::Vector3d& x = mesh.vertices[v];
-    finite[v] = x.allFinite();
-    points[v] = Point(x.x(), x.y(), x.z());
-  }
-  std::vector<uint8_t> state(nf, kTopological);
-  std::vector<uint8_t> zero_area(nf, 0);
-  std::vector<uint8_t> referenced(nv, 0);
-  for (int64_t f = 0; f < nf; ++f) {
-    const auto& t = mesh.faces[f];
-    bool ok = true;
-    for (int32_t v : t) ok = ok && v >= 0 && v < nv && finite[v];
-    if (!ok) {
-      state[f] = kInvalid;
-      ++r.num_invalid_faces;
-      AddExample(&r.invalid_face_examples, f, max_ex);
-      continue;
-    }
-    for (int32_t v : t) referenced[v] = 1;
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
-      state[f] = kRepeated;
-    } else if (CGAL::collinear(points[t[0]], points[t[1]], points[t[2]])) {
-      zero_area[f] = 1;
-    }
-    if (state[f] == kRepeated || zero_area[f]) {
-      ++r.num_degenerate_faces;
-      AddExample(&r.degenerate_face_examples, f, max_ex);
-    }
-  }
-  for (int64_t v = 0; v < nv; ++v) {
-    if (!referenced[v]) {
-      ++r.num_unreferenced_vertices;
-      AddExample(&r.unreferenced_vertex_examples, static_cast<int32_t>(v), max_ex);
-    }
-  }
-
-  // --- Duplicate faces: the same vertex set (either orientation). ----------------------------
-  {
-    std::vector<std::pair<std::array<int32_t, 3>, int64_t>> keys;
-    keys.reserve(nf);
-    for (int64_t f = 0; f < nf; ++f) {
-      if (state[f] != kTopological) continue;
-      std::array<int32_t, 3> k = mesh.faces[f];
-      std::sort(k.begin(), k.end());
-      keys.emplace_back(k, f);
-    }
-    std::sort(keys.begin(), keys.end());
-    std::vector<int64_t> duplicates;
-    for (size_t i = 1; i < keys.size(); ++i) {
-      if (keys[i].first == keys[i - 1].first) duplicates.push_back(keys[i].second);
-    }
-    std::sort(duplicates.begin(), duplicates.end());
-    r.num_duplicate_faces = static_cast<int64_t>(duplicates.size());
-    for (int64_t f : duplicates) AddExample(&r.duplicate_face_examples, f, max_ex);
-  }
-
-  // --- Components: vertices joined by valid faces. -----------------------------------------
-  DisjointSets vertex_sets(nv);
-  for (int64_t f = 0; f < nf; ++f) {
-    if (state[f] == kInvalid) continue;
-    const auto& t = mesh.faces[f];
-    vertex_sets.Union(t[0], t[1]);
-    vertex_sets.Union(t[1], t[2]);
-  }
-  std::vector<int64_t> component_of(nv, -1);  // compact ids in order of the smallest vertex
+  r.num_vertices = static_cast<int64_t>(mesh.vertices.size());
+  r.num_faces = static_cast<int64_t>(mesh.faces.size());
+  const FaceTable faces = ClassifyFaces(mesh, max_ex, &r);
+  CountDuplicateFaces(mesh, faces, max_ex, &r);
   int64_t num_components = 0;
-  for (int64_t v = 0; v < nv; ++v) {
-    if (!referenced[v]) continue;
-    const size_t root = vertex_sets.Find(v);
-    if (component_of[root] < 0) component_of[root] = num_components++;
-    component_of[v] = component_of[root];
-  }
+  const std::vector<int64_t> component_of = LabelComponents(mesh, faces, &num_components);
   std::vector<ComponentAccumulator> acc(num_components);
-  for (int64_t f = 0; f < nf; ++f) {
-    if (state[f] == kTopological) ++acc[component_of[mesh.faces[f][0]]].faces;
-    if (state[f] == kRepeated) ++acc[component_of[mesh.faces[f][0]]].repeated_faces;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    if (faces.state[f] == kTopological) ++acc[component_of[mesh.faces[f][0]]].faces;
+    if (faces.state[f] == kRepeated) ++acc[component_of[mesh.faces[f][0]]].repeated_faces;
   }
-
-  // --- Edges: boundary, non-manifold, orientation. -----------------------------------------
-  std::vector<HalfEdge> half_edges;
-  half_edges.reserve(3 * nf);
-  for (int64_t f = 0; f < nf; ++f) {
-    if (state[f] != kTopological) continue;
-    const auto& t = mesh.faces[f];
-    for (int k = 0; k < 3; ++k) {
-      const int32_t a = t[k], b = t[(k + 1) % 3];
-      half_edges.push_back({std::min(a, b), std::max(a, b), f, a < b});
-    }
-  }
-  std::sort(half_edges.begin(), half_edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return std::tie(x.lo, x.hi, x.face) < std::tie(y.lo, y.hi, y.face);
-  });
-  ParitySets orientation(nf);
-  for (size_t i = 0; i < half_edges.size();) {
-    size_t j = i;
-    while (j < half_edges.size() && half_edges[j].lo == half_edges[i].lo &&
-           half_edges[j].hi == half_edges[i].hi) {
-      ++j;
-    }
-    const std::array<int32_t, 2> edge{half_edges[i].lo, half_edges[i].hi};
-    ComponentAccumulator& c = acc[component_of[edge[0]]];
-    ++r.num_edges;
-    ++c.edges;
-    const size_t count = j - i;
-    if (count == 1) {
-      ++r.num_boundary_edges;
-      ++c.boundary_edges;
-      AddExample(&r.boundary_edge_examples, edge, max_ex);
-    } else if (count >= 3) {
-      ++r.num_non_manifold_edges;
-      ++c.non_manifold_edges;
-      AddExample(&r.non_manifold_edge_examples, edge, max_ex);
-    } else {
-      const bool same_direction = half_edges[i].forward == half_edges[i + 1].forward;
-      if (same_direction) {
-        ++r.num_inconsistent_edges;
-        ++c.inconsistent_edges;
-        AddExample(&r.inconsistent_edge_examples, edge, max_ex);
-      }
-      if (!orientation.Join(half_edges[i].face, half_edges[i + 1].face, same_direction ? 1 : 0)) {
-        c.orientation_conflict = true;
-      }
-    }
-    i = j;
-  }
-  half_edges.clear();
-  half_edges.shrink_to_fit();
-
-  // --- Vertices: the edges opposite to v must form one cycle (or one path on a boundary). ----
-  {
-    std::vector<int64_t> offsets(nv + 1, 0);
-    for (int64_t f = 0; f < nf; ++f) {
-      if (state[f] != kTopological) continue;
-      for (int32_t v : mesh.faces[f]) ++offsets[v + 1];
-    }
-    std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
-    std::vector<int64_t> incident(offsets[nv]);
-    std::vector<int64_t> fill(offsets.begin(), offsets.end() - 1);
-    for (int64_t f = 0; f < nf; ++f) {
-      if (state[f] != kTopological) continue;
-      for (int32_t v : mesh.faces[f]) incident[fill[v]++] = f;
-    }
-    std::vector<int32_t> nodes;
-    std::vector<std::array<int32_t, 2>> link;
-    std::vector<int> degree;
-    DisjointSets link_sets;  // reused: one per vertex would allocate a million times
-    for (int64_t v = 0; v < nv; ++v) {
-      const int64_t begin = offsets[v], end = offsets[v + 1];
-      if (begin == end) continue;
-      ComponentAccumulator& c = acc[component_of[v]];
-      ++c.vertices;
-      nodes.clear();
-      link.clear();
-      for (int64_t k = begin; k < end; ++k) {
-        const auto& t = mesh.faces[incident[k]];
-        const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
-        link.push_back({t[(i + 1) % 3], t[(i + 2) % 3]});
-        nodes.push_back(t[(i + 1) % 3]);
-        nodes.push_back(t[(i + 2) % 3]);
-      }
-      std::sort(nodes.begin(), nodes.end());
-      nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
-      degree.assign(nodes.size(), 0);
-      link_sets.Reset(nodes.size());
-      size_t link_components = nodes.size();
-      for (const auto& e : link) {
-        const size_t a = std::lower_bound(nodes.begin(), nodes.end(), e[0]) - nodes.begin();
-        const size_t b = std::lower_bound(nodes.begin(), nodes.end(), e[1]) - nodes.begin();
-        ++degree[a];
-        ++degree[b];
-        if (link_sets.Union(a, b)) --link_components;
-      }
-      int ends = 0;
-      bool regular = link_components == 1;
-      for (int d : degree) {
-        if (d == 1) {
-          ++ends;
-        } else if (d != 2) {
-          regular = false;
-        }
-      }
-      if (regular && ends == 2) {
-        ++r.num_boundary_vertices;
-      } else if (!regular || ends != 0) {
-        ++r.num_non_manifold_vertices;
-        ++c.non_manifold_vertices;
-        AddExample(&r.non_manifold_vertex_examples, static_cast<int32_t>(v), max_ex);
-      }
-    }
-  }
-
-  // --- Per-component topology and volume. --------------------------------------------------
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // volumes relative to the box centre
-  if (nv > 0) {
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-    for (int64_t v = 0; v < nv; ++v) {
-      if (!referenced[v]) continue;
-      lo = lo.cwiseMin(mesh.vertices[v]);
-      hi = hi.cwiseMax(mesh.vertices[v]);
-    }
-    if (lo.allFinite() && hi.allFinite()) origin = 0.5 * (lo + hi);
-  }
-  for (int64_t f = 0; f < nf; ++f) {
-    if (state[f] != kTopological) continue;
-    const auto& t = mesh.faces[f];
-    const Eigen::Vector3d a = mesh.vertices[t[0]] - origin, b = mesh.vertices[t[1]] - origin,
-                          c = mesh.vertices[t[2]] - origin;
-    acc[component_of[t[0]]].volume6 += a.dot(b.cross(c));
-  }
-  r.num_components = num_components;
-  bool all_have_genus = num_components > 0;
-  int64_t genus_sum = 0;
-  for (const ComponentAccumulator& c : acc) {
-    MeshComponent out;
-    out.num_vertices = c.vertices;
-    out.num_edges = c.edges;
-    out.num_faces = c.faces;
-    out.euler_characteristic = c.vertices - c.edges + c.faces;
-    out.closed = c.boundary_edges == 0;
-    out.manifold = c.non_manifold_edges == 0 && c.non_manifold_vertices == 0 &&
-                   c.repeated_faces == 0 && c.faces > 0;
-    out.oriented = out.manifold && c.inconsistent_edges == 0;
-    out.orientable = out.manifold && !c.orientation_conflict;
-    if (out.closed && out.manifold && out.orientable) {
-      out.genus = (2 - out.euler_characteristic) / 2;
-      genus_sum += *out.genus;
-    } else {
-      all_have_genus = false;
-    }
-    if (out.closed && out.oriented) out.signed_volume = c.volume6 / 6.0;
-    r.euler_characteristic += out.euler_characteristic;
-    r.components.push_back(out);
-  }
-  if (all_have_genus) r.genus = genus_sum;
-  std::stable_sort(
-      r.components.begin(), r.components.end(),
-      [](const MeshComponent& a, const MeshComponent& b) { return a.num_faces > b.num_faces; });
-
-  // --- Self-intersections. -------------------------------------------------------------------
+  CheckEdges(mesh, faces, component_of, max_ex, &acc, &r);
+  CheckVertexLinks(mesh, faces, component_of, max_ex, &acc, &r);
+  SummarizeComponents(mesh, faces, component_of, &acc, &r);
   r.self_intersections_checked = options.check_self_intersections;
   if (options.check_self_intersections) {
-    FindSelfIntersections(mesh, points, state, zero_area, options, &r);
+    FindSelfIntersections(mesh, faces.points, faces.state, faces.zero_area, options, &r);
   }
-
-  // --- Floating-point robustness (double precision, mesh/float_robustness.h). --------------
-  {
-    std::vector<uint8_t> usable(nf);
-    for (int64_t f = 0; f < nf; ++f) usable[f] = state[f] != kInvalid;
-    r.float_robustness = CheckFloatRobustness(mesh, usable, FloatOptions(options));
-  }
-  r.allow_float_issues = options.allow_float_issues;
-  r.is_float_robust = r.float_robustness.IsRobust();
-
-  const bool common = nf > 0 && r.num_invalid_faces == 0 && r.num_non_manifold_edges == 0 &&
-                      r.num_non_manifold_vertices == 0 && r.num_inconsistent_edges == 0 &&
-                      r.num_degenerate_faces == 0 && r.num_duplicate_faces == 0 &&
-                      r.num_self_intersections == 0;
-  r.is_closed_manifold = common && r.num_boundary_edges == 0 && r.num_boundary_vertices == 0;
-  r.is_valid = (options.allow_boundary ? common : r.is_closed_manifold) &&
-               (r.is_float_robust || options.allow_float_issues);
+  std::vector<uint8_t> usable(mesh.faces.size());  // floating point (mesh/float_robustness.h)
+  for (size_t f = 0; f < usable.size(); ++f) usable[f] = faces.state[f] != kInvalid;
+  r.float_robustness = CheckFloatRobustness(mesh, usable, FloatOptions(options));
+  DecideValidity(options, &r);
   return r;
 }
 

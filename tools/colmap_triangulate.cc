@@ -819,10 +819,10 @@ std::string ParseColmapVersion(const std::string& help_output) {
 
 // ---- the route ------------------------------------------------------------------------------
 
-ColmapTriangulateResult TriangulateWithColmap(const Scene& cameras,
-                                              const ColmapTriangulateOptions& options) {
-  options.Check();
-  const std::string source = cameras.source.empty() ? "scene" : cameras.source;
+namespace {
+
+// Every view has its image: colmap extracts features from them.
+void CheckViewsHaveImages(const Scene& cameras, const std::string& source) {
   if (cameras.views.size() < 2) {
     throw InputError(source + ": point_triangulator needs at least two views, the scene has " +
                      std::to_string(cameras.views.size()));
@@ -836,202 +836,221 @@ ColmapTriangulateResult TriangulateWithColmap(const Scene& cameras,
                        " not found (give the image folder with --images)");
     }
   }
+}
 
-  ColmapTriangulateResult result;
-  result.colmap_path = FindExecutable(options.colmap);
-  if (result.colmap_path.empty()) {
+std::string FindColmapOrThrow(const std::string& colmap) {
+  const std::string path = FindExecutable(colmap);
+  if (path.empty()) {
     throw InputError(
-        "colmap: '" + options.colmap + "' " +
-        (options.colmap.find('/') == std::string::npos ? "is not in PATH"
-                                                       : "is not an executable") +
+        "colmap: '" + colmap + "' " +
+        (colmap.find('/') == std::string::npos ? "is not in PATH" : "is not an executable") +
         "; install the Debian package `colmap` (sudo apt-get install colmap, or deploy/setup.sh) "
         "or give its path with --colmap");
   }
+  return path;
+}
 
-  // Workspace.
-  const bool temporary = options.workspace.empty();
-  fs::path workspace;
-  if (temporary) {
+// A fresh temporary folder, or the given one emptied of an earlier route's files. Absolute.
+fs::path PrepareWorkspace(const std::string& given) {
+  std::error_code ec;
+  if (given.empty()) {
     std::string pattern = (fs::temp_directory_path() / "manisweep-colmap-XXXXXX").string();
     if (!::mkdtemp(pattern.data())) {
       throw InputError(pattern +
                        ": cannot create the temporary colmap workspace: " + strerror(errno));
     }
-    workspace = pattern;
-  } else {
-    workspace = options.workspace;
-    fs::create_directories(workspace, ec);
-    if (ec || !fs::is_directory(workspace, ec)) {
-      throw InputError(options.workspace + ": cannot create the colmap workspace directory");
-    }
-    for (const char* old :
-         {"database.db", "database.db-journal", "database.db-wal", "database.db-shm", "images",
-          "image_list.txt", "model_in", "model_out", "colmap.log"}) {
-      fs::remove_all(workspace / old, ec);
-      if (ec) throw InputError((workspace / old).string() + ": cannot remove: " + ec.message());
-    }
+    return fs::absolute(pattern);
   }
-  workspace = fs::absolute(workspace);
-  const bool keep = !temporary || options.keep_workspace;
-  WorkspaceGuard guard(workspace, !keep);
-  spdlog::info("colmap workspace: {}{}", workspace.string(),
-               keep ? "" : " (removed at the end; --keep-workspace keeps it)");
-  const fs::path log_path = workspace / "colmap.log";
-  const fs::path database = workspace / "database.db";
-  const fs::path image_dir = workspace / "images";
-  const fs::path model_in = workspace / "model_in";
-  const fs::path model_out = workspace / "model_out";
-  { std::ofstream touch(log_path); }
-  ColmapRunner colmap(result.colmap_path, log_path, keep);
+  const fs::path workspace = given;
+  fs::create_directories(workspace, ec);
+  if (ec || !fs::is_directory(workspace, ec)) {
+    throw InputError(given + ": cannot create the colmap workspace directory");
+  }
+  for (const char* old :
+       {"database.db", "database.db-journal", "database.db-wal", "database.db-shm", "images",
+        "image_list.txt", "model_in", "model_out", "colmap.log"}) {
+    fs::remove_all(workspace / old, ec);
+    if (ec) throw InputError((workspace / old).string() + ": cannot remove: " + ec.message());
+  }
+  return fs::absolute(workspace);
+}
 
-  const std::string help = colmap.Run("-h", {});
-  result.colmap_version = ParseColmapVersion(help);
-  spdlog::info("colmap: {} ({})",
-               result.colmap_version.empty() ? "unknown version" : result.colmap_version,
-               result.colmap_path);
-  if (result.colmap_version.rfind("COLMAP 3.", 0) != 0) {
-    spdlog::warn(
-        "colmap: the options used here were checked with COLMAP 3.8 (Debian 12); "
-        "this one reports '{}'",
-        result.colmap_version);
-  }
+// What the stages share: the scene, the workspace's files, colmap, the result being filled.
+struct ColmapRoute {
+  const Scene& cameras;
+  const ColmapTriangulateOptions& options;
+  ColmapTriangulateResult& result;
+  fs::path workspace;
+  ColmapRunner& colmap;
+  std::vector<std::string> names;  // the views' names in the workspace (ColmapWorkspaceNames)
+  ColmapIdMap ids;                 // the database's ids of the views (after ExtractFeatures)
 
-  // Images: links named as the views (see ColmapWorkspaceNames), listed explicitly so colmap
-  // sees exactly the scene's views.
-  const std::vector<std::string> names = ColmapWorkspaceNames(cameras);
-  {
-    std::string list;
-    for (size_t i = 0; i < names.size(); ++i) {
-      const fs::path link = image_dir / names[i];
-      fs::create_directories(link.parent_path(), ec);
-      fs::create_symlink(fs::absolute(cameras.views[i].image_path), link, ec);
-      if (ec) throw InputError(link.string() + ": cannot create image link: " + ec.message());
-      list += names[i] + "\n";
-    }
-    WriteFileAtomically(
-        workspace / "image_list.txt", [&](std::ostream& out) { out << list; }, false);
-  }
-  const std::string threads = std::to_string(options.threads);
-  const int64_t num_views = static_cast<int64_t>(cameras.views.size());
-  const auto timed = [&](const std::string& stage, const std::function<void()>& body) {
+  fs::path Database() const { return workspace / "database.db"; }
+  fs::path Images() const { return workspace / "images"; }
+  fs::path ModelIn() const { return workspace / "model_in"; }
+  fs::path ModelOut() const { return workspace / "model_out"; }
+  int64_t NumViews() const { return static_cast<int64_t>(cameras.views.size()); }
+  std::string Threads() const { return std::to_string(options.threads); }
+
+  void Timed(const std::string& stage, const std::function<void()>& body) {
     Timer timer;
     body();
     result.stage_times.push_back({stage, timer.Seconds()});
     spdlog::info("{}: {:.1f} s", stage, result.stage_times.back().seconds);
-  };
+  }
+};
 
-  // 1. SIFT features on the CPU, one camera per image with the first view's intrinsics; the
-  //    database's cameras get every view's own intrinsics right after.
-  const ColmapDbCamera first = ColmapCameraFor(cameras.views[0].intrinsics);
+void CheckColmapVersion(ColmapRoute& route) {
+  const std::string help = route.colmap.Run("-h", {});
+  route.result.colmap_version = ParseColmapVersion(help);
+  spdlog::info(
+      "colmap: {} ({})",
+      route.result.colmap_version.empty() ? "unknown version" : route.result.colmap_version,
+      route.result.colmap_path);
+  if (route.result.colmap_version.rfind("COLMAP 3.", 0) != 0) {
+    spdlog::warn(
+        "colmap: the options used here were checked with COLMAP 3.8 (Debian 12); "
+        "this one reports '{}'",
+        route.result.colmap_version);
+  }
+}
+
+// Images: links named as the views (see ColmapWorkspaceNames), listed explicitly so colmap
+// sees exactly the scene's views.
+void LinkImages(ColmapRoute& route) {
+  std::error_code ec;
+  std::string list;
+  for (size_t i = 0; i < route.names.size(); ++i) {
+    const fs::path link = route.Images() / route.names[i];
+    fs::create_directories(link.parent_path(), ec);
+    fs::create_symlink(fs::absolute(route.cameras.views[i].image_path), link, ec);
+    if (ec) throw InputError(link.string() + ": cannot create image link: " + ec.message());
+    list += route.names[i] + "\n";
+  }
+  WriteFileAtomically(
+      route.workspace / "image_list.txt", [&](std::ostream& out) { out << list; }, false);
+}
+
+// 1. SIFT features on the CPU, one camera per image with the first view's intrinsics; the
+//    database's cameras get every view's own intrinsics right after.
+void ExtractFeatures(ColmapRoute& route) {
+  const ColmapDbCamera first = ColmapCameraFor(route.cameras.views[0].intrinsics);
   std::string extraction_output;
-  timed("feature_extractor", [&] {
-    extraction_output = colmap.Run("feature_extractor",
-                                   {"--database_path",
-                                    database.string(),
-                                    "--image_path",
-                                    image_dir.string(),
-                                    "--image_list_path",
-                                    (workspace / "image_list.txt").string(),
-                                    "--ImageReader.camera_model",
-                                    ModelName(first.model),
-                                    "--ImageReader.camera_params",
-                                    JoinParams(first.params, ","),
-                                    "--ImageReader.single_camera",
-                                    "0",
-                                    "--SiftExtraction.use_gpu",
-                                    "0",
-                                    "--SiftExtraction.max_image_size",
-                                    std::to_string(options.max_image_size),
-                                    "--SiftExtraction.num_threads",
-                                    threads,
-                                    "--log_to_stderr",
-                                    "1"},
-                                   [](const std::string& line, StageMonitor& m) {
-                                     int64_t done = 0, total = 0;
-                                     if (ParseFraction(line, "Processed file [", &done, &total)) {
-                                       m.Report(done, total, "images");
-                                     }
-                                   });
+  route.Timed("feature_extractor", [&] {
+    extraction_output =
+        route.colmap.Run("feature_extractor",
+                         {"--database_path",
+                          route.Database().string(),
+                          "--image_path",
+                          route.Images().string(),
+                          "--image_list_path",
+                          (route.workspace / "image_list.txt").string(),
+                          "--ImageReader.camera_model",
+                          ModelName(first.model),
+                          "--ImageReader.camera_params",
+                          JoinParams(first.params, ","),
+                          "--ImageReader.single_camera",
+                          "0",
+                          "--SiftExtraction.use_gpu",
+                          "0",
+                          "--SiftExtraction.max_image_size",
+                          std::to_string(route.options.max_image_size),
+                          "--SiftExtraction.num_threads",
+                          route.Threads(),
+                          "--log_to_stderr",
+                          "1"},
+                         [](const std::string& line, StageMonitor& m) {
+                           int64_t done = 0, total = 0;
+                           if (ParseFraction(line, "Processed file [", &done, &total)) {
+                             m.Report(done, total, "images");
+                           }
+                         });
   });
-  ColmapDatabase db = ReadColmapDatabase(database.string());
+  const std::string database = route.Database().string();
+  const ColmapDatabase db = ReadColmapDatabase(database);
   ColmapIdMap ids;
   try {
-    ids = MatchDatabaseToViews(cameras, names, db, database.string());
+    ids = MatchDatabaseToViews(route.cameras, route.names, db, database);
   } catch (const InputError& e) {
     // Add what colmap said about the image ("Name: <name>", then "ERROR: ...").
     std::string said;
-    for (size_t i = 0; i < names.size() && said.empty(); ++i) {
-      said = ColmapImageError(extraction_output, names[i]);
+    for (size_t i = 0; i < route.names.size() && said.empty(); ++i) {
+      said = ColmapImageError(extraction_output, route.names[i]);
     }
     throw InputError(std::string(e.what()) + (said.empty() ? "" : " (colmap: " + said + ")"));
   }
-  {
-    std::vector<ColmapDbCamera> known;
-    std::set<int64_t> done;
-    for (size_t i = 0; i < cameras.views.size(); ++i) {
-      if (!done.insert(ids.camera_id[i]).second) continue;
-      known.push_back(ColmapCameraFor(cameras.views[i].intrinsics));
-      known.back().camera_id = ids.camera_id[i];
-    }
-    WriteColmapDatabaseCameras(database.string(), known);
+  std::vector<ColmapDbCamera> known;
+  std::set<int64_t> done;
+  for (size_t i = 0; i < route.cameras.views.size(); ++i) {
+    if (!done.insert(ids.camera_id[i]).second) continue;
+    known.push_back(ColmapCameraFor(route.cameras.views[i].intrinsics));
+    known.back().camera_id = ids.camera_id[i];
   }
+  WriteColmapDatabaseCameras(database, known);
   int64_t without_features = 0;
   for (const ColmapDbImage& image : db.images) {
-    result.num_keypoints += image.num_keypoints;
+    route.result.num_keypoints += image.num_keypoints;
     if (image.num_keypoints == 0) ++without_features;
   }
-  spdlog::info("colmap: {} SIFT features in {} views ({:.0f} per view)", result.num_keypoints,
-               num_views, static_cast<double>(result.num_keypoints) / num_views);
+  spdlog::info("colmap: {} SIFT features in {} views ({:.0f} per view)", route.result.num_keypoints,
+               route.NumViews(),
+               static_cast<double>(route.result.num_keypoints) / route.NumViews());
   if (without_features > 0) spdlog::warn("colmap: {} views have no features", without_features);
+  route.ids = ids;
+}
 
-  // 2. Matching with geometric verification under the known intrinsics.
-  const std::string matcher = options.matcher + "_matcher";
-  timed(matcher, [&] {
-    colmap.Run(matcher,
-               {"--database_path", database.string(), "--SiftMatching.use_gpu", "0",
-                "--SiftMatching.num_threads", threads, "--log_to_stderr", "1"},
-               [](const std::string& line, StageMonitor& m) {
-                 long long a = 0, b = 0, c = 0, d = 0;
-                 int64_t x = 0, y = 0;
-                 const size_t at = line.find("Matching block [");
-                 if (at != std::string::npos &&
-                     std::sscanf(line.c_str() + at, "Matching block [%lld/%lld, %lld/%lld]", &a, &b,
-                                 &c, &d) == 4 &&
-                     b > 0 && d > 0) {
-                   m.Report((a - 1) * d + c, b * d, "blocks");
-                 } else if (ParseFraction(line, "Matching image [", &x, &y)) {
-                   m.Report(x, y, "images");
-                 }
-               });
+// 2. Matching with geometric verification under the known intrinsics.
+void MatchFeatures(ColmapRoute& route) {
+  const std::string matcher = route.options.matcher + "_matcher";
+  route.Timed(matcher, [&] {
+    route.colmap.Run(matcher,
+                     {"--database_path", route.Database().string(), "--SiftMatching.use_gpu", "0",
+                      "--SiftMatching.num_threads", route.Threads(), "--log_to_stderr", "1"},
+                     [](const std::string& line, StageMonitor& m) {
+                       long long a = 0, b = 0, c = 0, d = 0;
+                       int64_t x = 0, y = 0;
+                       const size_t at = line.find("Matching block [");
+                       if (at != std::string::npos &&
+                           std::sscanf(line.c_str() + at, "Matching block [%lld/%lld, %lld/%lld]",
+                                       &a, &b, &c, &d) == 4 &&
+                           b > 0 && d > 0) {
+                         m.Report((a - 1) * d + c, b * d, "blocks");
+                       } else if (ParseFraction(line, "Matching image [", &x, &y)) {
+                         m.Report(x, y, "images");
+                       }
+                     });
   });
-  db = ReadColmapDatabase(database.string());
-  result.num_verified_pairs = db.num_verified_pairs;
-  result.num_inlier_matches = db.num_inlier_matches;
+  const ColmapDatabase db = ReadColmapDatabase(route.Database().string());
+  route.result.num_verified_pairs = db.num_verified_pairs;
+  route.result.num_inlier_matches = db.num_inlier_matches;
   spdlog::info("colmap: {} of {} image pairs verified, {} inlier matches", db.num_verified_pairs,
-               num_views * (num_views - 1) / 2, db.num_inlier_matches);
+               route.NumViews() * (route.NumViews() - 1) / 2, db.num_inlier_matches);
   if (db.num_verified_pairs == 0) {
     spdlog::warn("colmap: no image pair has verified matches; no points can be triangulated");
   }
+}
 
-  // 3. The known cameras as a model with the database's ids, then triangulation with them fixed.
-  {
-    const ColmapFiles model = MakeKnownPoseModel(cameras, names, ids);
-    fs::create_directories(model_in, ec);
-    fs::create_directories(model_out, ec);
+// 3. The known cameras as a model with the database's ids, then triangulation with them fixed.
+void TriangulatePoints(ColmapRoute& route) {
+  const ColmapFiles model = MakeKnownPoseModel(route.cameras, route.names, route.ids);
+  std::error_code ec;
+  fs::create_directories(route.ModelIn(), ec);
+  fs::create_directories(route.ModelOut(), ec);
+  for (const auto& [name, text] : {std::pair{model.cameras_name, &model.cameras},
+                                   {model.images_name, &model.images},
+                                   {model.points_name, &model.points}}) {
     WriteFileAtomically(
-        model_in / model.cameras_name, [&](std::ostream& out) { out << model.cameras; }, false);
-    WriteFileAtomically(
-        model_in / model.images_name, [&](std::ostream& out) { out << model.images; }, false);
-    WriteFileAtomically(
-        model_in / model.points_name, [&](std::ostream& out) { out << model.points; }, false);
+        route.ModelIn() / name, [&](std::ostream& out) { out << *text; }, false);
   }
-  timed("point_triangulator", [&] {
-    colmap.Run(
+  const int64_t num_views = route.NumViews();
+  route.Timed("point_triangulator", [&] {
+    route.colmap.Run(
         "point_triangulator",
-        {"--database_path", database.string(), "--image_path", image_dir.string(), "--input_path",
-         model_in.string(), "--output_path", model_out.string(), "--Mapper.ba_refine_focal_length",
-         "0", "--Mapper.ba_refine_principal_point", "0", "--Mapper.ba_refine_extra_params", "0",
-         "--Mapper.num_threads", threads, "--log_to_stderr", "1"},
+        {"--database_path", route.Database().string(), "--image_path", route.Images().string(),
+         "--input_path", route.ModelIn().string(), "--output_path", route.ModelOut().string(),
+         "--Mapper.ba_refine_focal_length", "0", "--Mapper.ba_refine_principal_point", "0",
+         "--Mapper.ba_refine_extra_params", "0", "--Mapper.num_threads", route.Threads(),
+         "--log_to_stderr", "1"},
         [num_views](const std::string& line, StageMonitor& m) {
           if (line.rfind("Triangulating image #", 0) == 0) {
             const size_t open = line.rfind('(');
@@ -1046,19 +1065,48 @@ ColmapTriangulateResult TriangulateWithColmap(const Scene& cameras,
           }
         });
   });
+}
 
-  // 4. Import.
-  timed("import", [&] {
-    const std::string model_dir = FindColmapModelDir(model_out.string());
+// 4. Import: the triangulated points attached to the given cameras.
+void ImportModel(ColmapRoute& route) {
+  route.Timed("import", [&] {
+    const std::string model_dir = FindColmapModelDir(route.ModelOut().string());
     if (model_dir.empty()) {
-      throw InternalError(model_out.string() + ": colmap point_triangulator wrote no model");
+      throw InternalError(route.ModelOut().string() + ": colmap point_triangulator wrote no model");
     }
     SceneReadOptions read;
     read.read_image_sizes = false;
     const Scene triangulated = ReadColmapModel(model_dir, ColmapModelIsBinary(model_dir), read);
-    result.scene = AttachTriangulatedPoints(cameras, names, triangulated, &result);
-    result.scene.Validate();
+    route.result.scene =
+        AttachTriangulatedPoints(route.cameras, route.names, triangulated, &route.result);
+    route.result.scene.Validate();
   });
+}
+
+}  // namespace
+
+ColmapTriangulateResult TriangulateWithColmap(const Scene& cameras,
+                                              const ColmapTriangulateOptions& options) {
+  options.Check();
+  CheckViewsHaveImages(cameras, cameras.source.empty() ? "scene" : cameras.source);
+  ColmapTriangulateResult result;
+  result.colmap_path = FindColmapOrThrow(options.colmap);
+  const bool temporary = options.workspace.empty();
+  const fs::path workspace = PrepareWorkspace(options.workspace);
+  const bool keep = !temporary || options.keep_workspace;
+  WorkspaceGuard guard(workspace, !keep);
+  spdlog::info("colmap workspace: {}{}", workspace.string(),
+               keep ? "" : " (removed at the end; --keep-workspace keeps it)");
+  const fs::path log_path = workspace / "colmap.log";
+  { std::ofstream touch(log_path); }
+  ColmapRunner colmap(result.colmap_path, log_path, keep);
+  ColmapRoute route{cameras, options, result, workspace, colmap, ColmapWorkspaceNames(cameras)};
+  CheckColmapVersion(route);
+  LinkImages(route);
+  ExtractFeatures(route);
+  MatchFeatures(route);
+  TriangulatePoints(route);
+  ImportModel(route);
   return result;
 }
 
