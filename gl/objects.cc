@@ -817,4 +817,73 @@ std::string InsertDefines(const std::string& text, const std::vector<std::string
   throw InternalError("shader has no #version line; cannot insert #defines");
 }
 
+// ---------------------------------------------------------------------------------------------
+// Layered framebuffers, double uniforms, array layers
+
+void ShaderProgram::SetDouble(const std::string& uniform, double value) const {
+  glProgramUniform1d(id(), Location(uniform), value);
+}
+
+Texture2D Texture2D::FromImage(const cv::Mat& image, TextureFormat format) {
+  Texture2D texture(image.cols, image.rows, format);
+  texture.Upload(image);
+  return texture;
+}
+
+void Texture2DArray::BindImage(int unit, ImageAccess access) const {
+  const GLenum mode = access == ImageAccess::kReadOnly    ? GL_READ_ONLY
+                      : access == ImageAccess::kWriteOnly ? GL_WRITE_ONLY
+                                                          : GL_READ_WRITE;
+  glBindImageTexture(static_cast<GLuint>(unit), id_, 0, GL_TRUE, 0, mode,
+                     Info(format_).internal_format);
+}
+
+cv::Mat Texture2DArray::DownloadLayer(int layer) const {
+  MS_CHECK(layer >= 0 && layer < layers_) << "layer " << layer << " of " << layers_;
+  const FormatInfo info = Info(format_);
+  cv::Mat all(height_ * layers_, width_, info.cv_type);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, id_);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, info.pixel_format, info.pixel_type, all.data);
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  CheckGlError("texture array read-back");
+  return all.rowRange(layer * height_, (layer + 1) * height_).clone();
+}
+
+LayeredFramebuffer::LayeredFramebuffer(const std::vector<const Texture2DArray*>& colors,
+                                       const Texture2DArray& depth)
+    : width_(depth.width()), height_(depth.height()), num_colors_(static_cast<int>(colors.size())) {
+  glGenFramebuffers(1, &fbo_);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+  std::vector<GLenum> buffers;
+  for (size_t i = 0; i < colors.size(); ++i) {
+    glFramebufferTexture(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(i),
+                         colors[i]->id(), 0);
+    buffers.push_back(GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(i));
+  }
+  glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, depth.id(), 0);
+  glDrawBuffers(static_cast<GLsizei>(buffers.size()), buffers.data());
+  const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+  if (status != GL_FRAMEBUFFER_COMPLETE) {
+    glDeleteFramebuffers(1, &fbo_);
+    throw InternalError(fmt::format("{}x{}x{} layered framebuffer incomplete (0x{:x})",
+                                    depth.width(), depth.height(), depth.layers(), status));
+  }
+  CheckGlError("creating a layered framebuffer");
+}
+
+LayeredFramebuffer::~LayeredFramebuffer() {
+  if (fbo_ != 0) glDeleteFramebuffers(1, &fbo_);
+}
+
+void LayeredFramebuffer::BindAndClear(const std::vector<Eigen::Vector4f>& colors, float depth,
+                                      const cv::Rect& viewport) const {
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+  glViewport(0, 0, width_, height_);
+  glDepthMask(GL_TRUE);
+  for (int i = 0; i < num_colors_; ++i) glClearBufferfv(GL_COLOR, i, colors[i].data());
+  glClearBufferfv(GL_DEPTH, 0, &depth);
+  glViewport(viewport.x, viewport.y, viewport.width, viewport.height);
+}
+
 }  // namespace ms::gl

@@ -76,6 +76,8 @@ class ShaderProgram {
   void Set(const std::string& uniform, const Eigen::Matrix3f& value) const;  // column-major
   void Set(const std::string& uniform, const Eigen::Matrix4f& value) const;
   void Set(const std::string& uniform, const std::vector<float>& values) const;  // float[]
+  // A `double` uniform (GL 4.0). Not an overload of Set: a double literal there means float.
+  void SetDouble(const std::string& uniform, double value) const;
 
   // Compute programs: Use() + glDispatchCompute(groups). Follow with MemoryBarrier() before
   // reading what the shader wrote through another path (buffer download, texture fetch).
@@ -205,6 +207,8 @@ class Texture2D {
  public:
   // Immutable storage (glTexStorage2D) with `levels` mip levels. Filter: nearest; wrap: clamp.
   Texture2D(int width, int height, TextureFormat format, int levels = 1);
+  // A texture of `format` holding `image` (CvTypeOf(format), level 0 only).
+  static Texture2D FromImage(const cv::Mat& image, TextureFormat format);
   ~Texture2D();
   Texture2D(Texture2D&& other) noexcept;
   Texture2D& operator=(Texture2D&& other) noexcept;
@@ -250,6 +254,10 @@ class Texture2DArray {
   void SetFilter(TextureFilter filter);
   void SetWrap(TextureWrap wrap);
   void Bind(int unit) const;
+  // Every layer, level 0, as an image unit (GLSL image2DArray) of the array's format.
+  void BindImage(int unit, ImageAccess access) const;
+  // One layer of level 0. Reads the whole array: for captures and tests, not hot paths.
+  cv::Mat DownloadLayer(int layer) const;
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -307,6 +315,26 @@ class Framebuffer {
   int width_ = 0, height_ = 0;
   std::vector<Texture2D> colors_;
   std::vector<Texture2D> depth_;  // zero or one
+};
+
+// Colour texture arrays and a depth texture array it does not own, attached as one layered
+// framebuffer: an instanced draw routes each instance to its layer (gl_Layer), colour output i
+// to colors[i]. All arrays have the depth array's size.
+class LayeredFramebuffer {
+ public:
+  LayeredFramebuffer(const std::vector<const Texture2DArray*>& colors, const Texture2DArray& depth);
+  ~LayeredFramebuffer();
+  LayeredFramebuffer(const LayeredFramebuffer&) = delete;
+  LayeredFramebuffer& operator=(const LayeredFramebuffer&) = delete;
+
+  // Binds for drawing, clears colour i to colors[i] (all layers) and depth, and sets the
+  // viewport to `viewport` (x, y, width, height).
+  void BindAndClear(const std::vector<Eigen::Vector4f>& colors, float depth,
+                    const cv::Rect& viewport) const;
+
+ private:
+  int width_, height_, num_colors_;
+  uint32_t fbo_ = 0;
 };
 
 // Inserts `#define NAME` / `#define NAME VALUE` lines right after a shader's #version line,

@@ -71,95 +71,11 @@ gl::ShaderProgram Program(const std::string& name, const std::vector<std::string
 
 // ---- GL helpers ----
 
-void SetDouble(const gl::ShaderProgram& program, const char* name, double value) {
-  glProgramUniform1d(program.id(), program.Location(name), value);
-}
-
-void BindImageArray(const gl::Texture2DArray& texture, int unit, GLenum access, GLenum format) {
-  glBindImageTexture(static_cast<GLuint>(unit), texture.id(), 0, GL_TRUE, 0, access, format);
-}
-
 // After every compute pass: its image and buffer stores become visible to every later access
 // (the next pass's image loads, the next batch's rendering into the same arrays, read-backs).
 void Barrier() { glMemoryBarrier(GL_ALL_BARRIER_BITS); }
 
 int DivUp(int64_t a, int64_t b) { return static_cast<int>((a + b - 1) / b); }
-
-// One layer of a texture array (the whole array is read: for captures only).
-cv::Mat DownloadLayer(const gl::Texture2DArray& texture, int layer) {
-  const bool rgba = texture.format() == gl::TextureFormat::kRGBA32F;
-  MS_CHECK(rgba || texture.format() == gl::TextureFormat::kR32F) << "capture of an odd format";
-  const int type = rgba ? CV_32FC4 : CV_32FC1;
-  cv::Mat all(texture.height() * texture.layers(), texture.width(), type);
-  glBindTexture(GL_TEXTURE_2D_ARRAY, texture.id());
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, rgba ? GL_RGBA : GL_RED, GL_FLOAT, all.data);
-  glPixelStorei(GL_PACK_ALIGNMENT, 4);
-  gl::CheckGlError("capture read-back");
-  return all.rowRange(layer * texture.height(), (layer + 1) * texture.height()).clone();
-}
-
-// Colour texture arrays and a depth texture array attached as one layered framebuffer: an
-// instanced draw routes each instance to its layer (gl_Layer), colour output i to colors[i].
-class LayeredTarget {
- public:
-  LayeredTarget(const std::vector<const gl::Texture2DArray*>& colors,
-                const gl::Texture2DArray& depth)
-      : width_(depth.width()),
-        height_(depth.height()),
-        num_colors_(static_cast<int>(colors.size())) {
-    glGenFramebuffers(1, &fbo_);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
-    std::vector<GLenum> buffers;
-    for (size_t i = 0; i < colors.size(); ++i) {
-      glFramebufferTexture(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(i),
-                           colors[i]->id(), 0);
-      buffers.push_back(GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(i));
-    }
-    glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, depth.id(), 0);
-    glDrawBuffers(static_cast<GLsizei>(buffers.size()), buffers.data());
-    const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
-    if (status != GL_FRAMEBUFFER_COMPLETE) {
-      glDeleteFramebuffers(1, &fbo_);
-      throw InternalError(fmt::format("{}x{}x{} layered framebuffer incomplete (0x{:x})",
-                                      depth.width(), depth.height(), depth.layers(), status));
-    }
-    gl::CheckGlError("creating a layered framebuffer");
-  }
-  ~LayeredTarget() {
-    if (fbo_ != 0) glDeleteFramebuffers(1, &fbo_);
-  }
-  LayeredTarget(const LayeredTarget&) = delete;
-  LayeredTarget& operator=(const LayeredTarget&) = delete;
-
-  // Binds for drawing, clears colour i to colors[i] (all layers) and depth, and sets the
-  // viewport to `viewport` (x, y, width, height).
-  void BindAndClear(const std::vector<Eigen::Vector4f>& colors, float depth,
-                    const cv::Rect& viewport) const {
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
-    glViewport(0, 0, width_, height_);
-    glDepthMask(GL_TRUE);
-    for (int i = 0; i < num_colors_; ++i) glClearBufferfv(GL_COLOR, i, colors[i].data());
-    glClearBufferfv(GL_DEPTH, 0, &depth);
-    glViewport(viewport.x, viewport.y, viewport.width, viewport.height);
-  }
-
- private:
-  int width_, height_, num_colors_;
-  GLuint fbo_ = 0;
-};
-
-gl::Texture2D ZeroTexture(int width, int height, gl::TextureFormat format) {
-  gl::Texture2D texture(width, height, format);
-  texture.Upload(cv::Mat::zeros(height, width, gl::CvTypeOf(format)));
-  return texture;
-}
-
-gl::Texture2D ImageTexture(const cv::Mat& image) {
-  gl::Texture2D texture(image.cols, image.rows, gl::TextureFormat::kR32F);
-  texture.Upload(image);
-  return texture;
-}
 
 // The farthest camera z any swept vertex can reach (sweeping moves a vertex by at most
 // |alpha k_max| along a ray), padded; 0 if the mesh lies behind the camera.
@@ -221,8 +137,8 @@ struct GlslSweepKernel::Impl {
     std::unique_ptr<gl::Texture2DArray> unswept_ncc;
     std::vector<std::unique_ptr<gl::Texture2DArray>> reprojected;  // per neighbour
     std::vector<std::unique_ptr<gl::Texture2DArray>> shadow, shadow_depth;
-    std::unique_ptr<LayeredTarget> surface_target;
-    std::vector<std::unique_ptr<LayeredTarget>> shadow_targets;
+    std::unique_ptr<gl::LayeredFramebuffer> surface_target;
+    std::vector<std::unique_ptr<gl::LayeredFramebuffer>> shadow_targets;
     std::unique_ptr<gl::Texture2D> sums0, sums1;
   };
   Resources resources;
@@ -389,7 +305,7 @@ void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, 
       std::make_unique<Texture2DArray>(padded, height, batch_size, TextureFormat::kRG32F);
   resources.surface_depth =
       std::make_unique<Texture2DArray>(padded, height, batch_size, TextureFormat::kDepth32F);
-  resources.surface_target = std::make_unique<LayeredTarget>(
+  resources.surface_target = std::make_unique<gl::LayeredFramebuffer>(
       std::vector<const Texture2DArray*>{resources.surface.get()}, *resources.surface_depth);
   resources.world =
       std::make_unique<Texture2DArray>(padded, height, batch_size, TextureFormat::kRGBA32F);
@@ -401,7 +317,7 @@ void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, 
         std::make_unique<Texture2DArray>(k.width, k.height, batch_size, TextureFormat::kR32F));
     resources.shadow_depth.push_back(
         std::make_unique<Texture2DArray>(k.width, k.height, batch_size, TextureFormat::kDepth32F));
-    resources.shadow_targets.push_back(std::make_unique<LayeredTarget>(
+    resources.shadow_targets.push_back(std::make_unique<gl::LayeredFramebuffer>(
         std::vector<const Texture2DArray*>{resources.shadow.back().get()},
         *resources.shadow_depth.back()));
   }
@@ -416,10 +332,10 @@ void GlslSweepKernel::Impl::Allocate(const PreparedSweep& prep, int batch_size, 
   const bool transposed = variant == GlslBlurVariant::kUnrolled;
   const int sums_w = transposed ? height + 2 * radius + block : width;
   const int sums_h = transposed ? width : height + 2 * radius + block;
-  resources.sums0 =
-      std::make_unique<gl::Texture2D>(ZeroTexture(sums_w, sums_h, TextureFormat::kRGBA32F));
-  resources.sums1 =
-      std::make_unique<gl::Texture2D>(ZeroTexture(sums_w, sums_h, TextureFormat::kRG32F));
+  resources.sums0 = std::make_unique<gl::Texture2D>(
+      gl::Texture2D::FromImage(cv::Mat::zeros(sums_h, sums_w, CV_32FC4), TextureFormat::kRGBA32F));
+  resources.sums1 = std::make_unique<gl::Texture2D>(
+      gl::Texture2D::FromImage(cv::Mat::zeros(sums_h, sums_w, CV_32FC2), TextureFormat::kRG32F));
   gl::CheckGlError("allocating sweep textures");
 }
 
@@ -686,14 +602,15 @@ GlslSweepKernel::Impl::GpuJob::GpuJob(const SweepJob& job, const PreparedSweep& 
       batches(Batch::Split(prep, rule, batch_size)),
       mesh(job.mesh),
       origin(mesh.origin()),
-      image(ImageTexture(prep.camera.image)),
+      image(gl::Texture2D::FromImage(prep.camera.image, gl::TextureFormat::kR32F)),
       records(prep.tiles, static_cast<float>(job.options.ncc_threshold), match_words,
               static_cast<int>(batches.size())),
       clip_control(clip_control),
       range(clip_control ? gl::DepthRange::kReversedZeroToOne : gl::DepthRange::kNegativeOneToOne),
       clear_depth(clip_control ? 0.0f : 1.0f),
       center((prep.camera.view.Center() - origin).cast<float>()) {
-  for (const SweepCamera& n : prep.neighbours) neighbour_images.push_back(ImageTexture(n.image));
+  for (const SweepCamera& n : prep.neighbours)
+    neighbour_images.push_back(gl::Texture2D::FromImage(n.image, gl::TextureFormat::kR32F));
   // Far planes beyond every swept vertex.
   const int max_offset = std::max(std::abs(prep.offsets.front()), std::abs(prep.offsets.back()));
   const double max_shift = std::abs(prep.alpha) * max_offset;
@@ -767,7 +684,7 @@ bool GlslSweepKernel::Impl::CaptureRecorder::AfterRender(const Batch& batch) {
   const int width = gpu_.width, height = gpu_.height, radius = gpu_.radius;
   const Eigen::Vector3d& origin = gpu_.origin;
   const View& view = gpu_.prep.camera.view;
-  const cv::Mat world4 = DownloadLayer(*resources_.world, layer).colRange(radius, radius + width);
+  const cv::Mat world4 = resources_.world->DownloadLayer(layer).colRange(radius, radius + width);
   capture_->world.create(height, width, CV_32FC3);
   capture_->depth.create(height, width, CV_32F);
   capture_->face.create(height, width, CV_32S);
@@ -790,9 +707,9 @@ bool GlslSweepKernel::Impl::CaptureRecorder::AfterRender(const Batch& batch) {
   capture_->reprojected.clear();
   capture_->mask.clear();
   for (int j = 0; j < gpu_.num_neighbours; ++j) {
-    capture_->shadow.push_back(DownloadLayer(*resources_.shadow[j], layer));
+    capture_->shadow.push_back(resources_.shadow[j]->DownloadLayer(layer));
     const cv::Mat reprojected =
-        DownloadLayer(*resources_.reprojected[j], layer).colRange(radius, radius + width);
+        resources_.reprojected[j]->DownloadLayer(layer).colRange(radius, radius + width);
     cv::Mat values(height, width, CV_32F, cv::Scalar(0));
     cv::Mat mask(height, width, CV_8U, cv::Scalar(0));
     for (int r = 0; r < height; ++r) {
@@ -815,7 +732,7 @@ bool GlslSweepKernel::Impl::CaptureRecorder::AfterNcc(const Batch& batch) {
   if (layer < 0) return false;
   capture_->ncc.clear();
   for (int j = 0; j < gpu_.num_neighbours; ++j) {
-    cv::Mat ncc = DownloadLayer(*resources_.ncc, layer * gpu_.num_neighbours + j);
+    cv::Mat ncc = resources_.ncc->DownloadLayer(layer * gpu_.num_neighbours + j);
     ncc.setTo(std::numeric_limits<float>::quiet_NaN(), ncc < -1.5f);
     capture_->ncc.push_back(ncc);
   }
@@ -912,8 +829,8 @@ std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
   programs.rows.Set("u_weights", weights);
   programs.ncc.Set("u_size", Eigen::Vector2i(width, height));
   programs.ncc.Set("u_weights", weights);
-  SetDouble(programs.ncc, "u_min_window_weight", sweep.min_window_weight);
-  SetDouble(programs.ncc, "u_min_texture_variance", sweep.min_texture_variance);
+  programs.ncc.SetDouble("u_min_window_weight", sweep.min_window_weight);
+  programs.ncc.SetDouble("u_min_texture_variance", sweep.min_texture_variance);
   tile_best.Set("u_neighbours", num_neighbours);
   tile_best.Set("u_width", width);
   tile_best.Set("u_threshold", rule.threshold);
@@ -1003,10 +920,10 @@ void GlslSweepKernel::Impl::RenderCameraView(const GpuJob& gpu, const Batch& bat
     for (int i = 0; i < group.count; ++i) {
       gpu.neighbour_images[group.first + i].Bind(1 + i);
       resources.shadow[group.first + i]->Bind(1 + group.count + i);
-      BindImageArray(*resources.reprojected[group.first + i], 1 + i, GL_WRITE_ONLY, GL_RGBA32F);
+      resources.reprojected[group.first + i]->BindImage(1 + i, gl::ImageAccess::kWriteOnly);
     }
     resources.surface->Bind(1 + 2 * group.count);
-    BindImageArray(*resources.world, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    resources.world->BindImage(0, gl::ImageAccess::kWriteOnly);
     gpu.SetGroup(group);
     group.program->Set("u_size", Eigen::Vector2i(padded, gpu.height));
     group.program->Set("u_layers", batch.layers);
@@ -1021,7 +938,7 @@ void GlslSweepKernel::Impl::NccBatch(const GpuJob& gpu, const Batch& batch) {
   const BlurPrograms& programs = *gpu.blur;
   for (int b = 0; b < batch.layers; ++b) {
     for (int j = 0; j < gpu.num_neighbours; ++j) {
-      BindImageArray(*resources.reprojected[j], 2, GL_READ_ONLY, GL_RGBA32F);
+      resources.reprojected[j]->BindImage(2, gl::ImageAccess::kReadOnly);
       resources.sums0->BindImage(0, gl::ImageAccess::kWriteOnly);
       resources.sums1->BindImage(1, gl::ImageAccess::kWriteOnly);
       programs.rows.Set("u_layer", b);
@@ -1030,8 +947,8 @@ void GlslSweepKernel::Impl::NccBatch(const GpuJob& gpu, const Batch& batch) {
 
       resources.sums0->BindImage(1, gl::ImageAccess::kReadOnly);
       resources.sums1->BindImage(2, gl::ImageAccess::kReadOnly);
-      BindImageArray(*resources.reprojected[j], 3, GL_READ_ONLY, GL_RGBA32F);
-      BindImageArray(*resources.ncc, 0, GL_WRITE_ONLY, GL_R32F);
+      resources.reprojected[j]->BindImage(3, gl::ImageAccess::kReadOnly);
+      resources.ncc->BindImage(0, gl::ImageAccess::kWriteOnly);
       programs.ncc.Set("u_layer", b);
       programs.ncc.Set("u_ncc_layer", b * gpu.num_neighbours + j);
       programs.ncc.Dispatch(gpu.ncc_groups_x, gpu.ncc_groups_y);
@@ -1054,11 +971,11 @@ void GlslSweepKernel::Impl::KeepUnsweptNcc(const GpuJob& gpu) {
 // the unswept batch only counts.
 void GlslSweepKernel::Impl::ReduceBatch(const GpuJob& gpu, const Batch& batch) {
   const TileRecords& records = gpu.records;
-  BindImageArray(*resources.ncc, 0, GL_READ_ONLY, GL_R32F);
-  BindImageArray(*resources.world, 1, GL_READ_ONLY, GL_RGBA32F);
+  resources.ncc->BindImage(0, gl::ImageAccess::kReadOnly);
+  resources.world->BindImage(1, gl::ImageAccess::kReadOnly);
   // Read only where winners must move; some array is bound there either way.
-  BindImageArray(resources.unswept_ncc ? *resources.unswept_ncc : *resources.ncc, 2, GL_READ_ONLY,
-                 GL_R32F);
+  (resources.unswept_ncc ? *resources.unswept_ncc : *resources.ncc)
+      .BindImage(2, gl::ImageAccess::kReadOnly);
   records.columns.BindStorage(0);
   records.rows.BindStorage(1);
   records.best_ncc.BindStorage(2);
