@@ -142,7 +142,7 @@ void RegisterColmapTriangulateCommand(CLI::App& app) {
       "colmap-triangulate",
       "Sparse points with visibility for cameras with known poses (Strecha, Middlebury, any "
       "scene): runs Debian's colmap (CPU SIFT, matching, point_triangulator with the poses "
-      "fixed) and imports the result. See docs/colmap-route.md");
+      "fixed) and imports the result. See docs/reference/colmap-route.md");
   cmd->add_option("-i,--input", options->input,
                   "cameras with known poses: a Strecha directory of *.camera files, a "
                   "Middlebury *_par.txt, or any scene format (its points are ignored)")

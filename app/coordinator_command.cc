@@ -38,11 +38,12 @@ void RunCoordinator(CoordinatorCommandOptions& options) {
   // that takes an explicit choice.
   const bool reachable = !IsLocalOnlyEndpoint(options.bind);
   if (reachable && options.curve_secret_key.empty() && !options.insecure) {
-    throw InputError("--bind " + options.bind +
-                     ": listening beyond this machine without CURVE lets anyone who reaches the "
-                     "port send results; give --curve-secret-key and --curve-public-keys (keys "
-                     "from `manisweep keygen`, docs/distributed.md), bind to 127.0.0.1, or pass "
-                     "--insecure to accept that");
+    throw InputError(
+        "--bind " + options.bind +
+        ": listening beyond this machine without CURVE lets anyone who reaches the "
+        "port send results; give --curve-secret-key and --curve-public-keys (keys "
+        "from `manisweep keygen`, docs/design/distributed.md), bind to 127.0.0.1, or pass "
+        "--insecure to accept that");
   }
   InitLogging("coordinator");
   if (reachable && options.curve_secret_key.empty()) {
@@ -101,7 +102,7 @@ void RegisterCoordinatorCommand(CLI::App& app) {
                 "send results)");
   cmd->add_flag("--refine", options->refine,
                 "then refine final.ply photometrically into refined.ply on the same workers, "
-                "keeping it a closed 2-manifold (docs/refine.md)");
+                "keeping it a closed 2-manifold (docs/design/refine.md)");
   AddRunOptions(cmd, &options->run);
   AddOptionGroup(cmd, &options->refine_options);
   cmd->callback([options] { RunCoordinator(*options); });

@@ -177,7 +177,7 @@ void RegisterRefineCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "refine",
       "Photometric refinement of a closed manifold mesh (Vu et al. 2012) that keeps it a closed "
-      "2-manifold without self-intersections (docs/refine.md)");
+      "2-manifold without self-intersections (docs/design/refine.md)");
   cmd->add_option("-i,--input", options->input, "scene with images (any supported format)")
       ->required();
   cmd->add_option("-m,--mesh", options->mesh, "closed 2-manifold to refine (.ply or .obj)")

@@ -89,7 +89,7 @@ int Main(int argc, char** argv) {
   int rounds = 3;
   SweepOptions sweep;
   sweep.max_image_dimension = 0;  // full size unless asked
-  CLI::App cli("Pixel-hypotheses per second of the sweep kernels (docs/performance.md)");
+  CLI::App cli("Pixel-hypotheses per second of the sweep kernels (docs/design/performance.md)");
   cli.add_option("--sizes", sizes_arg, "image sizes, WxH,...")->capture_default_str();
   cli.add_option("--kernels", kernels_arg, "cpu, cpu:T (T threads), reference, glsl")
       ->capture_default_str();

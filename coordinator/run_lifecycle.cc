@@ -270,7 +270,7 @@ StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const Swe
   if (done.jobs_smoothed > 0) {
     spdlog::info(
         "iteration {}: the images of {} of {} jobs were smoothed before matching (noise up to "
-        "{:.2f} grey levels; --sweep.image-noise-target, docs/sweep.md \"Noisy images\")",
+        "{:.2f} grey levels; --sweep.image-noise-target, docs/design/sweep.md \"Noisy images\")",
         iteration, done.jobs_smoothed, done.jobs, done.image_noise_max);
   }
   CheckpointInBackground();
@@ -283,7 +283,7 @@ int64_t RunLifecycle::CountCamerasInMatter(int iteration) {
     const size_t shown = std::min<size_t>(enclosed.size(), 10);
     spdlog::warn(
         "iteration {}: {} camera(s) inside the matter (their centre is in no free-space cell "
-        "of O, so they see the mesh from inside): {}{}; docs/manifold.md, \"Known limits\"",
+        "of O, so they see the mesh from inside): {}{}; docs/design/manifold.md, \"Known limits\"",
         iteration, enclosed.size(),
         fmt::join(enclosed.begin(), enclosed.begin() + static_cast<std::ptrdiff_t>(shown), ", "),
         shown < enclosed.size() ? ", ..." : "");

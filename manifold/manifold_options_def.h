@@ -31,7 +31,7 @@ MS_OPTION(int, steiner_grid, 3, "steiner-grid",
 MS_OPTION(GradedSteiner, steiner_graded, GradedSteiner::kHidden, "graded-steiner",
           "graded Steiner points in the empty space: hidden (those behind what every camera "
           "sees, and in open air far from the points), on (all, cells of Steiner points only "
-          "being free) or off (the paper's box grid only); docs/manifold.md",
+          "being free) or off (the paper's box grid only); docs/design/manifold.md",
           AnyValue())
 MS_OPTION(double, steiner_clearance, 1.5, "steiner-clearance",
           "graded Steiner points keep this x their size away from every point", AtLeast(1))

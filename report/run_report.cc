@@ -358,7 +358,7 @@ std::string BuildRunReport(const gl::GlContext& gl, const RunFolder& run,
   if (!per_camera.empty()) html += Section("cameras", "Cameras", per_camera);
   html += OptionsSection(run);
   html += Note("Written by `manisweep report " + run.dir +
-               "` from summary.json, run.h5 and the meshes of the folder (docs/report.md).");
+               "` from summary.json, run.h5 and the meshes of the folder (docs/guides/report.md).");
   html += kSelfCheck;
   html += "</body>\n</html>\n";
   return html;
