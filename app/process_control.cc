@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "base/error.h"
+#include "base/subprocess.h"
 
 namespace ms::app {
 namespace {
@@ -26,14 +27,6 @@ void OnStopSignal(int sig) {
     ::signal(sig, SIG_DFL);
     ::raise(sig);
   }
-}
-
-std::string Describe(int status) {
-  if (WIFEXITED(status)) return fmt::format("exit code {}", WEXITSTATUS(status));
-  if (WIFSIGNALED(status)) {
-    return fmt::format("killed by signal {} ({})", WTERMSIG(status), strsignal(WTERMSIG(status)));
-  }
-  return "stopped";
 }
 
 }  // namespace
@@ -52,34 +45,17 @@ bool StopRequested() { return g_stop_signal.load() != 0; }
 int StopSignal() { return g_stop_signal.load(); }
 
 pid_t SpawnSelf(const std::vector<std::string>& args) {
-  // Everything the child needs is prepared before fork: between fork and exec only
-  // async-signal-safe calls.
-  std::vector<std::string> storage = {"manisweep"};
-  storage.insert(storage.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& s : storage) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  const pid_t parent = ::getpid();
-  const pid_t pid = ::fork();
-  if (pid < 0) throw InternalError(std::string("fork: ") + std::strerror(errno));
-  if (pid == 0) {
-    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
-    if (::getppid() != parent) ::_exit(1);  // the parent died before prctl
-    // The parent ignores nothing the child should: restore default signal actions.
-    ::signal(SIGINT, SIG_DFL);
-    ::signal(SIGTERM, SIG_DFL);
-    ::signal(SIGPIPE, SIG_DFL);
-    ::execv("/proc/self/exe", argv.data());
-    ::_exit(127);
-  }
-  return pid;
+  SubprocessOptions child;
+  child.executable = "/proc/self/exe";
+  child.argv = {"manisweep"};
+  child.argv.insert(child.argv.end(), args.begin(), args.end());
+  return StartSubprocess(child);
 }
 
 bool ReapIfExited(pid_t pid, std::string* how) {
   int status = 0;
-  const pid_t r = ::waitpid(pid, &status, WNOHANG);
-  if (r != pid) return false;
-  *how = Describe(status);
+  if (!ms::ReapIfExited(pid, &status)) return false;
+  *how = DescribeExit(status);
   return true;
 }
 

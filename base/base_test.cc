@@ -1,8 +1,10 @@
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <vector>
 
@@ -11,12 +13,37 @@
 #include "base/file_util.h"
 #include "base/large_buffer.h"
 #include "base/parallel_for.h"
+#include "base/subprocess.h"
 #include "base/text_reader.h"
 
 namespace ms {
 namespace {
 
 namespace fs = std::filesystem;
+
+TEST(Subprocess, AppendsOutputToTheLogAndReportsTheExit) {
+  const std::filesystem::path log =
+      std::filesystem::temp_directory_path() / ("ms_subprocess_" + std::to_string(getpid()));
+  std::filesystem::remove(log);
+  SubprocessOptions child;
+  child.executable = "/bin/sh";
+  child.argv = {"sh", "-c", "echo out; echo err >&2; echo \"$MS_TEST_VALUE\"; exit 3"};
+  child.env = {"MS_TEST_VALUE=given"};
+  child.output_path = log.string();
+  child.stdin_from_null = true;
+  int status = 0;
+  ASSERT_TRUE(WaitForExit(StartSubprocess(child), 30, &status));
+  EXPECT_EQ(DescribeExit(status), "exit code 3");
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "out\nerr\ngiven\n");
+  child.executable = "/nonexistent/program";
+  ASSERT_TRUE(WaitForExit(StartSubprocess(child), 30, &status));
+  EXPECT_EQ(DescribeExit(status), "exit code 127");
+  child.output_path = "/nonexistent/folder/log";
+  EXPECT_THROW(StartSubprocess(child), InternalError);
+  std::filesystem::remove(log);
+}
 
 TEST(LargeBuffer, ReusesFreedBlocksOfTheSameSizeAndStartsZeroed) {
   large_buffer::ReleaseCache();

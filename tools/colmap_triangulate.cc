@@ -31,6 +31,7 @@
 #include "base/error.h"
 #include "base/file_util.h"
 #include "base/log.h"
+#include "base/subprocess.h"
 
 namespace fs = std::filesystem;
 
@@ -302,57 +303,28 @@ class ColmapRunner {
     std::error_code ec;
     const uint64_t start_offset = fs::file_size(log_path_, ec);
 
-    std::vector<std::string> argv_storage;
+    SubprocessOptions child;
     // colmap prints progress through std::cout, which is block-buffered into a file; coreutils'
     // stdbuf makes it line-buffered so progress shows while a stage runs.
-    if (!stdbuf_.empty()) argv_storage.insert(argv_storage.end(), {stdbuf_, "-oL", "-eL"});
-    argv_storage.push_back(executable_);
-    argv_storage.push_back(stage);
-    argv_storage.insert(argv_storage.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& a : argv_storage) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    // The child's environment, built before fork (the child only calls async-signal-safe
-    // functions). SIFT on the CPU needs no display; should any Qt code start anyway, it must not
-    // look for X. glog's own log files go to the workspace instead of /tmp.
-    std::vector<std::string> env_storage;
+    if (!stdbuf_.empty()) child.argv = {stdbuf_, "-oL", "-eL"};
+    child.argv.push_back(executable_);
+    child.argv.push_back(stage);
+    child.argv.insert(child.argv.end(), args.begin(), args.end());
+    child.executable = child.argv[0];
+    // SIFT on the CPU needs no display; should any Qt code start anyway, it must not look for
+    // X. glog's own log files go to the workspace instead of /tmp.
     bool has_qt_platform = false;
     for (char** e = environ; e && *e; ++e) {
       const std::string entry = *e;
       if (entry.rfind("GLOG_log_dir=", 0) == 0) continue;
       if (entry.rfind("QT_QPA_PLATFORM=", 0) == 0) has_qt_platform = true;
-      env_storage.push_back(entry);
+      child.env.push_back(entry);
     }
-    if (!has_qt_platform) env_storage.push_back("QT_QPA_PLATFORM=offscreen");
-    env_storage.push_back("GLOG_log_dir=" + log_path_.parent_path().string());
-    std::vector<char*> envp;
-    for (std::string& e : env_storage) envp.push_back(e.data());
-    envp.push_back(nullptr);
-    const std::string log_name = log_path_.string();
-
-    const auto launch = [&] {
-      const pid_t parent = ::getpid();
-      pid_t pid = ::fork();
-      if (pid < 0)
-        throw InternalError(std::string("cannot start colmap: fork: ") + strerror(errno));
-      if (pid == 0) {
-        // Child: only async-signal-safe calls until exec.
-        const int fd = ::open(log_name.c_str(), O_WRONLY | O_APPEND);
-        const int null_fd = ::open("/dev/null", O_RDONLY);
-        if (fd < 0) ::_exit(127);
-        // colmap dies with us (e.g. when manisweep is killed by a timeout).
-        ::prctl(PR_SET_PDEATHSIG, SIGTERM);
-        if (::getppid() != parent) ::_exit(127);
-        ::dup2(fd, STDOUT_FILENO);
-        ::dup2(fd, STDERR_FILENO);
-        if (null_fd >= 0) ::dup2(null_fd, STDIN_FILENO);
-        ::execve(argv[0], argv.data(), envp.data());
-        const char message[] = "manisweep: exec of colmap failed\n";
-        (void)!::write(STDERR_FILENO, message, sizeof(message) - 1);
-        ::_exit(127);
-      }
-      return pid;
-    };
+    if (!has_qt_platform) child.env.push_back("QT_QPA_PLATFORM=offscreen");
+    child.env.push_back("GLOG_log_dir=" + log_path_.parent_path().string());
+    child.output_path = log_path_.string();
+    child.stdin_from_null = true;  // colmap dies with us (e.g. when a timeout kills manisweep)
+    const auto launch = [&] { return StartSubprocess(child); };
     pid_t pid = launch();
 
     InterruptScope interrupt_scope;

@@ -14,28 +14,20 @@
 #include <stdexcept>
 #include <thread>
 
+#include "base/subprocess.h"
+
 namespace ms::test {
 
 ChildProcess::ChildProcess(const std::string& binary, const std::vector<std::string>& args,
                            const std::string& log_path)
     : log_path_(log_path) {
-  std::vector<std::string> storage = {binary};
-  storage.insert(storage.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& s : storage) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-  if (fd < 0) throw std::runtime_error("cannot open " + log_path);
-  pid_ = ::fork();
-  if (pid_ < 0) throw std::runtime_error("fork failed");
-  if (pid_ == 0) {
-    ::dup2(fd, 1);
-    ::dup2(fd, 2);
-    ::close(fd);
-    ::execv(binary.c_str(), argv.data());
-    ::_exit(127);
-  }
-  ::close(fd);
+  SubprocessOptions child;
+  child.executable = binary;
+  child.argv = {binary};
+  child.argv.insert(child.argv.end(), args.begin(), args.end());
+  child.output_path = log_path;
+  child.die_with_parent = false;
+  pid_ = StartSubprocess(child);
 }
 
 ChildProcess::~ChildProcess() {
