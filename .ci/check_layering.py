@@ -3,7 +3,8 @@
 
 The layers, bottom to top. A folder may include its own files and those of folders in lower
 layers; folders in the same layer never include each other (the coordinator and the worker,
-the manifold and the sweep). docs/design/architecture.md shows the same order (checked here too).
+the manifold and the sweep). A unit test (*_test.cc) sits beside the code it tests but belongs to
+the top layer: it may include testing/, the test-only code. docs/design/architecture.md shows the same order (checked here too).
 """
 import pathlib
 import re
@@ -22,6 +23,7 @@ LAYERS = [
     ["coordinator", "worker", "tools"],
     ["report"],
     ["app"],
+    ["testing"],
     ["bench", "tests"],
 ]
 
@@ -45,6 +47,7 @@ def main():
         if folder not in level:
             problems.append(f"{name}: folder '{folder}' is in no layer (.ci/check_layering.py)")
             continue
+        own_level = level["tests"] + 1 if name.endswith("_test.cc") else level[folder]
         for number, line in enumerate((root / name).read_text().splitlines(), 1):
             match = INCLUDE.match(line)
             if not match or match.group(1) == folder:
@@ -52,7 +55,7 @@ def main():
             target = match.group(1)
             if target not in level:
                 continue  # a third-party header with a folder of its own
-            if level[target] >= level[folder]:
+            if level[target] >= own_level:
                 how = "the same layer" if level[target] == level[folder] else "a higher layer"
                 problems.append(f"{name}:{number}: includes {target}/, {how} than {folder}/")
     docs = (root / "docs" / "design" / "architecture.md").read_text()

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "base/testing.h"
+#include "testing/testing.h"
 
 namespace ms {
 

@@ -1,5 +1,5 @@
 // Pixel-hypotheses per second (pixels x offsets x neighbours) of the sweep kernels on the
-// synthetic pyramid job (sweep/sweep_test_scene.h: noise 0.01, the flat square at half height),
+// synthetic pyramid job (testing/sweep_test_scene.h: noise 0.01, the flat square at half height),
 // default options (N = 20: 19 offsets, 2 neighbours, sigma = 8 px, 100 px tiles), swept at full
 // size (max_image_dimension 0); every --sweep.* option of `reconstruct` changes them. Kernels run
 // interleaved, round after round, so a noisy shared machine slows them alike; the median of the
@@ -31,7 +31,7 @@
 #include "sweep/cpu_sweep.h"
 #include "sweep/glsl_sweep.h"
 #include "sweep/reference_sweep.h"
-#include "sweep/sweep_test_scene.h"
+#include "testing/sweep_test_scene.h"
 
 namespace ms {
 namespace {

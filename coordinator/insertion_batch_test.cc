@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <random>
 
-#include "coordinator/test_job.h"
+#include "testing/test_job.h"
 
 namespace ms {
 namespace {

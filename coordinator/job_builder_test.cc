@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "proto/wire.h"
-#include "scene/scene_testing.h"
+#include "testing/scene_testing.h"
 
 namespace ms {
 namespace {

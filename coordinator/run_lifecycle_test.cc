@@ -10,7 +10,7 @@
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
 #include "scene/scene_io.h"
-#include "scene/scene_testing.h"
+#include "testing/scene_testing.h"
 
 namespace ms {
 namespace {

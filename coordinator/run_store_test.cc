@@ -11,7 +11,7 @@
 
 #include "base/file_util.h"
 #include "scene/h5_file.h"
-#include "scene/scene_testing.h"
+#include "testing/scene_testing.h"
 
 namespace ms {
 namespace {

@@ -6,10 +6,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include "base/error.h"
-#include "gl/gl_testing.h"
 #include "gl/mesh_renderer.h"
 #include "gl/objects.h"
 #include "gl/projection.h"
+#include "testing/gl_testing.h"
 
 namespace ms::gl {
 namespace {

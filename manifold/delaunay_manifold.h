@@ -98,6 +98,10 @@ std::vector<uint8_t> SteinerFlags(const SurfaceInfo& info);
 
 class DelaunayManifold {
  public:
+  // The implementation, with the CGAL triangulation: manifold/manifold_impl.h, a header of this
+  // folder's .cc files (and of the test hooks, testing/manifold_test_hooks.cc) only.
+  class Impl;
+
   DelaunayManifold(std::vector<ManifoldCamera> cameras, const ManifoldOptions& options);
   ~DelaunayManifold();
   DelaunayManifold(const DelaunayManifold&) = delete;
@@ -163,8 +167,6 @@ class DelaunayManifold {
   size_t MemoryBytes() const;  // estimate of the triangulation + ray data
 
  private:
-  class Impl;
-  friend struct ManifoldTestAccess;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -12,8 +12,8 @@
 #include <set>
 
 #include "base/error.h"
-#include "manifold/manifold_internal.h"
 #include "mesh/mesh_checker.h"
+#include "testing/manifold_test_hooks.h"
 
 namespace ms {
 namespace {

@@ -35,8 +35,6 @@
 
 namespace ms {
 
-struct ManifoldTestAccess;  // manifold_test_hooks.cc
-
 class DelaunayManifold::Impl {
  public:
   using Delaunay = manifold_detail::Delaunay;
@@ -104,8 +102,8 @@ class DelaunayManifold::Impl {
            vertex_of_point_.capacity() * sizeof(Vertex_handle) + ray_index_->MemoryBytes();
   }
 
- private:
-  friend struct ManifoldTestAccess;
+  // The state and the steps below are the implementation's own; the test hooks
+  // (testing/manifold_test_hooks.cc) also reach them, to build states no public call makes.
 
   // One Insert call's state, shared by its steps. A batch is inserted in one or more parts
   // (InsertPart). The exact recount of the cells born in the batch is done ray by ray once no

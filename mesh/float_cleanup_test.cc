@@ -7,7 +7,7 @@
 #include <map>
 
 #include "mesh/mesh_checker.h"
-#include "mesh/test_meshes.h"
+#include "testing/test_meshes.h"
 
 namespace ms {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "base/error.h"
 #include "mesh/mesh_checker.h"
-#include "mesh/test_meshes.h"
+#include "testing/test_meshes.h"
 
 namespace ms {
 namespace {

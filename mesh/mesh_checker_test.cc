@@ -15,7 +15,7 @@
 #include <set>
 
 #include "base/error.h"
-#include "mesh/test_meshes.h"
+#include "testing/test_meshes.h"
 
 namespace ms {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "base/error.h"
 #include "base/file_util.h"
-#include "base/testing.h"
+#include "testing/testing.h"
 
 namespace ms {
 namespace {

@@ -12,7 +12,6 @@
 #include "gl/context.h"
 #include "mesh/float_robustness.h"
 #include "mesh/mesh_checker.h"
-#include "mesh/test_meshes.h"
 #include "refine/gradient_kernel.h"
 #include "refine/mesh_moves.h"
 #include "refine/pair_sampling.h"
@@ -20,7 +19,8 @@
 #include "refine/refine_wire.h"
 #include "refine/refiner.h"
 #include "refine/remesh.h"
-#include "sweep/sweep_test_scene.h"
+#include "testing/sweep_test_scene.h"
+#include "testing/test_meshes.h"
 
 namespace ms {
 namespace {

@@ -7,8 +7,8 @@
 #include "base/error.h"
 #include "scene/middlebury_io.h"
 #include "scene/scene_io.h"
-#include "scene/scene_testing.h"
 #include "scene/strecha_io.h"
+#include "testing/scene_testing.h"
 
 namespace ms {
 namespace {

@@ -8,7 +8,7 @@
 #include "base/error.h"
 #include "base/file_util.h"
 #include "scene/scene_io.h"
-#include "scene/scene_testing.h"
+#include "testing/scene_testing.h"
 
 namespace ms {
 namespace {

@@ -15,7 +15,7 @@
 
 #include "base/error.h"
 #include "base/file_util.h"
-#include "base/testing.h"
+#include "testing/testing.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;

@@ -6,7 +6,7 @@
 #include "base/file_util.h"
 #include "scene/format_util.h"
 #include "scene/scene_io.h"
-#include "scene/scene_testing.h"
+#include "testing/scene_testing.h"
 
 namespace ms {
 namespace {

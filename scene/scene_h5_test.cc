@@ -15,9 +15,9 @@
 
 #include "base/error.h"
 #include "base/file_util.h"
-#include "base/testing.h"
 #include "scene/h5_file.h"
 #include "scene/scene_io.h"
+#include "testing/testing.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;

@@ -19,15 +19,15 @@
 #include <vector>
 
 #include "base/error.h"
-#include "base/testing.h"
 #include "sweep/recursive_gaussian.h"
 #include "sweep/reference_sweep.h"
 #include "sweep/software_raster.h"
 #include "sweep/span_raster.h"
 #include "sweep/subnormals.h"
-#include "sweep/sweep_parity_testing.h"
-#include "sweep/sweep_test_scene.h"
 #include "sweep/windowed_ncc.h"
+#include "testing/sweep_parity_testing.h"
+#include "testing/sweep_test_scene.h"
+#include "testing/testing.h"
 
 namespace ms {
 namespace {

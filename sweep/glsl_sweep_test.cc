@@ -16,12 +16,12 @@
 #include <utility>
 
 #include "base/error.h"
-#include "base/testing.h"
-#include "gl/gl_testing.h"
 #include "sweep/reference_sweep.h"
 #include "sweep/sweep_kernel_factory.h"
-#include "sweep/sweep_parity_testing.h"
-#include "sweep/sweep_test_scene.h"
+#include "testing/gl_testing.h"
+#include "testing/sweep_parity_testing.h"
+#include "testing/sweep_test_scene.h"
+#include "testing/testing.h"
 
 namespace ms {
 namespace {
@@ -241,7 +241,7 @@ TEST_F(GlslSweepTest, StagesMatchTheReference) {
 
 // ---- End to end ----
 
-// Tile winners are compared by ExpectSameWinners (sweep/sweep_parity_testing.h). With the paper's
+// Tile winners are compared by ExpectSameWinners (testing/sweep_parity_testing.h). With the paper's
 // rule, and where winners must move (the default) below.
 TEST_F(GlslSweepTest, PyramidFromAFlatSquareLikeTheReference) {
   const PyramidScene& scene = NoisyPyramidScene();

@@ -9,7 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "sweep/sweep_kernel.h"
-#include "sweep/sweep_test_scene.h"
+#include "testing/sweep_test_scene.h"
 
 namespace ms {
 namespace {

@@ -2,7 +2,7 @@
 // above (or below) its centre, 0.3 away. The one definition of its geometry for both pyramid
 // scenes: `manisweep synth pyramid-up / pyramid-down` (tools/synth_scenes.h; also the embedded
 // default scene of `manisweep reconstruct`) and the sweep's test scene
-// (sweep/sweep_test_scene.h). Production code; no GL.
+// (testing/sweep_test_scene.h). Production code; no GL.
 #pragma once
 
 #include <Eigen/Core>

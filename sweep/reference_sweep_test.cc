@@ -9,8 +9,8 @@
 #include <tuple>
 
 #include "base/error.h"
-#include "base/testing.h"
-#include "sweep/sweep_test_scene.h"
+#include "testing/sweep_test_scene.h"
+#include "testing/testing.h"
 
 namespace ms {
 namespace {

@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "base/log.h"
-#include "base/testing.h"
 #include "scene/scene_io.h"
+#include "testing/testing.h"
 
 namespace fs = std::filesystem;
 

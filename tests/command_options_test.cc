@@ -9,13 +9,13 @@
 #include <string>
 #include <vector>
 
-#include "base/testing.h"
 #include "coordinator/coordinator.h"
 #include "manifold/manifold_options.h"
 #include "mesh/visible_mesh.h"
 #include "report/report_options.h"
 #include "scene/view_selection.h"
 #include "sweep/sweep_options.h"
+#include "testing/testing.h"
 #include "worker/worker_process.h"
 
 namespace ms {

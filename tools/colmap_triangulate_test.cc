@@ -17,8 +17,8 @@
 #include <string>
 
 #include "base/error.h"
-#include "base/testing.h"
 #include "scene/colmap_io.h"
+#include "testing/testing.h"
 
 namespace fs = std::filesystem;
 

@@ -1,4 +1,4 @@
-// The photo-consistency figure on the analytic pyramid scene (sweep/sweep_test_scene.h): the true
+// The photo-consistency figure on the analytic pyramid scene (testing/sweep_test_scene.h): the true
 // surface is consistent almost everywhere it is seen, a mesh 0.15 off much less, a mesh out of
 // every view nowhere; shares are counted over all pixels.
 #include "tools/consistency.h"
@@ -9,8 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "base/error.h"
-#include "base/testing.h"
-#include "sweep/sweep_test_scene.h"
+#include "testing/sweep_test_scene.h"
+#include "testing/testing.h"
 
 namespace ms {
 namespace {

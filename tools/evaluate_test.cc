@@ -10,7 +10,7 @@
 
 #include "base/error.h"
 #include "base/file_util.h"
-#include "gl/gl_testing.h"
+#include "testing/gl_testing.h"
 #include "tools/plot.h"
 #include "tools/synth.h"
 #include "tools/synth_scenes.h"

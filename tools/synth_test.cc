@@ -8,8 +8,8 @@
 
 #include "base/error.h"
 #include "base/log.h"
-#include "gl/gl_testing.h"
 #include "gl/mesh_renderer.h"
+#include "testing/gl_testing.h"
 #include "tools/synth_scenes.h"
 
 namespace ms {

@@ -9,7 +9,7 @@
 #include "mesh/mesh_io.h"
 #include "scene/scene_h5.h"
 #include "sweep/pyramid_geometry.h"
-#include "sweep/sweep_test_scene.h"
+#include "testing/sweep_test_scene.h"
 
 namespace ms::testing {
 namespace fs = std::filesystem;

@@ -12,7 +12,7 @@ struct PyramidSceneFileOptions {
 };
 
 // A smaller pyramid scene for the multi-process tests (the sweep's test renderer,
-// sweep/sweep_test_scene.h, three cameras): images/pyramid_<i>.png (16-bit gray), scene.h5 (3
+// testing/sweep_test_scene.h, three cameras): images/pyramid_<i>.png (16-bit gray), scene.h5 (3
 // views; the 4 base corners as sparse points seen by every view: the paper's start), gt.ply (the
 // true surface). Returns the path of scene.h5.
 std::string WritePyramidSceneFiles(const std::string& directory,

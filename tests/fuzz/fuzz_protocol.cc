@@ -13,10 +13,10 @@
 
 #include "base/error.h"
 #include "coordinator/insertion_batch.h"
-#include "coordinator/test_job.h"
 #include "fuzz_util.h"
 #include "proto/wire.h"
 #include "sweep/sweep_options.h"
+#include "testing/test_job.h"
 
 namespace ms::fuzz {
 namespace {

@@ -1,6 +1,6 @@
 // Test helpers for scene I/O (header-only, for *_test.cc files): scene comparison with a
 // relative tolerance, fixture paths, and a small synthetic scene every format can hold
-// (plus base/testing.h's TempDir and ExpectInputError).
+// (plus testing/testing.h's TempDir and ExpectInputError).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -12,8 +12,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
-#include "base/testing.h"  // TempDir, ExpectInputError
 #include "scene/scene.h"
+#include "testing/testing.h"  // TempDir, ExpectInputError
 
 namespace ms::testing {
 

@@ -1,5 +1,7 @@
-// Test hooks (manifold/manifold_internal.h): compiled into manifold_test only, never into the
+// Test hooks (testing/manifold_test_hooks.h): compiled into manifold_test only, never into the
 // ms_manifold library. They reach DelaunayManifold::Impl through the internal headers.
+#include "testing/manifold_test_hooks.h"
+
 #include <algorithm>
 #include <functional>
 #include <iterator>
@@ -11,7 +13,6 @@
 #include "base/check.h"
 #include "manifold/cell_predicates.h"
 #include "manifold/manifold_impl.h"
-#include "manifold/manifold_internal.h"
 
 namespace ms {
 

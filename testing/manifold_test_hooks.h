@@ -1,5 +1,5 @@
-// Test hooks into the manifold's internals (no CGAL types), defined in manifold_test_hooks.cc,
-// which only the test executable compiles. Not for production callers.
+// Hooks into the manifold's internals for manifold_test (no CGAL types in this header; they
+// stay in manifold_test_hooks.cc, which works on DelaunayManifold::Impl directly).
 #pragma once
 
 #include <Eigen/Core>

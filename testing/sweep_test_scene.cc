@@ -1,4 +1,4 @@
-#include "sweep/sweep_test_scene.h"
+#include "testing/sweep_test_scene.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

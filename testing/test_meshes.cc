@@ -1,4 +1,4 @@
-#include "mesh/test_meshes.h"
+#include "testing/test_meshes.h"
 
 #include <array>
 #include <cmath>
