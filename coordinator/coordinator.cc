@@ -66,7 +66,7 @@ OptionValues CoordinatorOptionValues(const CoordinatorOptions& o) {
   return values;
 }
 
-class Coordinator::Impl {
+class Coordinator::Impl : public WorkerMessageHandler {
  public:
   Impl(const CoordinatorOptions& options, ServerTransport* transport)
       : options_(Checked(options)),
@@ -362,47 +362,18 @@ class Coordinator::Impl {
                                           PeerTag(message.peer)));
       return;
     }
-    wire::Envelope envelope;
-    bool wrong_version = false;
-    if (!DecodeWorkerMessage(message, limits_, transport_, &stamper_, &junk_, &envelope,
-                             &wrong_version)) {
-      if (wrong_version) scheduler_.Remove(message.peer);
-      return;
-    }
-    const double now = Now();
-    const std::string& sender = envelope.sender();
-    switch (envelope.body_case()) {
-      case wire::Envelope::kReady: {
-        const wire::Ready& ready = envelope.ready();
-        const bool known = scheduler_.IsKnown(message.peer);
-        scheduler_.OnReady(message.peer, sender, now);
-        spdlog::info("worker {} {} (kernel {}, pid {} on {}); {} workers", sender,
-                     known ? "is ready again" : "joined", ready.kernel(), ready.pid(),
-                     ready.hostname(), scheduler_.num_workers());
-        NoteKernel(sender, ready.kernel());
-        return;
-      }
-      case wire::Envelope::kHeartbeat:
-        scheduler_.OnHeartbeat(message.peer, sender, HeartbeatJob(envelope.heartbeat(), session_),
-                               envelope.heartbeat().last_job_id(), now);
-        return;
-      case wire::Envelope::kResult:
-        OnResult(message.peer, sender, envelope.result(), now);
-        return;
-      case wire::Envelope::kError:
-        OnError(message.peer, sender, envelope.error(), now);
-        return;
-      case wire::Envelope::kImageRequest:
-        scheduler_.Touch(message.peer, sender, now);
-        ServeImageRequest(run_.catalog(), envelope.image_request(), message.peer, sender, limits_,
-                          transport_, &stamper_);
-        return;
-      default:
-        scheduler_.Touch(message.peer, sender, now);
-        junk_.Warn("unexpected", fmt::format("dropped an unexpected {} message from {}",
-                                             BodyName(envelope), sender));
-        return;
-    }
+    RouteWorkerMessage(message, Now(), run_.catalog(),
+                       {limits_, transport_, &stamper_, &junk_, &scheduler_, session_}, this);
+  }
+
+  void OnReady(const std::string& peer, const std::string& sender, const wire::Ready& ready,
+               double now) override {
+    const bool known = scheduler_.IsKnown(peer);
+    scheduler_.OnReady(peer, sender, now);
+    spdlog::info("worker {} {} (kernel {}, pid {} on {}); {} workers", sender,
+                 known ? "is ready again" : "joined", ready.kernel(), ready.pid(), ready.hostname(),
+                 scheduler_.num_workers());
+    NoteKernel(sender, ready.kernel());
   }
 
   void NoteKernel(const std::string& worker, const std::string& kernel) {
@@ -424,7 +395,7 @@ class Coordinator::Impl {
   }
 
   void OnResult(const std::string& peer, const std::string& sender, const wire::Result& result,
-                double now) {
+                double now) override {
     if (result.session_id() != session_) {
       // A result for a coordinator before a restart: only the worker's state matters.
       scheduler_.OnResult(peer, sender, kForeignJob, now);
@@ -460,7 +431,7 @@ class Coordinator::Impl {
   }
 
   void OnError(const std::string& peer, const std::string& sender, const wire::Error& error,
-               double now) {
+               double now) override {
     const bool ours = error.session_id() == session_ && error.job_id() != 0;
     if (HandleBusyOrForeignError(error, ours, "job " + JobName(error.job_id()), session_, peer,
                                  sender, now, &scheduler_)) {

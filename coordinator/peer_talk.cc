@@ -83,4 +83,42 @@ void ServeImageRequest(const ImageCatalog* catalog, const wire::ImageRequest& re
   transport->Send(peer, Serialize(reply));
 }
 
+void RouteWorkerMessage(const PeerMessage& message, double now, const ImageCatalog* catalog,
+                        const WorkerMessageContext& c, WorkerMessageHandler* handler) {
+  wire::Envelope envelope;
+  bool wrong_version = false;
+  if (!DecodeWorkerMessage(message, c.limits, c.transport, c.stamper, c.junk, &envelope,
+                           &wrong_version)) {
+    if (wrong_version) c.scheduler->Remove(message.peer);
+    return;
+  }
+  const std::string& sender = envelope.sender();
+  switch (envelope.body_case()) {
+    case wire::Envelope::kReady:
+      handler->OnReady(message.peer, sender, envelope.ready(), now);
+      return;
+    case wire::Envelope::kHeartbeat:
+      if (!c.scheduler->IsKnown(message.peer)) handler->OnHeartbeatOfNewcomer(sender);
+      c.scheduler->OnHeartbeat(message.peer, sender, HeartbeatJob(envelope.heartbeat(), c.session),
+                               envelope.heartbeat().last_job_id(), now);
+      return;
+    case wire::Envelope::kResult:
+      handler->OnResult(message.peer, sender, envelope.result(), now);
+      return;
+    case wire::Envelope::kError:
+      handler->OnError(message.peer, sender, envelope.error(), now);
+      return;
+    case wire::Envelope::kImageRequest:
+      c.scheduler->Touch(message.peer, sender, now);
+      ServeImageRequest(catalog, envelope.image_request(), message.peer, sender, c.limits,
+                        c.transport, c.stamper);
+      return;
+    default:
+      c.scheduler->Touch(message.peer, sender, now);
+      c.junk->Warn("unexpected", fmt::format("dropped an unexpected {} message from {}",
+                                             BodyName(envelope), sender));
+      return;
+  }
+}
+
 }  // namespace ms

@@ -1,5 +1,6 @@
-// Small pieces the coordinator's network loops share (the sweep run's and refinement's): the
-// clock, session ids, how peers appear in logs, and rate-limited warnings about junk.
+// What the coordinator's network loops share (the sweep run's and refinement's): the clock,
+// session ids, how peers appear in logs, rate-limited warnings about junk, and the handling of
+// the messages both take alike.
 #pragma once
 
 #include <fmt/format.h>
@@ -114,5 +115,34 @@ bool HandleBusyOrForeignError(const wire::Error& error, bool ours, const std::st
 void ServeImageRequest(const ImageCatalog* catalog, const wire::ImageRequest& request,
                        const std::string& peer, const std::string& sender, const WireLimits& limits,
                        ServerTransport* transport, EnvelopeStamper* stamper);
+
+// What a network loop does with the messages that differ between the sweep run and refinement.
+class WorkerMessageHandler {
+ public:
+  virtual ~WorkerMessageHandler() = default;
+  virtual void OnReady(const std::string& peer, const std::string& sender, const wire::Ready& ready,
+                       double now) = 0;
+  virtual void OnResult(const std::string& peer, const std::string& sender,
+                        const wire::Result& result, double now) = 0;
+  virtual void OnError(const std::string& peer, const std::string& sender, const wire::Error& error,
+                       double now) = 0;
+  // Before a heartbeat of a peer the scheduler does not know yet.
+  virtual void OnHeartbeatOfNewcomer(const std::string& sender) { (void)sender; }
+};
+
+// One message from a worker through what both network loops do alike: decode it (junk dropped,
+// another protocol version answered and the peer forgotten), keep heartbeats, serve image
+// requests (`catalog`: null while the coordinator is starting), drop unexpected bodies; Ready,
+// Result and Error go to `handler`.
+struct WorkerMessageContext {
+  const WireLimits& limits;
+  ServerTransport* transport;
+  EnvelopeStamper* stamper;
+  JunkLog* junk;
+  JobScheduler* scheduler;
+  uint64_t session;
+};
+void RouteWorkerMessage(const PeerMessage& message, double now, const ImageCatalog* catalog,
+                        const WorkerMessageContext& context, WorkerMessageHandler* handler);
 
 }  // namespace ms

@@ -18,7 +18,7 @@
 
 namespace ms {
 
-class RefineDispatcher::Impl {
+class RefineDispatcher::Impl : public WorkerMessageHandler {
  public:
   Impl(const Scene& scene, std::vector<std::pair<int, int>> pairs, const RefineOptions& options,
        ServerTransport* transport, const SchedulerOptions& scheduler, const WireLimits& limits,
@@ -232,47 +232,22 @@ class RefineDispatcher::Impl {
 
   void Handle(const PeerMessage& message) {
     if (unfit_.SentAway(message.peer)) return;
-    wire::Envelope envelope;
-    bool wrong_version = false;
-    if (!DecodeWorkerMessage(message, limits_, transport_, &stamper_, &junk_, &envelope,
-                             &wrong_version)) {
-      if (wrong_version) scheduler_.Remove(message.peer);
-      return;
-    }
-    const double now = MonotonicSeconds();
-    const std::string& sender = envelope.sender();
-    switch (envelope.body_case()) {
-      case wire::Envelope::kReady:
-        scheduler_.OnReady(message.peer, sender, now);
-        spdlog::info("worker {} ready for refinement; {} workers", sender,
-                     scheduler_.num_workers());
-        return;
-      case wire::Envelope::kHeartbeat:
-        if (!scheduler_.IsKnown(message.peer)) spdlog::info("worker {} joins refinement", sender);
-        scheduler_.OnHeartbeat(message.peer, sender, HeartbeatJob(envelope.heartbeat(), session_),
-                               envelope.heartbeat().last_job_id(), now);
-        return;
-      case wire::Envelope::kResult:
-        OnResult(message.peer, sender, envelope.result(), now);
-        return;
-      case wire::Envelope::kError:
-        OnError(message.peer, sender, envelope.error(), now);
-        return;
-      case wire::Envelope::kImageRequest:
-        scheduler_.Touch(message.peer, sender, now);
-        ServeImageRequest(&catalog_, envelope.image_request(), message.peer, sender, limits_,
-                          transport_, &stamper_);
-        return;
-      default:
-        scheduler_.Touch(message.peer, sender, now);
-        junk_.Warn("unexpected", fmt::format("dropped an unexpected {} message from {}",
-                                             BodyName(envelope), sender));
-        return;
-    }
+    RouteWorkerMessage(message, MonotonicSeconds(), &catalog_,
+                       {limits_, transport_, &stamper_, &junk_, &scheduler_, session_}, this);
+  }
+
+  void OnReady(const std::string& peer, const std::string& sender, const wire::Ready&,
+               double now) override {
+    scheduler_.OnReady(peer, sender, now);
+    spdlog::info("worker {} ready for refinement; {} workers", sender, scheduler_.num_workers());
+  }
+
+  void OnHeartbeatOfNewcomer(const std::string& sender) override {
+    spdlog::info("worker {} joins refinement", sender);
   }
 
   void OnResult(const std::string& peer, const std::string& sender, const wire::Result& result,
-                double now) {
+                double now) override {
     if (result.session_id() != session_) {  // e.g. a sweep job finishing late
       scheduler_.OnResult(peer, sender, kForeignJob, now);
       return;
@@ -308,7 +283,7 @@ class RefineDispatcher::Impl {
   }
 
   void OnError(const std::string& peer, const std::string& sender, const wire::Error& error,
-               double now) {
+               double now) override {
     const bool ours = error.session_id() == session_ && OfThisRound(error.job_id());
     if (HandleBusyOrForeignError(error, ours, "refinement job " + PairName(error.job_id()),
                                  session_, peer, sender, now, &scheduler_)) {
