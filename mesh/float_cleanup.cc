@@ -13,6 +13,7 @@
 #include "base/check.h"
 #include "base/log.h"
 #include "base/memory.h"
+#include "mesh/face_tree.h"
 #include "mesh/float_robustness.h"
 
 namespace ms {
@@ -42,6 +43,8 @@ struct Box3 {
   }
 };
 
+FloatBox3 AroundBox(const Box3& b) { return FloatBox3::Around(b.lo, b.hi); }
+
 // The problems a check found, every pair listed, sorted (as CheckFloatRobustness sorts them).
 struct ProblemPairs {
   std::vector<std::array<int32_t, 2>> near_vertices;
@@ -58,112 +61,6 @@ void SortUnique(std::vector<T>* v) {
   std::sort(v->begin(), v->end());
   v->erase(std::unique(v->begin(), v->end()), v->end());
 }
-
-// A face's box in floats rounded outward (24 bytes against 48 in doubles: at 2·10^6 faces the
-// cleanup's per-face boxes were most of the coordinator's peak). Searches with them find a
-// superset of the faces whose double boxes overlap; the cleaner tests those exactly.
-struct FloatBox3 {
-  std::array<float, 3> lo, hi;
-  static FloatBox3 Around(const Box3& b) {
-    FloatBox3 f;
-    for (int d = 0; d < 3; ++d) {
-      f.lo[d] = float_robustness_internal::FloatAtOrBelow(b.lo[d]);
-      f.hi[d] = float_robustness_internal::FloatAtOrAbove(b.hi[d]);
-    }
-    return f;
-  }
-  static FloatBox3 Empty() {
-    constexpr float inf = std::numeric_limits<float>::infinity();
-    return {{inf, inf, inf}, {-inf, -inf, -inf}};
-  }
-  void Add(const FloatBox3& b) {
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = std::min(lo[d], b.lo[d]);
-      hi[d] = std::max(hi[d], b.hi[d]);
-    }
-  }
-  bool Overlaps(const FloatBox3& b) const {
-    for (int d = 0; d < 3; ++d) {
-      if (lo[d] > b.hi[d] || b.lo[d] > hi[d]) return false;
-    }
-    return true;
-  }
-};
-
-// A bounding-volume hierarchy over the faces alive when it is built (median splits on the
-// longest axis); faces made later are scanned by the caller. Its float boxes make it visit a
-// superset of the faces a double box overlaps: callers filter with the exact boxes.
-class FaceTree {
- public:
-  void Build(const std::vector<FloatBox3>& boxes, std::vector<int32_t> faces) {
-    boxes_ = &boxes;
-    order_ = std::move(faces);
-    nodes_.clear();
-    if (!order_.empty()) BuildNode(0, static_cast<int32_t>(order_.size()));
-  }
-
-  template <typename Visit>
-  void Query(const FloatBox3& box, Visit&& visit) const {
-    if (nodes_.empty()) return;
-    std::vector<int32_t> stack{0};
-    while (!stack.empty()) {
-      const Node& node = nodes_[stack.back()];
-      stack.pop_back();
-      if (!node.box.Overlaps(box)) continue;
-      if (node.left < 0) {
-        for (int32_t i = node.begin; i < node.end; ++i) {
-          if ((*boxes_)[order_[i]].Overlaps(box)) visit(order_[i]);
-        }
-      } else {
-        stack.push_back(node.left);
-        stack.push_back(node.right);
-      }
-    }
-  }
-
- private:
-  struct Node {
-    FloatBox3 box;
-    int32_t begin = 0, end = 0, left = -1, right = -1;
-  };
-
-  int32_t BuildNode(int32_t begin, int32_t end) {
-    const int32_t index = static_cast<int32_t>(nodes_.size());
-    nodes_.push_back({});
-    FloatBox3 box = FloatBox3::Empty(), centres = FloatBox3::Empty();
-    for (int32_t i = begin; i < end; ++i) {
-      const FloatBox3& b = (*boxes_)[order_[i]];
-      box.Add(b);
-      FloatBox3 centre;
-      for (int d = 0; d < 3; ++d) centre.lo[d] = centre.hi[d] = (b.lo[d] + b.hi[d]) / 2;
-      centres.Add(centre);
-    }
-    nodes_[index].box = box;
-    nodes_[index].begin = begin;
-    nodes_[index].end = end;
-    if (end - begin <= 8) return index;
-    int axis = 0;
-    for (int d = 1; d < 3; ++d) {
-      if (centres.hi[d] - centres.lo[d] > centres.hi[axis] - centres.lo[axis]) axis = d;
-    }
-    const int32_t mid = begin + (end - begin) / 2;
-    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-                     [&](int32_t a, int32_t b) {
-                       const FloatBox3& x = (*boxes_)[a];
-                       const FloatBox3& y = (*boxes_)[b];
-                       return x.lo[axis] + x.hi[axis] < y.lo[axis] + y.hi[axis];
-                     });
-    const int32_t left = BuildNode(begin, mid);
-    const int32_t right = BuildNode(mid, end);
-    nodes_[index].left = left;
-    nodes_[index].right = right;
-    return index;
-  }
-
-  const std::vector<FloatBox3>* boxes_ = nullptr;
-  std::vector<int32_t> order_;
-  std::vector<Node> nodes_;
-};
 
 // Each vertex's alive faces, in the order one vector per vertex would keep them (faces appended,
 // a removal closing its gap), since the collapses depend on that order. One array holds every
@@ -264,7 +161,7 @@ class Cleaner {
     alive_.assign(mesh_.faces.size(), 1);
     touched_.reserve(mesh_.faces.capacity());
     box_.reserve(mesh_.faces.capacity());
-    for (const Face& face : mesh_.faces) box_.push_back(FloatBox3::Around(FaceBox(face)));
+    for (const Face& face : mesh_.faces) box_.push_back(AroundBox(FaceBox(face)));
     for (size_t v = 0; v < faces_of_.size(); ++v) {
       live_vertices_ += !faces_of_[static_cast<int32_t>(v)].empty();
     }
@@ -742,7 +639,7 @@ class Cleaner {
     const auto exact = [&](int32_t f) {
       if (alive_[f] && FaceBox(mesh_.faces[f]).Overlaps(box)) visit(f);
     };
-    const FloatBox3 search = FloatBox3::Around(box);
+    const FloatBox3 search = AroundBox(box);
     tree_.Query(search, exact);
     made_tree_.Query(search, exact);
     if (made_now != nullptr) {
@@ -782,7 +679,7 @@ class Cleaner {
       mesh_.faces.push_back(face);
       alive_.push_back(1);
       touched_.push_back(1);
-      box_.push_back(FloatBox3::Around(FaceBox(face)));
+      box_.push_back(AroundBox(FaceBox(face)));
       recent_.push_back(f);
       for (int32_t v : face) faces_of_.Add(v, f);
     }

@@ -1,4 +1,5 @@
-// Ray casting against a triangle mesh on the CPU (bounding-volume hierarchy + Moller-Trumbore),
+// Ray casting against a triangle mesh on the CPU (the float-box tree of mesh/face_tree.h and
+// Moller-Trumbore),
 // for visibility of synthetic sparse points without a GPU and as a check independent of GL.
 #pragma once
 
@@ -6,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "mesh/face_tree.h"
 #include "mesh/mesh.h"
 
 namespace ms {
@@ -33,19 +35,14 @@ class RayCaster {
     Eigen::Vector3d a, e1, e2;  // a, b - a, c - a
     int32_t face;
   };
-  struct Node {
-    Eigen::Vector3d min, max;
-    int32_t first = 0;  // leaf: first triangle; inner: index of the left child
-    int32_t right = 0;  // inner: index of the right child
-    int32_t count = 0;  // leaf: triangle count (> 0); inner: 0
-  };
-  int32_t Build(int32_t first, int32_t count, int depth);
+  // The nearest hit with t in (t_min, t_max), or with kAnyHit the first found.
   template <bool kAnyHit>
   bool Traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double t_min,
                 double t_max, Hit* hit) const;
 
   std::vector<Triangle> triangles_;
-  std::vector<Node> nodes_;
+  std::vector<FloatBox3> boxes_;  // per triangle
+  FaceTree tree_;                 // over the triangles (mesh/face_tree.h)
 };
 
 }  // namespace ms
