@@ -20,7 +20,7 @@ LAYERS = [
     ["proto"],
     ["manifold", "sweep"],
     ["refine"],
-    ["coordinator", "worker", "tools"],
+    ["coordinator", "worker", "tools", "colmap"],
     ["report"],
     ["app"],
     ["testing"],

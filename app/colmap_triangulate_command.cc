@@ -1,6 +1,6 @@
 // `manisweep colmap-triangulate`: the documented route from cameras with known poses (Strecha,
 // Middlebury, or any scene format) to a sparse point cloud with visibility, through Debian's
-// colmap. See docs/reference/colmap-route.md and tools/colmap_triangulate.h.
+// colmap. See docs/reference/colmap-route.md and colmap/colmap_triangulate.h.
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -12,8 +12,8 @@
 #include "base/error.h"
 #include "base/file_util.h"
 #include "base/log.h"
+#include "colmap/colmap_triangulate.h"
 #include "scene/scene_io.h"
-#include "tools/colmap_triangulate.h"
 
 namespace fs = std::filesystem;
 

@@ -1,7 +1,7 @@
 // The colmap route's steps without colmap: database reading/writing on fake databases with
 // colmap 3.8's schema, the mapping of database ids to views, the known-pose input model, the
 // import of triangulated points, and the runner's failure path with a fake colmap script.
-#include "tools/colmap_triangulate.h"
+#include "colmap/colmap_triangulate.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-#include "tools/colmap_triangulate.h"
+#include "colmap/colmap_triangulate.h"
 
 #include <fcntl.h>
 #include <fmt/format.h>
