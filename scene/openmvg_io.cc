@@ -179,22 +179,9 @@ struct RawIntrinsic {
   std::string path;
 };
 
-}  // namespace
+using Poses = std::map<int64_t, std::pair<Eigen::Matrix3d, Eigen::Vector3d>>;
 
-Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::string* root_path) {
-  CheckNesting(name, contents, 32);
-  json root;
-  try {
-    root = json::parse(contents);
-  } catch (const json::exception& e) {
-    throw InputError(name + ": not valid JSON: " + OneLine(e.what()));
-  }
-  JsonReader in(name);
-  if (!root.is_object()) in.Fail("(top level)", "expected an object");
-  if (const json* rp = in.OptionalField(root, "root_path"); rp && root_path) {
-    *root_path = in.String(*rp, "root_path");
-  }
-
+std::map<int64_t, RawView> ReadViews(const json& root, JsonReader& in) {
   std::map<int64_t, RawView> views;
   const json& views_json = in.Array(in.Field(root, "views", "(top level)"), "views");
   for (size_t i = 0; i < views_json.size(); ++i) {
@@ -222,6 +209,10 @@ Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::st
       in.Fail(path + ".key", "view id " + std::to_string(v.id) + " appears twice");
   }
 
+  return views;
+}
+
+std::map<int64_t, RawIntrinsic> ReadIntrinsics(const json& root, JsonReader& in) {
   std::map<int64_t, RawIntrinsic> intrinsics;
   const json& intrinsics_json = in.Array(in.Field(root, "intrinsics", "(top level)"), "intrinsics");
   for (size_t i = 0; i < intrinsics_json.size(); ++i) {
@@ -253,7 +244,11 @@ Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::st
       in.Fail(path + ".key", "intrinsic id " + std::to_string(id) + " appears twice");
   }
 
-  std::map<int64_t, std::pair<Eigen::Matrix3d, Eigen::Vector3d>> poses;
+  return intrinsics;
+}
+
+Poses ReadExtrinsics(const json& root, JsonReader& in) {
+  Poses poses;
   const json& extrinsics_json = in.Array(in.Field(root, "extrinsics", "(top level)"), "extrinsics");
   for (size_t i = 0; i < extrinsics_json.size(); ++i) {
     const std::string path = "extrinsics[" + std::to_string(i) + "]";
@@ -276,63 +271,79 @@ Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::st
     }
   }
 
-  Scene scene;
-  scene.source = name;
-  std::map<int64_t, int32_t> view_index;  // openMVG view id -> scene view, -1 if not posed
+  return poses;
+}
+
+// A posed view's camera from its intrinsic (checked against the view) and pose.
+View PosedView(const RawView& v, const RawIntrinsic& k,
+               const std::pair<Eigen::Matrix3d, Eigen::Vector3d>& pose, JsonReader& in) {
+  static const std::set<std::string> kSupported = {"pinhole", "pinhole_radial_k1",
+                                                   "pinhole_radial_k3", "pinhole_brown_t2"};
+  if (!kSupported.count(k.type)) {
+    in.Fail(k.path, "camera type " + format::Quote(k.type) +
+                        " is not supported (supported: pinhole, pinhole_radial_k1, "
+                        "pinhole_radial_k3, pinhole_brown_t2)");
+  }
+  const size_t disto_count = k.type == "pinhole"             ? 0
+                             : k.type == "pinhole_radial_k1" ? 1
+                             : k.type == "pinhole_radial_k3" ? 3
+                                                             : 5;
+  if (k.pp.size() != 2 || k.disto.size() != disto_count) {
+    in.Fail(k.path, "fields do not match camera type " + k.type);
+  }
+  if (v.width != k.width || v.height != k.height) {
+    in.Fail(v.path, "view size " + std::to_string(v.width) + "x" + std::to_string(v.height) +
+                        " differs from its intrinsic's " + std::to_string(k.width) + "x" +
+                        std::to_string(k.height));
+  }
+  View view;
+  view.name = v.name;
+  Intrinsics& in_k = view.intrinsics;
+  in_k.width = k.width;
+  in_k.height = k.height;
+  in_k.fx = in_k.fy = k.focal;
+  in_k.cx = k.pp[0];
+  in_k.cy = k.pp[1];
+  if (disto_count >= 1) in_k.k1 = k.disto[0];
+  if (disto_count >= 3) {
+    in_k.k2 = k.disto[1];
+    in_k.k3 = k.disto[2];
+  }
+  if (disto_count == 5) {
+    in_k.p1 = k.disto[3];  // openMVG's t1 multiplies (r^2 + 2y^2) in y: OpenCV's p1
+    in_k.p2 = k.disto[4];
+  }
+  view.R = format::NearestRotation(pose.first);
+  view.t = -view.R * pose.second;
+  return view;
+}
+
+// The views with a pose and an intrinsic become the scene's, in id order; `view_index` maps
+// every openMVG view id to its scene view, -1 for those left out. Returns how many were.
+size_t AddPosedViews(const std::map<int64_t, RawView>& views,
+                     const std::map<int64_t, RawIntrinsic>& intrinsics, const Poses& poses,
+                     JsonReader& in, Scene* scene, std::map<int64_t, int32_t>* view_index) {
   size_t unposed = 0;
   for (const auto& [id, v] : views) {
     const auto pose = poses.find(v.pose);
     const auto intrinsic = intrinsics.find(v.intrinsic);
     if (pose == poses.end() || intrinsic == intrinsics.end()) {
-      view_index[id] = -1;
+      (*view_index)[id] = -1;
       ++unposed;
       continue;
     }
-    const RawIntrinsic& k = intrinsic->second;
-    static const std::set<std::string> kSupported = {"pinhole", "pinhole_radial_k1",
-                                                     "pinhole_radial_k3", "pinhole_brown_t2"};
-    if (!kSupported.count(k.type)) {
-      in.Fail(k.path, "camera type " + format::Quote(k.type) +
-                          " is not supported (supported: pinhole, pinhole_radial_k1, "
-                          "pinhole_radial_k3, pinhole_brown_t2)");
-    }
-    const size_t disto_count = k.type == "pinhole"             ? 0
-                               : k.type == "pinhole_radial_k1" ? 1
-                               : k.type == "pinhole_radial_k3" ? 3
-                                                               : 5;
-    if (k.pp.size() != 2 || k.disto.size() != disto_count) {
-      in.Fail(k.path, "fields do not match camera type " + k.type);
-    }
-    if (v.width != k.width || v.height != k.height) {
-      in.Fail(v.path, "view size " + std::to_string(v.width) + "x" + std::to_string(v.height) +
-                          " differs from its intrinsic's " + std::to_string(k.width) + "x" +
-                          std::to_string(k.height));
-    }
-    View view;
-    view.name = v.name;
-    Intrinsics& in_k = view.intrinsics;
-    in_k.width = k.width;
-    in_k.height = k.height;
-    in_k.fx = in_k.fy = k.focal;
-    in_k.cx = k.pp[0];
-    in_k.cy = k.pp[1];
-    if (disto_count >= 1) in_k.k1 = k.disto[0];
-    if (disto_count >= 3) {
-      in_k.k2 = k.disto[1];
-      in_k.k3 = k.disto[2];
-    }
-    if (disto_count == 5) {
-      in_k.p1 = k.disto[3];  // openMVG's t1 multiplies (r^2 + 2y^2) in y: OpenCV's p1
-      in_k.p2 = k.disto[4];
-    }
-    view.R = format::NearestRotation(pose->second.first);
-    view.t = -view.R * pose->second.second;
-    view_index[id] = static_cast<int32_t>(scene.views.size());
-    scene.views.push_back(std::move(view));
+    (*view_index)[id] = static_cast<int32_t>(scene->views.size());
+    scene->views.push_back(PosedView(v, intrinsic->second, pose->second, in));
   }
+  return unposed;
+}
 
+// The points and their observations in posed views; returns the observations dropped with
+// the views left out.
+size_t AddStructure(const json& root, const std::map<int64_t, int32_t>& view_index, JsonReader& in,
+                    Scene* scene) {
   const json& structure = in.Array(in.Field(root, "structure", "(top level)"), "structure");
-  scene.points.reserve(structure.size());
+  scene->points.reserve(structure.size());
   size_t dropped = 0;
   for (size_t i = 0; i < structure.size(); ++i) {
     const std::string path = "structure[" + std::to_string(i) + "]";
@@ -362,8 +373,34 @@ Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::st
       point.observations.push_back(
           {it->second, static_cast<float>(x[0]), static_cast<float>(x[1])});
     }
-    scene.points.push_back(std::move(point));
+    scene->points.push_back(std::move(point));
   }
+  return dropped;
+}
+
+}  // namespace
+
+Scene ParseOpenMvg(const std::string& name, const std::string& contents, std::string* root_path) {
+  CheckNesting(name, contents, 32);
+  json root;
+  try {
+    root = json::parse(contents);
+  } catch (const json::exception& e) {
+    throw InputError(name + ": not valid JSON: " + OneLine(e.what()));
+  }
+  JsonReader in(name);
+  if (!root.is_object()) in.Fail("(top level)", "expected an object");
+  if (const json* rp = in.OptionalField(root, "root_path"); rp && root_path) {
+    *root_path = in.String(*rp, "root_path");
+  }
+  const std::map<int64_t, RawView> views = ReadViews(root, in);
+  const std::map<int64_t, RawIntrinsic> intrinsics = ReadIntrinsics(root, in);
+  const Poses poses = ReadExtrinsics(root, in);
+  Scene scene;
+  scene.source = name;
+  std::map<int64_t, int32_t> view_index;
+  const size_t unposed = AddPosedViews(views, intrinsics, poses, in, &scene, &view_index);
+  const size_t dropped = AddStructure(root, view_index, in, &scene);
   if (unposed > 0) {
     spdlog::info("{}: skipped {} views without pose or intrinsic, and {} observations in them",
                  name, unposed, dropped);
