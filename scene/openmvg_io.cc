@@ -418,47 +418,45 @@ Scene ReadOpenMvg(const std::string& path, const SceneReadOptions& options) {
   return scene;
 }
 
-void WriteOpenMvg(const Scene& scene, const std::string& path, const SceneWriteOptions& options) {
-  using ojson = nlohmann::ordered_json;
-  format::LossPolicy loss(path, "openMVG", options.allow_lossy);
-  for (const ScenePoint& p : scene.points) {
-    if (p.color != std::array<uint8_t, 3>{{128, 128, 128}}) {
-      loss.Report("point colours (sfm_data has none)");
-      break;
-    }
-  }
-  // root_path: the folder the image names are relative to, when all views agree on one.
+namespace {
+
+using ojson = nlohmann::ordered_json;
+
+// root_path: the folder the image names are relative to, when all views agree on one; else "".
+std::string CommonRootPath(const Scene& scene) {
   std::string root;
-  bool consistent = !scene.views.empty();
   for (const View& v : scene.views) {
     const std::string& image = v.image_path;
     const std::string suffix = "/" + v.name;
     if (image.size() <= suffix.size() ||
         image.compare(image.size() - suffix.size(), suffix.size(), suffix) != 0) {
-      consistent = false;
-      break;
+      return "";
     }
     const std::string folder = image.substr(0, image.size() - suffix.size());
     if (root.empty()) root = folder;
-    if (folder != root) consistent = false;
+    if (folder != root) return "";
   }
-  if (!consistent) root.clear();
+  return root;
+}
 
-  uint64_t next_pointer = 1;
-  ojson out;
-  out["sfm_data_version"] = "0.3";
-  out["root_path"] = root;
-  out["views"] = ojson::array();
+// The distinct intrinsics, and each view's index into them.
+std::vector<const Intrinsics*> DistinctIntrinsics(const Scene& scene,
+                                                  std::vector<size_t>* intrinsic_of_view) {
   std::vector<const Intrinsics*> unique;
-  std::vector<size_t> intrinsic_of_view;
   for (const View& v : scene.views) {
     size_t found = unique.size();
     for (size_t c = 0; c < unique.size(); ++c) {
       if (*unique[c] == v.intrinsics) found = c;
     }
     if (found == unique.size()) unique.push_back(&v.intrinsics);
-    intrinsic_of_view.push_back(found);
+    intrinsic_of_view->push_back(found);
   }
+  return unique;
+}
+
+ojson ViewsJson(const Scene& scene, const std::vector<size_t>& intrinsic_of_view,
+                const std::string& path, uint64_t* next_pointer) {
+  ojson views = ojson::array();
   for (size_t i = 0; i < scene.views.size(); ++i) {
     const View& v = scene.views[i];
     if (v.name.empty())
@@ -473,36 +471,47 @@ void WriteOpenMvg(const Scene& scene, const std::string& path, const SceneWriteO
     data["id_pose"] = i;
     ojson value;
     value["polymorphic_id"] = kNotPolymorphic;
-    value["ptr_wrapper"] = {{"id", kFirstOccurrence | next_pointer++}, {"data", data}};
-    out["views"].push_back({{"key", i}, {"value", value}});
+    value["ptr_wrapper"] = {{"id", kFirstOccurrence | (*next_pointer)++}, {"data", data}};
+    views.push_back({{"key", i}, {"value", value}});
   }
-  out["intrinsics"] = ojson::array();
+  return views;
+}
+
+// One intrinsic as openMVG's pinhole types (the plainest that holds its distortion).
+ojson IntrinsicData(const Intrinsics& k, format::LossPolicy* loss, std::string* type) {
+  if (k.fx != k.fy) loss->Report("fx != fy (openMVG has one focal length; written: their mean)");
+  *type = "pinhole";
+  const char* disto_name = nullptr;
+  ojson disto = ojson::array();
+  if (k.p1 != 0 || k.p2 != 0) {
+    *type = "pinhole_brown_t2";
+    disto_name = "disto_t2";
+    disto = {k.k1, k.k2, k.k3, k.p1, k.p2};
+  } else if (k.k2 != 0 || k.k3 != 0) {
+    *type = "pinhole_radial_k3";
+    disto_name = "disto_k3";
+    disto = {k.k1, k.k2, k.k3};
+  } else if (k.k1 != 0) {
+    *type = "pinhole_radial_k1";
+    disto_name = "disto_k1";
+    disto = {k.k1};
+  }
+  ojson data;
+  data["width"] = k.width;
+  data["height"] = k.height;
+  data["focal_length"] = 0.5 * (k.fx + k.fy);
+  data["principal_point"] = {k.cx, k.cy};
+  if (disto_name) data[disto_name] = disto;
+  return data;
+}
+
+ojson IntrinsicsJson(const std::vector<const Intrinsics*>& unique, format::LossPolicy* loss,
+                     uint64_t* next_pointer) {
+  ojson intrinsics = ojson::array();
   std::map<std::string, uint64_t> type_ids;
   for (size_t c = 0; c < unique.size(); ++c) {
-    const Intrinsics& k = *unique[c];
-    if (k.fx != k.fy) loss.Report("fx != fy (openMVG has one focal length; written: their mean)");
-    std::string type = "pinhole";
-    const char* disto_name = nullptr;
-    ojson disto = ojson::array();
-    if (k.p1 != 0 || k.p2 != 0) {
-      type = "pinhole_brown_t2";
-      disto_name = "disto_t2";
-      disto = {k.k1, k.k2, k.k3, k.p1, k.p2};
-    } else if (k.k2 != 0 || k.k3 != 0) {
-      type = "pinhole_radial_k3";
-      disto_name = "disto_k3";
-      disto = {k.k1, k.k2, k.k3};
-    } else if (k.k1 != 0) {
-      type = "pinhole_radial_k1";
-      disto_name = "disto_k1";
-      disto = {k.k1};
-    }
-    ojson data;
-    data["width"] = k.width;
-    data["height"] = k.height;
-    data["focal_length"] = 0.5 * (k.fx + k.fy);
-    data["principal_point"] = {k.cx, k.cy};
-    if (disto_name) data[disto_name] = disto;
+    std::string type;
+    const ojson data = IntrinsicData(*unique[c], loss, &type);
     ojson value;
     const auto known = type_ids.find(type);
     if (known == type_ids.end()) {
@@ -513,35 +522,65 @@ void WriteOpenMvg(const Scene& scene, const std::string& path, const SceneWriteO
     } else {
       value["polymorphic_id"] = known->second;
     }
-    value["ptr_wrapper"] = {{"id", kFirstOccurrence | next_pointer++}, {"data", data}};
-    out["intrinsics"].push_back({{"key", c}, {"value", value}});
+    value["ptr_wrapper"] = {{"id", kFirstOccurrence | (*next_pointer)++}, {"data", data}};
+    intrinsics.push_back({{"key", c}, {"value", value}});
   }
-  out["extrinsics"] = ojson::array();
+  return intrinsics;
+}
+
+ojson ExtrinsicsJson(const Scene& scene) {
+  ojson extrinsics = ojson::array();
   for (size_t i = 0; i < scene.views.size(); ++i) {
     const View& v = scene.views[i];
     ojson rotation = ojson::array();
     for (int r = 0; r < 3; ++r) rotation.push_back({v.R(r, 0), v.R(r, 1), v.R(r, 2)});
     const Eigen::Vector3d c = v.Center();
-    out["extrinsics"].push_back(
+    extrinsics.push_back(
         {{"key", i}, {"value", {{"rotation", rotation}, {"center", {c.x(), c.y(), c.z()}}}}});
   }
-  out["structure"] = ojson::array();
+  return extrinsics;
+}
+
+ojson StructureJson(const Scene& scene, format::LossPolicy* loss) {
+  ojson structure = ojson::array();
   std::vector<int64_t> next_feature(scene.views.size(), 0);
   for (size_t p = 0; p < scene.points.size(); ++p) {
     const ScenePoint& point = scene.points[p];
     ojson observations = ojson::array();
     for (const Observation& o : point.observations) {
       double x = 0, y = 0;
-      if (!format::ObservationPixel(scene, point, o, &loss, &x, &y)) continue;
+      if (!format::ObservationPixel(scene, point, o, loss, &x, &y)) continue;
       observations.push_back(
           {{"key", o.view}, {"value", {{"id_feat", next_feature[o.view]++}, {"x", {x, y}}}}});
     }
-    out["structure"].push_back(
-        {{"key", p},
-         {"value",
-          {{"X", {point.position.x(), point.position.y(), point.position.z()}},
-           {"observations", observations}}}});
+    structure.push_back({{"key", p},
+                         {"value",
+                          {{"X", {point.position.x(), point.position.y(), point.position.z()}},
+                           {"observations", observations}}}});
   }
+  return structure;
+}
+
+}  // namespace
+
+void WriteOpenMvg(const Scene& scene, const std::string& path, const SceneWriteOptions& options) {
+  format::LossPolicy loss(path, "openMVG", options.allow_lossy);
+  for (const ScenePoint& p : scene.points) {
+    if (p.color != std::array<uint8_t, 3>{{128, 128, 128}}) {
+      loss.Report("point colours (sfm_data has none)");
+      break;
+    }
+  }
+  std::vector<size_t> intrinsic_of_view;
+  const std::vector<const Intrinsics*> unique = DistinctIntrinsics(scene, &intrinsic_of_view);
+  uint64_t next_pointer = 1;
+  ojson out;
+  out["sfm_data_version"] = "0.3";
+  out["root_path"] = CommonRootPath(scene);
+  out["views"] = ViewsJson(scene, intrinsic_of_view, path, &next_pointer);
+  out["intrinsics"] = IntrinsicsJson(unique, &loss, &next_pointer);
+  out["extrinsics"] = ExtrinsicsJson(scene);
+  out["structure"] = StructureJson(scene, &loss);
   out["control_points"] = ojson::array();
   const std::string text = out.dump(4);
   WriteFileAtomically(
