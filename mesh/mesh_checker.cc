@@ -548,17 +548,19 @@ MeshReport CheckMesh(const Mesh& mesh, const MeshCheckOptions& options) {
   r.num_vertices = static_cast<int64_t>(mesh.vertices.size());
   r.num_faces = static_cast<int64_t>(mesh.faces.size());
   const FaceTable faces = ClassifyFaces(mesh, max_ex, &r);
-  CountDuplicateFaces(mesh, faces, max_ex, &r);
-  int64_t num_components = 0;
-  const std::vector<int64_t> component_of = LabelComponents(mesh, faces, &num_components);
-  std::vector<ComponentAccumulator> acc(num_components);
-  for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    if (faces.state[f] == kTopological) ++acc[component_of[mesh.faces[f][0]]].faces;
-    if (faces.state[f] == kRepeated) ++acc[component_of[mesh.faces[f][0]]].repeated_faces;
+  if (options.check_topology) {
+    CountDuplicateFaces(mesh, faces, max_ex, &r);
+    int64_t num_components = 0;
+    const std::vector<int64_t> component_of = LabelComponents(mesh, faces, &num_components);
+    std::vector<ComponentAccumulator> acc(num_components);
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      if (faces.state[f] == kTopological) ++acc[component_of[mesh.faces[f][0]]].faces;
+      if (faces.state[f] == kRepeated) ++acc[component_of[mesh.faces[f][0]]].repeated_faces;
+    }
+    CheckEdges(mesh, faces, component_of, max_ex, &acc, &r);
+    CheckVertexLinks(mesh, faces, component_of, max_ex, &acc, &r);
+    SummarizeComponents(mesh, faces, component_of, &acc, &r);
   }
-  CheckEdges(mesh, faces, component_of, max_ex, &acc, &r);
-  CheckVertexLinks(mesh, faces, component_of, max_ex, &acc, &r);
-  SummarizeComponents(mesh, faces, component_of, &acc, &r);
   r.self_intersections_checked = options.check_self_intersections;
   if (options.check_self_intersections) {
     FindSelfIntersections(mesh, faces.points, faces.state, faces.zero_area, options, &r);

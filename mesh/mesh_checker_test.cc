@@ -183,6 +183,30 @@ TEST(MeshChecker, FocusedCheckTestsOnlyPairsWithAFlaggedFace) {
   EXPECT_THROW(CheckMesh(mesh, options), InputError);
 }
 
+TEST(MeshChecker, GeometryOnlyFindsTheSameGeometricProblems) {
+  // Crossing corners (open, so topology has something to say too) and a degenerate face.
+  Mesh mesh = Append(test_meshes::Corner({0, 0, 0}, 1), test_meshes::Corner({0.2, 0.2, 0.2}, 1));
+  const int32_t v = static_cast<int32_t>(mesh.vertices.size());
+  mesh.vertices.insert(mesh.vertices.end(), {{5, 5, 5}, {6, 5, 5}, {7, 5, 5}});
+  mesh.faces.push_back({v, v + 1, v + 2});
+  MeshCheckOptions options;
+  options.max_examples = 1000;
+  const MeshReport full = CheckMesh(mesh, options);
+  ASSERT_GT(full.num_boundary_edges, 0);
+  ASSERT_GT(full.num_self_intersections, 0);
+  ASSERT_EQ(full.num_degenerate_faces, 1);
+  options.check_topology = false;
+  const MeshReport geometry = CheckMesh(mesh, options);
+  EXPECT_EQ(geometry.self_intersection_examples, full.self_intersection_examples);
+  EXPECT_EQ(geometry.degenerate_face_examples, full.degenerate_face_examples);
+  EXPECT_EQ(geometry.float_robustness.float_intersection_examples,
+            full.float_robustness.float_intersection_examples);
+  EXPECT_EQ(geometry.float_robustness.close_face_pair_examples,
+            full.float_robustness.close_face_pair_examples);
+  EXPECT_EQ(geometry.num_boundary_edges, 0);  // not looked at
+  EXPECT_EQ(geometry.num_edges, 0);
+}
+
 TEST(MeshChecker, TorusHasGenusOne) {
   const MeshReport r = Check(Torus(12, 8));
   EXPECT_TRUE(r.is_valid);

@@ -55,6 +55,7 @@ CheckerProblems FindCheckerProblems(const Mesh& mesh, double tolerance,
   check.float_tolerance_abs = tolerance;
   check.max_examples = INT_MAX;
   check.max_self_intersections = INT64_MAX;
+  check.check_topology = false;  // moves and the remeshing's own steps keep it
   MeshReport report = CheckMesh(mesh, check);
   FloatRobustnessReport& f = report.float_robustness;
   CheckerProblems p;
