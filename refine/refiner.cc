@@ -151,11 +151,10 @@ std::vector<std::pair<int, int>> RefinePairs(const Scene& scene, const Neighbour
   return pairs;
 }
 
-RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
-                       const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
-                       const RefineHooks& hooks) {
-  const RefineState* resume = hooks.resume;
-  options.Check();
+namespace {
+
+void CheckRefineInputs(const std::vector<SweepCamera>& cameras,
+                       const std::vector<std::pair<int, int>>& pairs, const RefineHooks& hooks) {
   for (const auto& [a, b] : pairs) {
     const int n = static_cast<int>(cameras.size());
     if (a < 0 || a >= n || b < 0 || b >= n || a == b) {
@@ -163,14 +162,133 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
           fmt::format("refine: camera pair ({}, {}) out of range ({} cameras)", a, b, n));
     }
   }
-  if (!hooks.pair_gradients) {
-    for (const SweepCamera& c : cameras) {
-      if (c.image.empty()) {
-        throw InternalError(fmt::format(
-            "refine: camera {} has no image and no pair gradient source was given", c.id));
-      }
+  if (hooks.pair_gradients) return;
+  for (const SweepCamera& c : cameras) {
+    if (c.image.empty()) {
+      throw InternalError(fmt::format(
+          "refine: camera {} has no image and no pair gradient source was given", c.id));
     }
   }
+}
+
+// The safe moves' limits, fixed for the whole refinement (kept by a checkpoint) so that they do
+// not drift with the mesh's extent.
+MoveOptions SafeMoveOptions(const Mesh& mesh, const std::vector<SweepCamera>& cameras,
+                            const RefineOptions& options, const RefineState* resume) {
+  MoveOptions move_options;
+  // The cleanup's margin over check-mesh's tolerance (mesh/float_cleanup.h).
+  move_options.tolerance =
+      resume ? resume->tolerance
+             : 2 * FloatCheckTolerance(mesh, std::vector<uint8_t>(mesh.faces.size(), 1));
+  move_options.max_face_turn_deg = options.max_face_turn_deg;
+  move_options.max_halvings = options.max_halvings;
+  // The surface keeps away from every camera's centre (CameraClearance): a camera in the
+  // matter, or a face inside its near plane, would break its views.
+  for (const SweepCamera& c : cameras) move_options.keep_clear.push_back(c.view.Center());
+  move_options.clearance = resume ? resume->camera_clearance : CameraClearance(mesh, cameras);
+  return move_options;
+}
+
+// What the levels of one refinement share.
+struct Refinement {
+  Mesh* mesh;
+  const std::vector<std::pair<int, int>>& pairs;
+  const RefineOptions& options;
+  const RefineHooks& hooks;
+  PairGradientKernel* kernel;  // null: hooks.pair_gradients
+  MoveOptions move_options;
+  RefineStats* stats;
+  int iteration = 0;  // over all levels
+
+  PairGradient Sum(const Mesh& at, const std::vector<RefineView>& views, int level) const {
+    return SumPairs(at, views, level, pairs, options, hooks.pair_gradients, kernel);
+  }
+};
+
+// `count` iterations at one pyramid level (index li from the coarsest), from `resumed` state
+// when the refinement was interrupted in this level. The finest level (l == 0) keeps its last
+// step only if it lowered the energy.
+void RefineLevel(Refinement& r, int li, int l, int level, int count, const RefineState* resumed,
+                 const std::vector<RefineView>& views) {
+  Mesh* mesh = r.mesh;
+  const std::vector<std::vector<int32_t>> neighbours = VertexNeighbours(*mesh);
+  // Backtracking: a step that raised the energy is undone and retried at half the length;
+  // after a step that lowered it, the length grows back (by 1.25, up to the full step).
+  double scale = resumed ? resumed->scale : 1;
+  std::vector<Eigen::Vector3d> accepted =
+      resumed ? resumed->accepted : std::vector<Eigen::Vector3d>();
+  double accepted_energy = resumed ? resumed->accepted_energy : 0;
+  PairGradient accepted_data;
+  if (!accepted.empty()) {  // the gradient there, as the interrupted run had it
+    Mesh at_accepted = *mesh;
+    at_accepted.vertices = accepted;
+    accepted_data = r.Sum(at_accepted, views, level);
+  }
+  for (int i = resumed ? resumed->iteration_in_level : 0; i < count; ++i) {
+    Timer timer;
+    PairGradient data = r.Sum(*mesh, views, level);
+    RefineIteration it;
+    it.level = level;
+    it.iteration = ++r.iteration;
+    it.pixels = data.pixels;
+    it.energy = data.MeanEnergy();
+    if (r.iteration == 1 && data.pixels == 0) {
+      throw InputError(
+          "refine: no pixel of any camera pair has a defined ZNCC at the first level: no camera "
+          "sees the mesh (is it the mesh of this scene?) or the images are textureless there");
+    }
+    if (!accepted.empty() && it.energy > accepted_energy) {
+      it.rejected = true;
+      mesh->vertices = accepted;
+      data = accepted_data;
+      scale /= 2;
+    } else {
+      if (!accepted.empty()) scale = std::min(1.0, scale * 1.25);
+      accepted = mesh->vertices;
+      accepted_data = data;
+      accepted_energy = it.energy;
+    }
+    it.step_scale = scale;
+    Timer check_timer;
+    const MoveStats moved = MoveVerticesSafely(
+        mesh, Displacements(*mesh, data, neighbours, r.options, scale), r.move_options);
+    it.checks = moved.rounds;
+    it.check_seconds = check_timer.Seconds();
+    it.moved = moved.moved;
+    it.halved = moved.halved;
+    it.refused = moved.refused;
+    it.largest_move = moved.largest;
+    it.seconds = timer.Seconds();
+    r.stats->iterations.push_back(it);
+    if (r.hooks.progress) r.hooks.progress(it);
+    if (r.hooks.checkpoint) {
+      RefineState state;
+      state.level_index = li;
+      state.iteration_in_level = i + 1;
+      state.iterations_done = r.iteration;
+      state.scale = scale;
+      state.accepted_energy = accepted_energy;
+      state.accepted = accepted;
+      state.tolerance = r.move_options.tolerance;
+      state.camera_clearance = r.move_options.clearance;
+      r.hooks.checkpoint(*mesh, state);
+    }
+  }
+  if (l == 0 && !accepted.empty()) {
+    const double energy = r.Sum(*mesh, views, level).MeanEnergy();
+    if (energy > accepted_energy) mesh->vertices = accepted;
+    r.stats->final_energy = std::min(energy, accepted_energy);
+  }
+}
+
+}  // namespace
+
+RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
+                       const std::vector<std::pair<int, int>>& pairs, const RefineOptions& options,
+                       const RefineHooks& hooks) {
+  const RefineState* resume = hooks.resume;
+  options.Check();
+  CheckRefineInputs(cameras, pairs, hooks);
   RefineStats stats;
   Timer total;
   if (mesh->faces.empty() || pairs.empty()) return stats;
@@ -180,22 +298,12 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     kernel = MakePairGradientKernel(options.kernel, &why);
     spdlog::info("refine: gradients by {} ({})", kernel->Name(), why);
   }
-  MoveOptions move_options;
-  // The cleanup's margin over check-mesh's tolerance (mesh/float_cleanup.h), fixed for the
-  // whole refinement so it does not drift with the mesh's extent.
-  move_options.tolerance =
-      resume ? resume->tolerance
-             : 2 * FloatCheckTolerance(*mesh, std::vector<uint8_t>(mesh->faces.size(), 1));
-  move_options.max_face_turn_deg = options.max_face_turn_deg;
-  move_options.max_halvings = options.max_halvings;
-  // The surface keeps away from every camera's centre (CameraClearance), fixed like the
-  // tolerance: a camera in the matter, or a face inside its near plane, would break its views.
-  for (const SweepCamera& c : cameras) move_options.keep_clear.push_back(c.view.Center());
-  move_options.clearance = resume ? resume->camera_clearance : CameraClearance(*mesh, cameras);
-
+  Refinement r{mesh,  pairs,        options,
+               hooks, kernel.get(), SafeMoveOptions(*mesh, cameras, options, resume),
+               &stats};
+  r.iteration = resume ? resume->iterations_done : 0;
   const int finest = FinestLevel(cameras, options);
   const int per_level = options.iterations / options.levels;
-  int iteration = resume ? resume->iterations_done : 0;
   for (int li = 0; li < options.levels; ++li) {
     const int l = options.levels - 1 - li;  // coarsest first
     const int level = finest + l;
@@ -206,80 +314,9 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     views.reserve(cameras.size());
     for (const SweepCamera& c : cameras) views.push_back(RefineViewAtLevel(c, level));
     if (options.max_edge_px > 0 && !resumed) {  // a resumed level was remeshed before
-      Remesh(mesh, views, options, move_options.tolerance, &stats);
+      Remesh(mesh, views, options, r.move_options.tolerance, &stats);
     }
-    const std::vector<std::vector<int32_t>> neighbours = VertexNeighbours(*mesh);
-    // Backtracking: a step that raised the energy is undone and retried at half the length;
-    // after a step that lowered it, the length grows back (by 1.25, up to the full step).
-    double scale = resumed ? resume->scale : 1;
-    std::vector<Eigen::Vector3d> accepted =
-        resumed ? resume->accepted : std::vector<Eigen::Vector3d>();
-    double accepted_energy = resumed ? resume->accepted_energy : 0;
-    PairGradient accepted_data;
-    if (!accepted.empty()) {  // the gradient there, as the interrupted run had it
-      Mesh at_accepted = *mesh;
-      at_accepted.vertices = accepted;
-      accepted_data =
-          SumPairs(at_accepted, views, level, pairs, options, hooks.pair_gradients, kernel.get());
-    }
-    for (int i = resumed ? resume->iteration_in_level : 0; i < count; ++i) {
-      Timer timer;
-      PairGradient data =
-          SumPairs(*mesh, views, level, pairs, options, hooks.pair_gradients, kernel.get());
-      RefineIteration it;
-      it.level = level;
-      it.iteration = ++iteration;
-      it.pixels = data.pixels;
-      it.energy = data.MeanEnergy();
-      if (iteration == 1 && data.pixels == 0) {
-        throw InputError(
-            "refine: no pixel of any camera pair has a defined ZNCC at the first level: no camera "
-            "sees the mesh (is it the mesh of this scene?) or the images are textureless there");
-      }
-      if (!accepted.empty() && it.energy > accepted_energy) {
-        it.rejected = true;
-        mesh->vertices = accepted;
-        data = accepted_data;
-        scale /= 2;
-      } else {
-        if (!accepted.empty()) scale = std::min(1.0, scale * 1.25);
-        accepted = mesh->vertices;
-        accepted_data = data;
-        accepted_energy = it.energy;
-      }
-      it.step_scale = scale;
-      Timer check_timer;
-      const MoveStats moved = MoveVerticesSafely(
-          mesh, Displacements(*mesh, data, neighbours, options, scale), move_options);
-      it.checks = moved.rounds;
-      it.check_seconds = check_timer.Seconds();
-      it.moved = moved.moved;
-      it.halved = moved.halved;
-      it.refused = moved.refused;
-      it.largest_move = moved.largest;
-      it.seconds = timer.Seconds();
-      stats.iterations.push_back(it);
-      if (hooks.progress) hooks.progress(it);
-      if (hooks.checkpoint) {
-        RefineState state;
-        state.level_index = li;
-        state.iteration_in_level = i + 1;
-        state.iterations_done = iteration;
-        state.scale = scale;
-        state.accepted_energy = accepted_energy;
-        state.accepted = accepted;
-        state.tolerance = move_options.tolerance;
-        state.camera_clearance = move_options.clearance;
-        hooks.checkpoint(*mesh, state);
-      }
-    }
-    if (l == 0 && !accepted.empty()) {  // the last step is kept only if it lowered the energy
-      const PairGradient last =
-          SumPairs(*mesh, views, level, pairs, options, hooks.pair_gradients, kernel.get());
-      const double energy = last.MeanEnergy();
-      if (energy > accepted_energy) mesh->vertices = accepted;
-      stats.final_energy = std::min(energy, accepted_energy);
-    }
+    RefineLevel(r, li, l, level, count, resumed ? resume : nullptr, views);
   }
   stats.seconds = total.Seconds();
   return stats;

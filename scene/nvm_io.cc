@@ -74,13 +74,8 @@ RawCamera ParseCamera(TextReader& r, bool r9t) {
   return c;
 }
 
-}  // namespace
-
-Scene ParseNvm(const std::string& name, std::string contents, int model_index,
-               const ImageSizeLookup& image_size) {
-  if (model_index < 0) throw InputError(name + ": NVM model index must be >= 0");
-  const size_t file_bytes = contents.size();
-  TextReader r(name, std::move(contents));
+// The header line: the version (R9T: rotations as 3x3) and an optional FixedK.
+FixedK ParseHeader(TextReader& r, bool* r9t) {
   std::string_view header;
   if (!r.NextDataLine(&header, 0)) r.Fail("empty file, expected the NVM_V3 header");
   std::string_view version;
@@ -90,7 +85,7 @@ Scene ParseNvm(const std::string& name, std::string contents, int model_index,
            Quote(version));
   }
   const auto head = format::SplitFieldsAtMost(r, header, 7, "header");
-  const bool r9t = head[0] == "NVM_V3_R9T";
+  *r9t = head[0] == "NVM_V3_R9T";
   FixedK fixed;
   if (head.size() > 1) {
     if (head[1] != "FixedK" || (head.size() != 6 && head.size() != 7)) {
@@ -106,7 +101,90 @@ Scene ParseNvm(const std::string& name, std::string contents, int model_index,
     }
     if (!(fixed.fx > 0 && fixed.fy > 0)) r.Fail("header: FixedK focal lengths must be positive");
   }
+  return fixed;
+}
 
+// Camera i of the chosen model as a view: its image's size, FixedK or its focal length with the
+// image centre, VisualSFM's radial distortion fitted by OpenCV's k1..k3.
+View ViewOfCamera(const RawCamera& c, size_t i, const std::string& name, const FixedK& fixed,
+                  const ImageSizeLookup& image_size) {
+  const std::string where = name + ":" + std::to_string(c.line) + ": camera " + std::to_string(i) +
+                            " (" + Quote(c.name) + ")";
+  if (!(c.f > 0)) throw InputError(where + ": focal length must be positive");
+  const ImageSize size = image_size(c.name);
+  View view;
+  view.name = c.name;
+  Intrinsics& k = view.intrinsics;
+  k.width = size.width;
+  k.height = size.height;
+  if (fixed.present) {
+    k.fx = fixed.fx;
+    k.fy = fixed.fy;
+    k.cx = fixed.cx;
+    k.cy = fixed.cy;
+  } else {
+    k.fx = k.fy = c.f;
+    k.cx = 0.5 * size.width;
+    k.cy = 0.5 * size.height;
+  }
+  if (c.k != 0) {
+    const double error =
+        format::FitOpenCvToVisualSfm(c.k, CornerRadius(k), where, &k.k1, &k.k2, &k.k3);
+    const double error_px = error * std::max(k.fx, k.fy);
+    if (error_px > kWarnDistortionErrorPx) {
+      spdlog::warn(
+          "{}: VisualSFM radial k={} converted to OpenCV k1..k3 with up to {:.3f} px "
+          "error at the image corners",
+          where, c.k, error_px);
+    } else {
+      spdlog::debug("{}: VisualSFM radial k={} -> k1={} k2={} k3={} (max error {:.2e} px)", where,
+                    c.k, k.k1, k.k2, k.k3, error_px);
+    }
+  }
+  view.R = c.R;
+  view.t = c.t;
+  return view;
+}
+
+// A model's points. Kept (with their observations, relative to the image centre or FixedK's
+// principal point) only when `chosen`; every field is checked either way.
+void ParsePoints(TextReader& r, int64_t num_cameras, bool chosen, size_t file_bytes, Scene* scene) {
+  const int64_t num_points = NextInt(r, "number of points", 0, INT32_MAX);
+  if (chosen) scene->points.reserve(format::ReserveBound(num_points, file_bytes, 14));
+  for (int64_t p = 0; p < num_points; ++p) {
+    ScenePoint point;
+    for (int i = 0; i < 3; ++i) point.position[i] = NextDouble(r, "point position");
+    for (int i = 0; i < 3; ++i) {
+      point.color[i] = static_cast<uint8_t>(NextInt(r, "point colour", 0, 255));
+    }
+    const int64_t num_measurements = NextInt(r, "number of measurements", 0, INT32_MAX);
+    for (int64_t m = 0; m < num_measurements; ++m) {
+      const int64_t view = NextInt(r, "measurement image index", 0, num_cameras - 1);
+      NextInt(r, "measurement feature index", INT32_MIN, INT64_MAX);
+      const double x = NextDouble(r, "measurement x");
+      const double y = NextDouble(r, "measurement y");
+      if (!(std::abs(x) <= kMaxPixel && std::abs(y) <= kMaxPixel)) {
+        r.Fail("measurement: pixel coordinate out of range");
+      }
+      if (chosen) {
+        const Intrinsics& k = scene->views[view].intrinsics;
+        point.observations.push_back({static_cast<int32_t>(view), static_cast<float>(x + k.cx),
+                                      static_cast<float>(y + k.cy)});
+      }
+    }
+    if (chosen) scene->points.push_back(std::move(point));
+  }
+}
+
+}  // namespace
+
+Scene ParseNvm(const std::string& name, std::string contents, int model_index,
+               const ImageSizeLookup& image_size) {
+  if (model_index < 0) throw InputError(name + ": NVM model index must be >= 0");
+  const size_t file_bytes = contents.size();
+  TextReader r(name, std::move(contents));
+  bool r9t = false;
+  const FixedK fixed = ParseHeader(r, &r9t);
   for (int model = 0;; ++model) {
     if (r.AtEnd()) {
       r.Fail("model " + std::to_string(model_index) + " requested but the file holds " +
@@ -121,77 +199,14 @@ Scene ParseNvm(const std::string& name, std::string contents, int model_index,
     std::vector<RawCamera> cameras;
     cameras.reserve(format::ReserveBound(num_cameras, file_bytes, 22));
     for (int64_t i = 0; i < num_cameras; ++i) cameras.push_back(ParseCamera(r, r9t));
-
     Scene scene;
     scene.source = name;
     if (chosen) {
       for (size_t i = 0; i < cameras.size(); ++i) {
-        const RawCamera& c = cameras[i];
-        const std::string where = name + ":" + std::to_string(c.line) + ": camera " +
-                                  std::to_string(i) + " (" + Quote(c.name) + ")";
-        if (!(c.f > 0)) throw InputError(where + ": focal length must be positive");
-        const ImageSize size = image_size(c.name);
-        View view;
-        view.name = c.name;
-        Intrinsics& k = view.intrinsics;
-        k.width = size.width;
-        k.height = size.height;
-        if (fixed.present) {
-          k.fx = fixed.fx;
-          k.fy = fixed.fy;
-          k.cx = fixed.cx;
-          k.cy = fixed.cy;
-        } else {
-          k.fx = k.fy = c.f;
-          k.cx = 0.5 * size.width;
-          k.cy = 0.5 * size.height;
-        }
-        if (c.k != 0) {
-          const double error =
-              format::FitOpenCvToVisualSfm(c.k, CornerRadius(k), where, &k.k1, &k.k2, &k.k3);
-          const double error_px = error * std::max(k.fx, k.fy);
-          if (error_px > kWarnDistortionErrorPx) {
-            spdlog::warn(
-                "{}: VisualSFM radial k={} converted to OpenCV k1..k3 with up to {:.3f} px "
-                "error at the image corners",
-                where, c.k, error_px);
-          } else {
-            spdlog::debug("{}: VisualSFM radial k={} -> k1={} k2={} k3={} (max error {:.2e} px)",
-                          where, c.k, k.k1, k.k2, k.k3, error_px);
-          }
-        }
-        view.R = c.R;
-        view.t = c.t;
-        scene.views.push_back(std::move(view));
+        scene.views.push_back(ViewOfCamera(cameras[i], i, name, fixed, image_size));
       }
     }
-
-    const int64_t num_points = NextInt(r, "number of points", 0, INT32_MAX);
-    if (chosen) scene.points.reserve(format::ReserveBound(num_points, file_bytes, 14));
-    for (int64_t p = 0; p < num_points; ++p) {
-      ScenePoint point;
-      for (int i = 0; i < 3; ++i) point.position[i] = NextDouble(r, "point position");
-      for (int i = 0; i < 3; ++i) {
-        point.color[i] = static_cast<uint8_t>(NextInt(r, "point colour", 0, 255));
-      }
-      const int64_t num_measurements = NextInt(r, "number of measurements", 0, INT32_MAX);
-      for (int64_t m = 0; m < num_measurements; ++m) {
-        const int64_t view = NextInt(r, "measurement image index", 0, num_cameras - 1);
-        NextInt(r, "measurement feature index", INT32_MIN, INT64_MAX);
-        const double x = NextDouble(r, "measurement x");
-        const double y = NextDouble(r, "measurement y");
-        if (!(std::abs(x) <= kMaxPixel && std::abs(y) <= kMaxPixel)) {
-          r.Fail("measurement: pixel coordinate out of range");
-        }
-        if (chosen) {
-          const Intrinsics& k = scene.views[view].intrinsics;
-          // Relative to the image centre, or to the principal point under FixedK.
-          point.observations.push_back({static_cast<int32_t>(view), static_cast<float>(x + k.cx),
-                                        static_cast<float>(y + k.cy)});
-        }
-      }
-      if (chosen) scene.points.push_back(std::move(point));
-    }
+    ParsePoints(r, num_cameras, chosen, file_bytes, &scene);
     if (chosen) {
       format::WarnDroppedDuplicates(name, format::SortAndDeduplicateObservations(&scene));
       return scene;
