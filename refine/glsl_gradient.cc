@@ -108,6 +108,12 @@ struct GlslPairGradient::Impl {
 
   PairGradient Compute(const Mesh& mesh, const RefineView& reference, const RefineView& neighbour,
                        const RefineOptions& options);
+  // The passes of Compute, in order.
+  void SampleNeighbour(const RefineView& reference, const RefineView& neighbour, double near_j,
+                       const Eigen::Vector3d& centre, const RefineOptions& options);
+  void ZnccCoefficients(const Eigen::Vector2i& size, const RefineOptions& options);
+  void ChainRule(const View& vi, const Eigen::Vector2i& size);
+  void SumPerVertex(const Mesh& mesh, int w, int h, PairGradient* out) const;
 };
 
 PairGradient GlslPairGradient::Impl::Compute(const Mesh& mesh, const RefineView& reference,
@@ -119,7 +125,6 @@ PairGradient GlslPairGradient::Impl::Compute(const Mesh& mesh, const RefineView&
   const View& vi = reference.view;
   const View& vj = neighbour.view;
   const int w = vi.intrinsics.width, h = vi.intrinsics.height;
-  const Eigen::Vector2i size(w, h);
   const Eigen::Vector3d centre = vi.Center();
 
   // The two renderings: the face each reference pixel sees, the neighbour's depth.
@@ -135,21 +140,32 @@ PairGradient GlslPairGradient::Impl::Compute(const Mesh& mesh, const RefineView&
   if (!maps || maps->window0.width() != w || maps->window0.height() != h) {
     maps = std::make_unique<Maps>(w, h);
   }
+  faces = gl::Buffer::FromVector(PlanFaces(mesh, centre));
+  faces.BindStorage(0);
+  SampleNeighbour(reference, neighbour, near_j, centre, options);
+  ZnccCoefficients(Eigen::Vector2i(w, h), options);
+  ChainRule(vi, Eigen::Vector2i(w, h));
+  gl::CheckGlError("refine gradient passes");
+  SumPerVertex(mesh, w, h, &out);
+  return out;
+}
+
+// Pass 1: the neighbour through the mesh, into the windows' per-pixel values.
+void GlslPairGradient::Impl::SampleNeighbour(const RefineView& reference,
+                                             const RefineView& neighbour, double near_j,
+                                             const Eigen::Vector3d& centre,
+                                             const RefineOptions& options) {
+  const View& vi = reference.view;
+  const View& vj = neighbour.view;
+  const int w = vi.intrinsics.width, h = vi.intrinsics.height;
   cv::Mat image_i, image_j;
   reference.image.convertTo(image_i, CV_32F);
   neighbour.image.convertTo(image_j, CV_32F);
-  gl::Texture2D texture_i(w, h, gl::TextureFormat::kR32F);
-  gl::Texture2D texture_j(image_j.cols, image_j.rows, gl::TextureFormat::kR32F);
-  texture_i.Upload(image_i);
-  texture_j.Upload(image_j);
-  faces = gl::Buffer::FromVector(PlanFaces(mesh, centre));
-  faces.BindStorage(0);
-
-  // Pass 1: the neighbour through the mesh.
-  const Eigen::Matrix3f rt_i = vi.R.transpose().cast<float>();
-  sample->Set("u_rt_i", rt_i);
+  const gl::Texture2D texture_i = gl::Texture2D::FromImage(image_i, gl::TextureFormat::kR32F);
+  const gl::Texture2D texture_j = gl::Texture2D::FromImage(image_j, gl::TextureFormat::kR32F);
+  sample->Set("u_rt_i", Eigen::Matrix3f(vi.R.transpose().cast<float>()));
   sample->Set("u_k_i", Intrinsics4(vi.intrinsics));
-  sample->Set("u_size_i", size);
+  sample->Set("u_size_i", Eigen::Vector2i(w, h));
   sample->Set("u_size_j", Eigen::Vector2i(vj.intrinsics.width, vj.intrinsics.height));
   sample->Set("u_r_j", Eigen::Matrix3f(vj.R.cast<float>()));
   sample->Set("u_centre_j", Eigen::Vector3f(vj.ToCamera(centre).cast<float>()));
@@ -166,8 +182,12 @@ PairGradient GlslPairGradient::Impl::Compute(const Mesh& mesh, const RefineView&
   texture_j.BindImage(6, gl::ImageAccess::kReadOnly);
   sample->Dispatch(DivUp(w, kGroupX), DivUp(h, kGroupY));
   gl::MemoryBarrier();
+}
 
-  // The window's sums (the fast CPU kernel's float Gaussian).
+// The window's sums (the fast CPU kernel's float Gaussian), then pass 2: ZNCC and its
+// coefficients, filtered again.
+void GlslPairGradient::Impl::ZnccCoefficients(const Eigen::Vector2i& size,
+                                              const RefineOptions& options) {
   const int radius = static_cast<int>(std::ceil(3 * options.gaussian_sigma_px));
   if (weights_sigma != options.gaussian_sigma_px) {
     const cv::Mat kernel = cv::getGaussianKernel(2 * radius + 1, options.gaussian_sigma_px, CV_32F);
@@ -177,8 +197,6 @@ PairGradient GlslPairGradient::Impl::Compute(const Mesh& mesh, const RefineView&
   }
   Blur(maps->window0, maps->sums0, radius);
   Blur(maps->window1, maps->sums1, radius);
-
-  // Pass 2: ZNCC and its coefficients, filtered again.
   coefficients->Set("u_size", size);
   coefficients->Set("u_min_variance", static_cast<float>(options.min_texture_variance));
   maps->window0.BindImage(0, gl::ImageAccess::kReadOnly);
@@ -186,13 +204,15 @@ PairGradient GlslPairGradient::Impl::Compute(const Mesh& mesh, const RefineView&
   maps->sums1.BindImage(2, gl::ImageAccess::kReadOnly);
   maps->coefficients.BindImage(3, gl::ImageAccess::kWriteOnly);
   maps->energy.BindImage(4, gl::ImageAccess::kWriteOnly);
-  coefficients->Dispatch(DivUp(w, kGroupX), DivUp(h, kGroupY));
+  coefficients->Dispatch(DivUp(size.x(), kGroupX), DivUp(size.y(), kGroupY));
   gl::MemoryBarrier();
   Blur(maps->coefficients, maps->filtered, radius);
+}
 
-  // Pass 3: the chain rule per pixel.
+// Pass 3: the chain rule per pixel.
+void GlslPairGradient::Impl::ChainRule(const View& vi, const Eigen::Vector2i& size) {
   faces.BindStorage(0);
-  chain->Set("u_rt_i", rt_i);
+  chain->Set("u_rt_i", Eigen::Matrix3f(vi.R.transpose().cast<float>()));
   chain->Set("u_k_i", Intrinsics4(vi.intrinsics));
   chain->Set("u_size", size);
   maps->window0.BindImage(0, gl::ImageAccess::kReadOnly);
@@ -200,11 +220,12 @@ PairGradient GlslPairGradient::Impl::Compute(const Mesh& mesh, const RefineView&
   maps->filtered.BindImage(2, gl::ImageAccess::kReadOnly);
   maps->face.BindImage(3, gl::ImageAccess::kReadOnly);
   maps->chain.BindImage(4, gl::ImageAccess::kWriteOnly);
-  chain->Dispatch(DivUp(w, kGroupX), DivUp(h, kGroupY));
+  chain->Dispatch(DivUp(size.x(), kGroupX), DivUp(size.y(), kGroupY));
   gl::MemoryBarrier();
-  gl::CheckGlError("refine gradient passes");
+}
 
-  // Per face in pixel order, then per vertex in face order (photometric_gradient_fast.cc).
+// Per face in pixel order, then per vertex in face order (photometric_gradient_fast.cc).
+void GlslPairGradient::Impl::SumPerVertex(const Mesh& mesh, int w, int h, PairGradient* out) const {
   const cv::Mat face = maps->face.Download();
   const cv::Mat per_pixel = maps->chain.Download();
   const cv::Mat energy = maps->energy.Download();
@@ -215,8 +236,8 @@ PairGradient GlslPairGradient::Impl::Compute(const Mesh& mesh, const RefineView&
     const float* e_row = energy.ptr<float>(row);
     for (int col = 0; col < w; ++col) {
       if (e_row[col] > -0.5f) {  // a defined ZNCC
-        out.energy += e_row[col];
-        ++out.pixels;
+        out->energy += e_row[col];
+        ++out->pixels;
       }
       const int32_t f = f_row[col];
       if (f < 0) continue;
@@ -237,12 +258,11 @@ PairGradient GlslPairGradient::Impl::Compute(const Mesh& mesh, const RefineView&
     if (!(n.squaredNorm() > 0)) continue;  // no area: no pixel sees it
     const Eigen::Vector3d unit = n.normalized();
     for (int k = 0; k < 3; ++k) {
-      out.gradient[t[k]] += sums[f][k] * unit;
-      out.parallax_rate2[t[k]] += sums[f][3 + k];
-      out.weight[t[k]] += sums[f][6 + k];
+      out->gradient[t[k]] += sums[f][k] * unit;
+      out->parallax_rate2[t[k]] += sums[f][3 + k];
+      out->weight[t[k]] += sums[f][6 + k];
     }
   }
-  return out;
 }
 
 GlslPairGradient::GlslPairGradient(const gl::GlContextOptions& context)
