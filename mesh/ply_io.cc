@@ -578,15 +578,21 @@ uint8_t ToColorByte(double v, PlyType t) {
   return static_cast<uint8_t>(std::clamp(std::round(v), 0.0, 255.0));
 }
 
-template <typename Source>
-void ReadElements(Source& source, PlyHeader& header, const PlyWants& wants, PlyData* out,
-                  const std::string& name) {
+// Which elements and properties the reader keeps: the slots assigned in the header.
+struct PlyLayout {
   PlyElement* vertex = nullptr;
+  PlyElement* face = nullptr;  // null when absent or not wanted
+  bool has_normals = false, has_colors = false, has_scalars = false;
+};
+
+PlyLayout AssignSlots(PlyHeader& header, const PlyWants& wants, const std::string& name) {
+  PlyLayout layout;
   PlyElement* face = nullptr;
   for (PlyElement& e : header.elements) {
-    if (e.name == "vertex") vertex = &e;
+    if (e.name == "vertex") layout.vertex = &e;
     if (e.name == "face") face = &e;
   }
+  PlyElement* vertex = layout.vertex;
   if (vertex == nullptr) throw InputError(name + ": no 'vertex' element in the header");
   if (!AssignGroup(*vertex, {{{"x"}, {"y"}, {"z"}}}, {Slot::kX, Slot::kY, Slot::kZ})) {
     FailAtLine(name, vertex->line, "element vertex needs scalar properties x, y and z");
@@ -597,20 +603,19 @@ void ReadElements(Source& source, PlyHeader& header, const PlyWants& wants, PlyD
                    " vertices are more than a mesh can index (" +
                    std::to_string(wants.max_vertices) + ")");
   }
-  const bool has_normals =
+  layout.has_normals =
       wants.normals &&
       AssignGroup(*vertex, {{{"nx", "normal_x"}, {"ny", "normal_y"}, {"nz", "normal_z"}}},
                   {Slot::kNx, Slot::kNy, Slot::kNz});
-  const bool has_colors = wants.colors && AssignGroup(*vertex,
-                                                      {{{"red", "diffuse_red", "r"},
-                                                        {"green", "diffuse_green", "g"},
-                                                        {"blue", "diffuse_blue", "b"}}},
-                                                      {Slot::kRed, Slot::kGreen, Slot::kBlue});
-  bool has_scalars = false;
+  layout.has_colors = wants.colors && AssignGroup(*vertex,
+                                                  {{{"red", "diffuse_red", "r"},
+                                                    {"green", "diffuse_green", "g"},
+                                                    {"blue", "diffuse_blue", "b"}}},
+                                                  {Slot::kRed, Slot::kGreen, Slot::kBlue});
   if (wants.scalars) {
     if (PlyProperty* q = FindProperty(*vertex, {"quality", "scalar"}); q && !q->is_list) {
       q->slot = Slot::kScalar;
-      has_scalars = true;
+      layout.has_scalars = true;
     }
   }
   if (wants.faces && face != nullptr) {
@@ -624,13 +629,97 @@ void ReadElements(Source& source, PlyHeader& header, const PlyWants& wants, PlyD
                  "face " + indices->name + ": index type must be an integer type");
     }
     indices->slot = Slot::kIndices;
+    layout.face = face;
   }
+  return layout;
+}
 
+// A list property: a face's indices (fanned into triangles) or a list skipped.
+template <typename Source>
+void ReadList(Source& source, const PlyProperty& p, int64_t num_vertices,
+              std::vector<int64_t>* polygon, PlyData* out) {
+  const int64_t n = source.ReadInteger(p.count_type, p);
+  if (n < 0) source.Fail(p.name + ": negative list length " + std::to_string(n));
+  if (static_cast<uint64_t>(n) > source.MaxListItems(p.type)) {
+    source.Fail(p.name + ": list of " + std::to_string(n) + " items runs past the end of the data");
+  }
+  if (p.slot != Slot::kIndices) {
+    source.SkipValues(p.type, static_cast<uint64_t>(n), p);
+    return;
+  }
+  if (n < 3) {
+    source.Fail(p.name + ": a face needs at least 3 vertices, this one has " + std::to_string(n));
+  }
+  polygon->resize(static_cast<size_t>(n));
+  for (int64_t k = 0; k < n; ++k) {
+    const int64_t index = source.ReadInteger(p.type, p);
+    if (index < 0 || index >= num_vertices) {
+      source.Fail(p.name + ": vertex index " + std::to_string(index) + " is out of range [0, " +
+                  std::to_string(num_vertices) + ")");
+    }
+    (*polygon)[static_cast<size_t>(k)] = index;
+  }
+  for (size_t k = 1; k + 1 < polygon->size(); ++k) {
+    out->triangles.push_back({static_cast<int32_t>((*polygon)[0]),
+                              static_cast<int32_t>((*polygon)[k]),
+                              static_cast<int32_t>((*polygon)[k + 1])});
+  }
+}
+
+// What one vertex instance holds.
+struct PlyVertexValues {
+  Eigen::Vector3d position, normal;
+  std::array<uint8_t, 3> color{};
+  float scalar = 0;
+};
+
+// One scalar property into its slot.
+template <typename Source>
+void ReadScalar(Source& source, const PlyProperty& p, PlyVertexValues* values) {
+  if (p.slot == Slot::kSkip) {
+    source.SkipValues(p.type, 1, p);
+    return;
+  }
+  const double v = source.ReadNumber(p.type, p);
+  switch (p.slot) {
+    case Slot::kX:
+    case Slot::kY:
+    case Slot::kZ:
+    case Slot::kNx:
+    case Slot::kNy:
+    case Slot::kNz:
+      if (!std::isfinite(v)) source.Fail(p.name + ": value is not finite");
+      if (p.slot <= Slot::kZ) {
+        values->position[static_cast<int>(p.slot) - static_cast<int>(Slot::kX)] = v;
+      } else {
+        values->normal[static_cast<int>(p.slot) - static_cast<int>(Slot::kNx)] = v;
+      }
+      break;
+    case Slot::kRed:
+    case Slot::kGreen:
+    case Slot::kBlue:
+      values->color[static_cast<int>(p.slot) - static_cast<int>(Slot::kRed)] =
+          ToColorByte(v, p.type);
+      break;
+    case Slot::kScalar:
+      values->scalar = static_cast<float>(v);
+      if (!std::isfinite(values->scalar)) source.Fail(p.name + ": value is not a finite float");
+      break;
+    default:
+      break;
+  }
+}
+
+template <typename Source>
+void ReadElements(Source& source, PlyHeader& header, const PlyWants& wants, PlyData* out,
+                  const std::string& name) {
+  const PlyLayout layout = AssignSlots(header, wants, name);
+  const PlyElement* vertex = layout.vertex;
   out->positions.reserve(vertex->count);
-  if (has_normals) out->normals.reserve(vertex->count);
-  if (has_colors) out->colors.reserve(vertex->count);
-  if (has_scalars) out->scalars.reserve(vertex->count);
-  if (face != nullptr && wants.faces) out->triangles.reserve(face->count);
+  if (layout.has_normals) out->normals.reserve(vertex->count);
+  if (layout.has_colors) out->colors.reserve(vertex->count);
+  if (layout.has_scalars) out->scalars.reserve(vertex->count);
+  if (layout.face != nullptr) out->triangles.reserve(layout.face->count);
   const int64_t num_vertices = static_cast<int64_t>(vertex->count);
 
   std::vector<int64_t> polygon;
@@ -638,84 +727,25 @@ void ReadElements(Source& source, PlyHeader& header, const PlyWants& wants, PlyD
     source.position_.element = &element.name;
     source.position_.index = 0;
     if (element.properties.empty()) continue;
-    const bool keep = &element == vertex || (&element == face && wants.faces);
+    const bool keep = &element == vertex || &element == layout.face;
     if (!keep && source.TrySkipFixedInstances(element, element.count)) continue;
     for (uint64_t i = 0; i < element.count; ++i) {
       source.position_.index = i;
       source.BeginInstance();
-      Eigen::Vector3d position, normal;
-      std::array<uint8_t, 3> color{};
-      float scalar = 0;
+      PlyVertexValues values;
       for (const PlyProperty& p : element.properties) {
         if (p.is_list) {
-          const int64_t n = source.ReadInteger(p.count_type, p);
-          if (n < 0) source.Fail(p.name + ": negative list length " + std::to_string(n));
-          if (static_cast<uint64_t>(n) > source.MaxListItems(p.type)) {
-            source.Fail(p.name + ": list of " + std::to_string(n) +
-                        " items runs past the end of the data");
-          }
-          if (p.slot != Slot::kIndices) {
-            source.SkipValues(p.type, static_cast<uint64_t>(n), p);
-            continue;
-          }
-          if (n < 3) {
-            source.Fail(p.name + ": a face needs at least 3 vertices, this one has " +
-                        std::to_string(n));
-          }
-          polygon.resize(static_cast<size_t>(n));
-          for (int64_t k = 0; k < n; ++k) {
-            const int64_t index = source.ReadInteger(p.type, p);
-            if (index < 0 || index >= num_vertices) {
-              source.Fail(p.name + ": vertex index " + std::to_string(index) +
-                          " is out of range [0, " + std::to_string(num_vertices) + ")");
-            }
-            polygon[static_cast<size_t>(k)] = index;
-          }
-          for (size_t k = 1; k + 1 < polygon.size(); ++k) {
-            out->triangles.push_back({static_cast<int32_t>(polygon[0]),
-                                      static_cast<int32_t>(polygon[k]),
-                                      static_cast<int32_t>(polygon[k + 1])});
-          }
-          continue;
-        }
-        if (p.slot == Slot::kSkip) {
-          source.SkipValues(p.type, 1, p);
-          continue;
-        }
-        const double v = source.ReadNumber(p.type, p);
-        switch (p.slot) {
-          case Slot::kX:
-          case Slot::kY:
-          case Slot::kZ:
-          case Slot::kNx:
-          case Slot::kNy:
-          case Slot::kNz:
-            if (!std::isfinite(v)) source.Fail(p.name + ": value is not finite");
-            if (p.slot <= Slot::kZ) {
-              position[static_cast<int>(p.slot) - static_cast<int>(Slot::kX)] = v;
-            } else {
-              normal[static_cast<int>(p.slot) - static_cast<int>(Slot::kNx)] = v;
-            }
-            break;
-          case Slot::kRed:
-          case Slot::kGreen:
-          case Slot::kBlue:
-            color[static_cast<int>(p.slot) - static_cast<int>(Slot::kRed)] = ToColorByte(v, p.type);
-            break;
-          case Slot::kScalar:
-            scalar = static_cast<float>(v);
-            if (!std::isfinite(scalar)) source.Fail(p.name + ": value is not a finite float");
-            break;
-          default:
-            break;
+          ReadList(source, p, num_vertices, &polygon, out);
+        } else {
+          ReadScalar(source, p, &values);
         }
       }
       source.EndInstance();
       if (&element == vertex) {
-        out->positions.push_back(position);
-        if (has_normals) out->normals.push_back(normal);
-        if (has_colors) out->colors.push_back(color);
-        if (has_scalars) out->scalars.push_back(scalar);
+        out->positions.push_back(values.position);
+        if (layout.has_normals) out->normals.push_back(values.normal);
+        if (layout.has_colors) out->colors.push_back(values.color);
+        if (layout.has_scalars) out->scalars.push_back(values.scalar);
       }
     }
   }
