@@ -27,10 +27,12 @@ struct CoordinatorCommandOptions {
   bool insecure = false;
   bool refine = false;  // refine final.ply into refined.ply on the workers (docs/design/refine.md)
   RefineOptions refine_options;
+  RunReportRequest report;  // report.html at the end (docs/guides/report.md)
 };
 
 void RunCoordinator(CoordinatorCommandOptions& options) {
   options.run.Check();
+  options.report.options.Check();
   if (options.refine && options.run.input.empty()) {
     throw InputError("--refine: needs --input (the scene whose images refinement compares)");
   }
@@ -72,6 +74,7 @@ void RunCoordinator(CoordinatorCommandOptions& options) {
                    options.refine_options, options.run.neighbours, false, options.run.run.resume,
                    &workers);
   }
+  WriteRunReportAfterRun(options.run.output_dir, options.report);
 }
 
 }  // namespace
@@ -105,6 +108,7 @@ void RegisterCoordinatorCommand(CLI::App& app) {
                 "keeping it a closed 2-manifold (docs/design/refine.md)");
   AddRunOptions(cmd, &options->run);
   AddOptionGroup(cmd, &options->refine_options);
+  AddRunReportOptions(cmd, &options->report);
   cmd->callback([options] { RunCoordinator(*options); });
 }
 

@@ -13,4 +13,11 @@ void AddRunOptions(CLI::App* command, CoordinatorOptions* options) {
   AddOptionGroup(command, &options->sweep);
 }
 
+void AddRunReportOptions(CLI::App* command, RunReportRequest* request) {
+  command->add_flag("--report,!--no-report", request->write,
+                    "write report.html, the run report, into the output folder at the end "
+                    "(docs/guides/report.md); --no-report skips it");
+  AddOptionGroup(command, &request->options);
+}
+
 }  // namespace ms::app

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include "coordinator/coordinator.h"
+#include "report/run_report.h"
 
 namespace ms::app {
 
@@ -12,5 +13,8 @@ namespace ms::app {
 // command): the run's own (--resume, --max-iterations, ...), --manifold.*, --neighbours.*,
 // --visible.*, --sweep.* and the scheduler's (--lease, --heartbeat-interval, ...).
 void AddRunOptions(CLI::App* command, CoordinatorOptions* options);
+
+// --report / --no-report and --report.*: the run report written at the end of the run.
+void AddRunReportOptions(CLI::App* command, RunReportRequest* request);
 
 }  // namespace ms::app

@@ -77,8 +77,7 @@ struct ReconstructCommandOptions {
   int max_restarts = -1;
   bool refine = true;  // refine final.ply into refined.ply at the end (docs/design/refine.md)
   RefineOptions refine_options;
-  bool report = true;  // write report.html at the end (docs/guides/report.md)
-  ReportOptions report_options;
+  RunReportRequest report;  // report.html at the end (docs/guides/report.md)
 };
 
 class WorkerPool {
@@ -145,7 +144,7 @@ void CheckReconstructOptions(ReconstructCommandOptions& options) {
         "`manisweep coordinator --no-images` and `manisweep worker --kernel replay`");
   }
   if (options.coordinator.output_dir.empty()) throw InputError("--output: required");
-  options.report_options.Check();
+  options.report.options.Check();
 }
 
 // Without --input, the embedded default scene, written into the output folder (or found there
@@ -277,14 +276,7 @@ void RunReconstruct(ReconstructCommandOptions& options) {
     stop_workers();
   }
   if (!default_dir.empty()) ReportDefaultSceneAccuracy(setup.output_dir, default_dir);
-  if (options.report) {
-    // The meshes are written: a report that cannot be made is a warning, not a failed run.
-    try {
-      WriteRunReport(setup.output_dir, options.report_options);
-    } catch (const std::exception& e) {
-      spdlog::warn("the run report was not written: {}", e.what());
-    }
-  }
+  WriteRunReportAfterRun(setup.output_dir, options.report);
 }
 
 }  // namespace
@@ -317,10 +309,7 @@ void RegisterReconstructCommand(CLI::App& app) {
       "keeping it a closed 2-manifold (docs/design/refine.md); --no-refine stops at final.ply");
   AddRunOptions(cmd, &options->coordinator);
   AddOptionGroup(cmd, &options->refine_options);
-  cmd->add_flag("--report,!--no-report", options->report,
-                "write report.html, the run report, into the output folder at the end "
-                "(docs/guides/report.md); --no-report skips it");
-  AddOptionGroup(cmd, &options->report_options);
+  AddRunReportOptions(cmd, &options->report);
   cmd->callback([options] { RunReconstruct(*options); });
 }
 

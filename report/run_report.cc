@@ -377,4 +377,13 @@ std::string WriteRunReport(const std::string& run_dir, const ReportOptions& opti
   return path;
 }
 
+void WriteRunReportAfterRun(const std::string& run_dir, const RunReportRequest& request) {
+  if (!request.write) return;
+  try {
+    WriteRunReport(run_dir, request.options);
+  } catch (const std::exception& e) {
+    spdlog::warn("the run report was not written: {}", e.what());
+  }
+}
+
 }  // namespace ms

@@ -23,4 +23,14 @@ std::string BuildRunReport(const gl::GlContext& gl, const RunFolder& run,
 std::string WriteRunReport(const std::string& run_dir, const ReportOptions& options,
                            const std::string& output = "");
 
+// What a command that ends a run (reconstruct, coordinator) does about the report.
+struct RunReportRequest {
+  bool write = true;  // --report / --no-report
+  ReportOptions options;
+};
+
+// RUN_DIR/report.html at the end of a run. The run's meshes are written by then, so a report
+// that cannot be made is logged as a warning, not thrown.
+void WriteRunReportAfterRun(const std::string& run_dir, const RunReportRequest& request);
+
 }  // namespace ms

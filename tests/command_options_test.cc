@@ -79,9 +79,10 @@ TEST(CommandOptions, CoordinatorTakesEveryOptionOfARun) {
                              SchedulerOptions, SweepOptions>());
 }
 
-TEST(CommandOptions, ReportAndReconstructTakeEveryReportOption) {
+TEST(CommandOptions, ReportReconstructAndCoordinatorTakeEveryReportOption) {
   ExpectHelpListsEveryFlag("report", FlagsOf<ReportOptions>());
   ExpectHelpListsEveryFlag("reconstruct", FlagsOf<ReportOptions>());
+  ExpectHelpListsEveryFlag("coordinator", FlagsOf<ReportOptions>());
 }
 
 TEST(CommandOptions, ManifoldTakesEveryManifoldOption) {
