@@ -21,6 +21,7 @@
 #include "report/svg_chart.h"
 #include "tools/consistency.h"
 #include "tools/evaluate.h"
+#include "tools/plot.h"
 #include "tools/render.h"
 
 namespace ms {
@@ -309,7 +310,20 @@ std::string AccuracySection(const gl::GlContext& gl, const RunFolder& run,
       "({}). A pixel the mesh misses counts as an error of {} Σ in the first column.",
       fs::path(run.ground_truth->path).filename().string(), run.ground_truth->source,
       run.ground_truth->view, e.sigma, e.sigma_rule, evaluate.max_multiple);
-  return Section("accuracy", "Accuracy against the ground truth", Note(text) + table.Html());
+  // The paper's Figure 5 (first row): each mesh's depth error from the evaluation view.
+  std::vector<ErrorPanel> panels;
+  for (const MeshEvaluation& m : e.meshes) panels.push_back({m.label, m.first_depth});
+  const double max_error = 5 * e.sigma;
+  const std::string figure =
+      PngImageTag(ErrorFigure(panels, e.first_gt_depth, max_error, options.picture_size),
+                  "depth error of each mesh from view " + std::to_string(run.ground_truth->view));
+  const std::string caption = Note(fmt::format(
+      "|d - d*| from view {}, blue 0 to red {:.4g} (5 Σ) and above; black: no ground truth, "
+      "white: the mesh misses a pixel the ground truth has.",
+      run.ground_truth->view, max_error));
+  return Section(
+      "accuracy", "Accuracy against the ground truth",
+      Note(text) + table.Html() + "<div class=\"pictures\">" + figure + "</div>\n" + caption);
 }
 
 constexpr const char* kStyle = R"(
