@@ -3,7 +3,8 @@
 // Included by report/report_options.h only (no include guard on purpose).
 
 MS_OPTION(int, cameras, 3, "cameras",
-          "views the meshes are rendered from, spread over the scene (0 = no pictures)",
+          "views the meshes are rendered from, spread over the scene (0 = no pictures, and no "
+          "error image)",
           InRange(0, 64))
 MS_OPTION(int, picture_size, 360, "picture-size", "longest side of each picture in pixels",
           InRange(64, 4096))

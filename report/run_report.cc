@@ -310,6 +310,9 @@ std::string AccuracySection(const gl::GlContext& gl, const RunFolder& run,
       "({}). A pixel the mesh misses counts as an error of {} Σ in the first column.",
       fs::path(run.ground_truth->path).filename().string(), run.ground_truth->source,
       run.ground_truth->view, e.sigma, e.sigma_rule, evaluate.max_multiple);
+  if (options.cameras == 0) {  // no pictures
+    return Section("accuracy", "Accuracy against the ground truth", Note(text) + table.Html());
+  }
   // The paper's Figure 5 (first row): each mesh's depth error from the evaluation view.
   std::vector<ErrorPanel> panels;
   for (const MeshEvaluation& m : e.meshes) panels.push_back({m.label, m.first_depth});
