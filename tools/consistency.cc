@@ -44,7 +44,9 @@ ConsistencyReport MeasureConsistency(const Scene& scene, const Mesh& mesh,
   ConsistencyReport report;
   Timer timer;
   const int num_views = static_cast<int>(scene.views.size());
+  Progress progress("consistency: cameras", num_views);
   for (int c = 0; c < num_views; ++c) {
+    progress.Update(c);
     const std::vector<int> neighbours = SelectNeighbours(scene, c, options.neighbours);
     if (neighbours.empty()) continue;
     SweepJob job;
@@ -86,10 +88,11 @@ ConsistencyReport MeasureConsistency(const Scene& scene, const Mesh& mesh,
       result.consistent += best[i] > options.ncc_threshold;
     }
     report.cameras.push_back(result);
-    spdlog::info("consistency: camera {}/{}: {:.1f}% of {} pixels consistent ({:.1f} s)", c + 1,
-                 num_views, 100.0 * result.consistent / std::max<int64_t>(1, result.pixels),
-                 result.pixels, timer.Seconds());
+    spdlog::debug("consistency: camera {}/{}: {:.1f}% of {} pixels consistent ({:.1f} s)", c + 1,
+                  num_views, 100.0 * result.consistent / std::max<int64_t>(1, result.pixels),
+                  result.pixels, timer.Seconds());
   }
+  progress.Finish(num_views);
   for (const CameraConsistency& c : report.cameras) {
     report.total.pixels += c.pixels;
     report.total.covered += c.covered;
