@@ -624,6 +624,7 @@ void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
   };
   auto callback = [&](const Box& x, const Box& y) {
     const int64_t f = std::min(x.info(), y.info()), g = std::max(x.info(), y.info());
+    if (options.on_box_pair) options.on_box_pair(f, g);
     const auto &a = mesh.faces[f], &b = mesh.faces[g];
     for (int32_t v : a) {
       if (v == b[0] || v == b[1] || v == b[2]) return;  // pairs sharing a vertex: not tested

@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <vector>
@@ -36,6 +37,12 @@ struct FloatRobustnessOptions {
   // the boxes it searches, and a slab's copy is all that is held. The pairs found do not depend
   // on it (nor their order, unless a search stops at max_pairs).
   int64_t boxes_per_slab = int64_t{1} << 18;
+  // Called on the searching thread with every face pair (f < g) whose boxes, enlarged by the
+  // tolerance, overlap (a superset of the pairs whose exact boxes do), those sharing a vertex
+  // included, before the pair tests; a pair of two flagged faces may come twice. The exact
+  // self-intersection test (mesh_checker.cc) shares the search this way. Not called for what
+  // a search stopped at max_pairs did not reach (both *_truncated flags then set).
+  std::function<void(int64_t f, int64_t g)> on_box_pair;
   void Check() const;  // throws InputError naming the field
 };
 

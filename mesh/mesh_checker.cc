@@ -212,6 +212,47 @@ void FindSelfIntersections(const Mesh& mesh, const std::vector<Point>& points,
   }
 }
 
+// Self-intersections among the pairs the float check's box search hands over
+// (FloatRobustnessOptions::on_box_pair): the same pairs FindSelfIntersections finds with a search
+// of its own, from one search instead of two.
+class SharedSelfIntersectionSearch {
+ public:
+  SharedSelfIntersectionSearch(const Mesh& mesh, const std::vector<Point>& points,
+                               const std::vector<uint8_t>& state,
+                               const std::vector<uint8_t>& zero_area, int64_t max_pairs)
+      : mesh_(mesh), points_(points), state_(state), zero_area_(zero_area), max_(max_pairs) {}
+
+  void Test(int64_t f, int64_t g) {
+    if (state_[f] != kTopological || zero_area_[f] || state_[g] != kTopological || zero_area_[g]) {
+      return;
+    }
+    if (static_cast<int64_t>(found_.size()) >= max_) {
+      truncated_ = true;
+      return;
+    }
+    if (FacesIntersect(mesh_.faces[f], mesh_.faces[g], points_)) found_.push_back({f, g});
+  }
+
+  void Report(int max_examples, MeshReport* report) {
+    std::sort(found_.begin(), found_.end());
+    found_.erase(std::unique(found_.begin(), found_.end()), found_.end());
+    report->self_intersections_truncated = truncated_;
+    report->num_self_intersections = static_cast<int64_t>(found_.size());
+    for (const auto& pair : found_) {
+      AddExample(&report->self_intersection_examples, pair, max_examples);
+    }
+  }
+
+ private:
+  const Mesh& mesh_;
+  const std::vector<Point>& points_;
+  const std::vector<uint8_t>& state_;
+  const std::vector<uint8_t>& zero_area_;
+  int64_t max_;
+  std::vector<std::array<int64_t, 2>> found_;
+  bool truncated_ = false;
+};
+
 std::string FormatEdges(const std::vector<std::array<int32_t, 2>>& edges) {
   std::string s;
   for (const auto& e : edges) s += fmt::format("{}{}-{}", s.empty() ? "" : " ", e[0], e[1]);
@@ -561,13 +602,27 @@ MeshReport CheckMesh(const Mesh& mesh, const MeshCheckOptions& options) {
     CheckVertexLinks(mesh, faces, component_of, max_ex, &acc, &r);
     SummarizeComponents(mesh, faces, component_of, &acc, &r);
   }
+  // Floating point (mesh/float_robustness.h), whose box search also hands the exact
+  // self-intersection test its candidate pairs.
   r.self_intersections_checked = options.check_self_intersections;
-  if (options.check_self_intersections) {
-    FindSelfIntersections(mesh, faces.points, faces.state, faces.zero_area, options, &r);
-  }
-  std::vector<uint8_t> usable(mesh.faces.size());  // floating point (mesh/float_robustness.h)
+  std::vector<uint8_t> usable(mesh.faces.size());
   for (size_t f = 0; f < usable.size(); ++f) usable[f] = faces.state[f] != kInvalid;
-  r.float_robustness = CheckFloatRobustness(mesh, usable, FloatOptions(options));
+  SharedSelfIntersectionSearch exact(mesh, faces.points, faces.state, faces.zero_area,
+                                     options.max_self_intersections);
+  FloatRobustnessOptions float_options = FloatOptions(options);
+  if (options.check_self_intersections) {
+    float_options.on_box_pair = [&exact](int64_t f, int64_t g) { exact.Test(f, g); };
+  }
+  r.float_robustness = CheckFloatRobustness(mesh, usable, float_options);
+  if (options.check_self_intersections) {
+    const FloatRobustnessReport& fr = r.float_robustness;
+    if (fr.close_face_pairs_truncated && fr.float_intersections_truncated) {
+      // The shared search stopped early: a search of the exact test's own.
+      FindSelfIntersections(mesh, faces.points, faces.state, faces.zero_area, options, &r);
+    } else {
+      exact.Report(options.max_examples, &r);
+    }
+  }
   DecideValidity(options, &r);
   return r;
 }
