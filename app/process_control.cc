@@ -52,13 +52,6 @@ pid_t SpawnSelf(const std::vector<std::string>& args) {
   return StartSubprocess(child);
 }
 
-bool ReapIfExited(pid_t pid, std::string* how) {
-  int status = 0;
-  if (!ms::ReapIfExited(pid, &status)) return false;
-  *how = DescribeExit(status);
-  return true;
-}
-
 int StopChildren(const std::vector<pid_t>& pids, double grace_s) {
   std::vector<pid_t> alive = pids;
   auto reap = [&](double wait_s) {

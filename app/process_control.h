@@ -21,9 +21,6 @@ int StopSignal();  // the signal that set the flag (0: none)
 // fork fails.
 pid_t SpawnSelf(const std::vector<std::string>& args);
 
-// Reaps `pid` if it has exited (no waiting). Returns true and its exit description if so.
-bool ReapIfExited(pid_t pid, std::string* how);
-
 // Waits up to grace_s for the children to exit, then sends SIGTERM, waits another grace_s,
 // then SIGKILL; reaps them all. Returns how many had to be signalled.
 int StopChildren(const std::vector<pid_t>& pids, double grace_s);

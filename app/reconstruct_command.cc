@@ -21,6 +21,7 @@
 #include "app/refine_run.h"
 #include "base/error.h"
 #include "base/log.h"
+#include "base/subprocess.h"
 #include "coordinator/coordinator.h"
 #include "gl/context.h"
 #include "mesh/mesh_io.h"
@@ -91,8 +92,9 @@ class WorkerPool {
   // when no worker is left and none may be restarted.
   bool Check() {
     for (size_t i = 0; i < pids_.size(); ++i) {
-      std::string how;
-      if (pids_[i] <= 0 || !ReapIfExited(pids_[i], &how)) continue;
+      int status = 0;
+      if (pids_[i] <= 0 || !ReapIfExited(pids_[i], &status)) continue;
+      const std::string how = DescribeExit(status);
       pids_[i] = 0;
       if (StopRequested() || how == "exit code 0" || how == "exit code 130") continue;
       if (restarts_ < max_restarts_) {

@@ -81,7 +81,7 @@ std::string HeaderSection(const RunFolder& run, const std::vector<LoadedMesh>& m
   fact("coordinator peak memory",
        fmt::format("{:.0f} MiB", s.value("peak_rss_bytes_this_process", 0.0) / (1 << 20)));
   if (run.refined) {
-    fact("refinement",
+    fact("refinement (the process that finished it)",
          fmt::format("{} iterations, {:.1f} s, final energy {:.4f}",
                      run.refined->value("iterations", json::array()).size(),
                      run.refined->value("seconds", 0.0), run.refined->value("final_energy", 0.0)));
