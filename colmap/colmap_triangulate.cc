@@ -1072,7 +1072,7 @@ ColmapTriangulateResult TriangulateWithColmap(const Scene& cameras,
   const fs::path log_path = workspace / "colmap.log";
   { std::ofstream touch(log_path); }
   ColmapRunner colmap(result.colmap_path, log_path, keep);
-  ColmapRoute route{cameras, options, result, workspace, colmap, ColmapWorkspaceNames(cameras)};
+  ColmapRoute route{cameras, options, result, workspace, colmap, ColmapWorkspaceNames(cameras), {}};
   CheckColmapVersion(route);
   LinkImages(route);
   ExtractFeatures(route);
