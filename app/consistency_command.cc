@@ -1,7 +1,8 @@
 // `manisweep consistency`: the ground-truth-free quality figure of meshes of a real scene
 // (tools/consistency.h): the share of image pixels where a neighbour's image, reprojected through
 // the mesh, matches the camera's own (NCC above a threshold). Several meshes are compared on the
-// same pixels, e.g. the initial and final meshes of a run.
+// same pixels, e.g. the initial and final meshes of a run; --within restricts them to the pixels
+// another mesh covers (a peer's open mesh).
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -19,6 +20,7 @@ namespace {
 struct ConsistencyCommandOptions {
   std::string input;
   std::vector<std::string> meshes;
+  std::string within;
   bool per_camera = false;
   ConsistencyOptions consistency;
 };
@@ -35,11 +37,16 @@ void RunConsistency(const ConsistencyCommandOptions& options) {
              std::to_string(options.consistency.sweep.max_image_dimension) + " px")
                 .c_str()
           : "full-size images");
+  std::unique_ptr<Mesh> within;
+  if (!options.within.empty()) {
+    within = std::make_unique<Mesh>(ReadMesh(options.within));
+    std::printf("only the pixels %s covers count\n", options.within.c_str());
+  }
   std::printf("%-40s %10s %10s %10s %11s\n", "mesh", "consistent", "covered", "of covered",
               "pixels");
   for (const std::string& path : options.meshes) {
     const Mesh mesh = ReadMesh(path);
-    const ConsistencyReport report = MeasureConsistency(scene, mesh, options.consistency);
+    const ConsistencyReport report = MeasureConsistency(scene, mesh, options.consistency, within.get());
     const CameraConsistency& t = report.total;
     const auto pct = [](int64_t a, int64_t b) { return b > 0 ? 100.0 * a / b : 0.0; };
     std::printf("%-40s %9.1f%% %9.1f%% %9.1f%% %11lld\n", path.c_str(), pct(t.consistent, t.pixels),
@@ -64,6 +71,9 @@ void RegisterConsistencyCommand(CLI::App& app) {
   cmd->add_option("--threshold", options->consistency.ncc_threshold,
                   "a pixel is consistent if its NCC with a neighbour is above this")
       ->capture_default_str();
+  cmd->add_option("--within", options->within,
+                  "count only the pixels this mesh covers (.ply or .obj; e.g. an open mesh of "
+                  "another tool, to compare on the same pixels)");
   cmd->add_flag("--per-camera", options->per_camera, "also print one line per camera");
   AddOptionGroup(cmd, &options->consistency.neighbours);
   AddOptionGroup(cmd, &options->consistency.sweep);

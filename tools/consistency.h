@@ -8,6 +8,9 @@
 // occluded ones count against it, so a mesh cannot score by covering less); the shares among
 // covered pixels and among pixels with a defined NCC follow. Pixels are those of the swept
 // resolution (SweepOptions::max_image_dimension, as the sweep).
+//
+// Restricted to the pixels another mesh covers (`within`, e.g. a peer's open mesh), a closed mesh
+// and an open one are compared on the same pixels: every count is then of those pixels only.
 #pragma once
 
 #include <cstdint>
@@ -42,8 +45,10 @@ struct ConsistencyReport {
   std::string ToTable() const;             // one line per camera and the total
 };
 
-// Throws InputError for a bad scene, mesh or image (naming it).
+// Throws InputError for a bad scene, mesh or image (naming it). With `within`, only the pixels
+// that mesh covers count.
 ConsistencyReport MeasureConsistency(const Scene& scene, const Mesh& mesh,
-                                     const ConsistencyOptions& options);
+                                     const ConsistencyOptions& options,
+                                     const Mesh* within = nullptr);
 
 }  // namespace ms

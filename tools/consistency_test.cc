@@ -58,5 +58,34 @@ TEST(Consistency, TrueSurfaceBeatsAWrongOneAndMissingCounts) {
                             {"threshold"});
 }
 
+// Restricted to the pixels another mesh covers, every count is of those pixels: a mesh measured
+// within itself keeps its covered pixels, a smaller mask keeps fewer, and a mask out of view none.
+TEST(Consistency, WithinAnotherMeshCountsOnlyItsPixels) {
+  const PyramidScene& pyramid = NoisyPyramidScene();
+  const Scene scene =
+      WritePyramidScene(pyramid, fs::path(::testing::TempDir()) / "ms_consistency_within_test");
+  ConsistencyOptions options;
+  options.sweep.gaussian_sigma_px = 4;
+  const ConsistencyReport all = MeasureConsistency(scene, pyramid.truth, options);
+  const Mesh patch = MakeFlatSquare(0.0, 0.4, 4);
+  const ConsistencyReport within = MeasureConsistency(scene, pyramid.truth, options, &patch);
+  ASSERT_EQ(within.cameras.size(), all.cameras.size());
+  for (size_t c = 0; c < all.cameras.size(); ++c) {
+    EXPECT_GT(within.cameras[c].pixels, 0) << "camera " << c;
+    EXPECT_LT(within.cameras[c].pixels, all.cameras[c].pixels / 2) << "camera " << c;
+    EXPECT_LE(within.cameras[c].covered, within.cameras[c].pixels) << "camera " << c;
+    EXPECT_LE(within.cameras[c].consistent, all.cameras[c].consistent) << "camera " << c;
+  }
+  // The truth is consistent on the patch's pixels as it is everywhere it is seen.
+  EXPECT_GT(static_cast<double>(within.total.consistent) / within.total.pixels, 0.8);
+  // Within itself: its own covered pixels (two rasterizers with the same fill rule).
+  const ConsistencyReport itself = MeasureConsistency(scene, pyramid.truth, options, &pyramid.truth);
+  EXPECT_NEAR(static_cast<double>(itself.total.pixels), static_cast<double>(all.total.covered),
+              0.002 * all.total.covered);
+  EXPECT_EQ(itself.total.consistent, all.total.consistent);
+  const Mesh away = MakeFlatSquare(-50, 0.1, 1);
+  EXPECT_EQ(MeasureConsistency(scene, pyramid.truth, options, &away).total.pixels, 0);
+}
+
 }  // namespace
 }  // namespace ms
