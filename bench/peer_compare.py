@@ -11,7 +11,9 @@ commit, date, command) and prints the markdown table docs/design/refine.md shows
 
   bench/peer_compare.py --dataset ../shared/data/fountain-P11 \\
       --peer-mesh ../shared/data/fountain-P11/peers/openmvs-2.3/refined.ply \\
-      --out docs/results/peer_fountain-P11.json [--run RUN_DIR] [-- RECONSTRUCT_OPTIONS...]
+      --out docs/results/peer_fountain-P11.json [--run RUN_DIR] [--mesh LABEL=PATH ...]
+      [--refine-variant "--refine.max-edge-px 16" ...]
+      [-- RECONSTRUCT_OPTIONS...]
   bench/peer_compare.py --table docs/results/peer_fountain-P11.json
 """
 import argparse
@@ -21,6 +23,7 @@ import json
 import os
 import platform
 import re
+import shlex
 import subprocess
 import sys
 
@@ -60,7 +63,7 @@ def run_ours(manisweep, dataset, work, extra):
                            run_dir, "--workers", "2", "--no-report"] + extra,
                           os.path.join(work, "manisweep.log"))
     return run_dir, {"seconds": seconds, "peak_rss_bytes": peak,
-                     "command": "manisweep reconstruct " + " ".join(["--workers", "2"] + extra)}
+                     "command": "`reconstruct " + " ".join(["--workers", "2"] + extra) + "`"}
 
 
 def run_openmvs(bin_dir, dataset, work, level):
@@ -153,8 +156,9 @@ def measure(args, work):
     if args.run:
         run_dir = args.run
         summary = json.load(open(os.path.join(run_dir, "summary.json")))
-        ours = {"seconds": None, "peak_rss_bytes": summary.get("peak_rss_bytes_this_process"),
-                "command": f"an existing run ({run_dir})"}
+        ours = {"seconds": summary.get("seconds_this_process"),
+                "peak_rss_bytes": summary.get("peak_rss_bytes_this_process"),
+                "command": f"an existing run ({run_dir}; the coordinator's time and memory)"}
     else:
         run_dir, ours = run_ours(args.manisweep, args.dataset, work, args.reconstruct)
     our_meshes = [("manisweep, " + name, os.path.join(run_dir, name + ".ply"))
@@ -166,7 +170,17 @@ def measure(args, work):
                                       args.openmvs_resolution_level)
     elif peer_mesh:
         peer = {"seconds": None, "peak_rss_bytes": None, "command": f"a mesh it made ({peer_mesh})"}
-    meshes = our_meshes + ([("OpenMVS, refined", peer_mesh)] if peer_mesh else [])
+    extra = [tuple(spec.split("=", 1)) for spec in args.mesh]
+    variant_costs = {}
+    for k, options in enumerate(args.refine_variant):
+        label = f"manisweep, final refined with `{options}`"
+        out = os.path.join(work, f"refined_variant_{k}.ply")
+        seconds, peak = timed([args.manisweep, "refine", "--input", model_of(args.dataset), "--mesh",
+                               os.path.join(run_dir, "final.ply"), "--output", out]
+                              + options.split(), os.path.join(work, f"refined_variant_{k}.log"))
+        variant_costs[out] = {"seconds": seconds, "peak_rss_bytes": peak}
+        extra.append((label, out))
+    meshes = our_meshes + extra + ([("OpenMVS, refined", peer_mesh)] if peer_mesh else [])
     log = os.path.join(work, "measure.log")
     paths = [path for _, path in meshes]
     everywhere = consistency(args.manisweep, scene, paths, None, log)
@@ -175,6 +189,8 @@ def measure(args, work):
     for label, path in meshes:
         row = {"label": label, "mesh": os.path.abspath(path),
                "check_mesh": check_mesh(args.manisweep, path)}
+        if path in variant_costs:
+            row["refine"] = variant_costs[path]
         row["consistency_all"], row["covered"], row["consistency_of_covered"] = everywhere[path]
         if path in on_peer:
             row["consistency_within_peer"] = on_peer[path][0]
@@ -196,11 +212,12 @@ def table(result):
     def share(x):
         return "—" if x is None else f"{100 * x:.1f}%"
 
-    lines = [f"**{result['dataset']}**: manisweep {result['ours']['command']}, "
-             f"{seconds(result['ours']['seconds'])}, peak {memory(result['ours']['peak_rss_bytes'])}"]
+    runs = [f"manisweep: {result['ours']['command']}, {seconds(result['ours']['seconds'])}, "
+            f"peak memory {memory(result['ours']['peak_rss_bytes'])}"]
     if result["peer"]:
-        lines.append(f"; OpenMVS {result['peer']['command']}, {seconds(result['peer']['seconds'])},"
-                     f" peak {memory(result['peer']['peak_rss_bytes'])}")
+        runs.append(f"OpenMVS: {result['peer']['command']}, {seconds(result['peer']['seconds'])}, "
+                    f"peak memory {memory(result['peer']['peak_rss_bytes'])}")
+    lines = [f"**{result['dataset']}** ({'; '.join(runs)})"]
     synthetic = any("accuracy" in r for r in result["meshes"])
     header = ("| mesh | vertices | photo-consistency, all pixels | covered | "
               "on the peer's pixels | closed 2-manifold (check-mesh) | boundary edges |")
@@ -211,7 +228,11 @@ def table(result):
     lines += ["", header, rule]
     for r in result["meshes"]:
         c = r["check_mesh"]
-        line = (f"| {r['label']} | {c['vertices']:,} | {share(r['consistency_all'])} | "
+        label = r["label"]
+        if "refine" in r:
+            label += (f" ({seconds(r['refine']['seconds'])}, "
+                      f"{memory(r['refine']['peak_rss_bytes'])})")
+        line = (f"| {label} | {c['vertices']:,} | {share(r['consistency_all'])} | "
                 f"{share(r['covered'])} | {share(r.get('consistency_within_peer'))} | "
                 f"{'VALID' if c['valid'] else 'no'} | {c['boundary_edges']:,} |")
         if synthetic:
@@ -230,6 +251,12 @@ def main():
     a.add_argument("--dataset", help="folder with images/ and sparse/ (or a synth dataset)")
     a.add_argument("--run", help="measure this finished manisweep run instead of running one")
     a.add_argument("--peer-mesh", help="a mesh the peer made from the same dataset")
+    a.add_argument("--mesh", action="append", default=[], metavar="LABEL=PATH",
+                   help="another mesh of the same dataset to measure (e.g. a refinement with other "
+                        "options); repeatable")
+    a.add_argument("--refine-variant", action="append", default=[], metavar="OPTIONS",
+                   help="also refine the run's final.ply with these refine options (one string), "
+                        "timed, as another row; repeatable")
     a.add_argument("--openmvs-bin", help="folder with the OpenMVS binaries: run the peer")
     a.add_argument("--openmvs-resolution-level", type=int, default=1)
     a.add_argument("--open3d", action="store_true",
@@ -253,7 +280,7 @@ def main():
         "machine": {"host": platform.node(), "cpu": cpu_name(), "cores": os.cpu_count()},
         "commit": git_commit(),
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "command": " ".join([os.path.relpath(sys.argv[0], ROOT)] + sys.argv[1:]),
+        "command": shlex.join([os.path.relpath(sys.argv[0], ROOT)] + sys.argv[1:]),
     }
     result.update(measure(args, args.work))
     with open(args.out, "w") as f:
