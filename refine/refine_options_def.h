@@ -48,8 +48,10 @@ MS_OPTION(double, max_face_turn_deg, 60, "max-face-turn-deg",
           "a move may turn a face's normal by at most this many degrees", InRange(1, 179))
 // Remeshing (refine/remesh.h): at the start of every level, edges longer than max_edge_px
 // pixels of that level (in the camera that sees them finest) are split at their midpoints, so
-// that detail finer than the starting mesh can appear; 0 turns it off.
-MS_OPTION(double, max_edge_px, 0, "max-edge-px",
+// that detail finer than the starting mesh can appear; 0 turns it off. 16 by default: on the
+// pyramids and fountain-P11 it beats no remeshing at about twice the refinement's time, and 8
+// costs twice 16's time for no more (docs/design/refine.md "Remeshing").
+MS_OPTION(double, max_edge_px, 16, "max-edge-px",
           "split edges longer than this many pixels of the level (0: no remeshing)", AtLeast(0))
 // With remeshing, first: edges shorter than min_edge_px pixels of the level are collapsed to
 // their midpoints (where that keeps the mesh a valid closed 2-manifold); 0: no collapses.
