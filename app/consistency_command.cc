@@ -46,7 +46,8 @@ void RunConsistency(const ConsistencyCommandOptions& options) {
               "pixels");
   for (const std::string& path : options.meshes) {
     const Mesh mesh = ReadMesh(path);
-    const ConsistencyReport report = MeasureConsistency(scene, mesh, options.consistency, within.get());
+    const ConsistencyReport report =
+        MeasureConsistency(scene, mesh, options.consistency, within.get());
     const CameraConsistency& t = report.total;
     const auto pct = [](int64_t a, int64_t b) { return b > 0 ? 100.0 * a / b : 0.0; };
     std::printf("%-40s %9.1f%% %9.1f%% %9.1f%% %11lld\n", path.c_str(), pct(t.consistent, t.pixels),

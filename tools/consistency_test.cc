@@ -79,7 +79,8 @@ TEST(Consistency, WithinAnotherMeshCountsOnlyItsPixels) {
   // The truth is consistent on the patch's pixels as it is everywhere it is seen.
   EXPECT_GT(static_cast<double>(within.total.consistent) / within.total.pixels, 0.8);
   // Within itself: its own covered pixels (two rasterizers with the same fill rule).
-  const ConsistencyReport itself = MeasureConsistency(scene, pyramid.truth, options, &pyramid.truth);
+  const ConsistencyReport itself =
+      MeasureConsistency(scene, pyramid.truth, options, &pyramid.truth);
   EXPECT_NEAR(static_cast<double>(itself.total.pixels), static_cast<double>(all.total.covered),
               0.002 * all.total.covered);
   EXPECT_EQ(itself.total.consistent, all.total.consistent);
