@@ -37,9 +37,9 @@ struct RefineCommandOptions {
 
 void LogIteration(const RefineIteration& it) {
   spdlog::info(
-      "iteration {} (level {}): energy {:.4f} over {} pixels{}; step x{:.3g}: {} vertices "
-      "moved ({} halved, {} refused), largest {:.3g}; {:.2f} s ({} checks, {:.2f} s)",
-      it.iteration, it.level, it.energy, it.pixels,
+      "iteration {} (level {}, {} vertices): energy {:.4f} over {} pixels{}; step x{:.3g}: {} "
+      "vertices moved ({} halved, {} refused), largest {:.3g}; {:.2f} s ({} checks, {:.2f} s)",
+      it.iteration, it.level, it.vertices, it.energy, it.pixels,
       it.rejected ? " (higher: last step undone)" : "", it.step_scale, it.moved, it.halved,
       it.refused, it.largest_move, it.seconds, it.checks, it.check_seconds);
 }

@@ -109,6 +109,32 @@ double Footprint(const std::vector<RefineView>& views, const Eigen::Vector3d& x)
   return best;
 }
 
+// Where each camera centre stands with respect to a closed mesh: its winding number (1 or -1
+// inside, 0 outside) and its distance to the nearest face.
+struct CameraSide {
+  int winding = 0;
+  double distance = std::numeric_limits<double>::infinity();
+};
+
+std::vector<CameraSide> CameraSides(const Mesh& mesh, const std::vector<Eigen::Vector3d>& centres) {
+  std::vector<CameraSide> sides(centres.size());
+  ParallelFor(centres.size(), [&](size_t c) {
+    const Eigen::Vector3d& p = centres[c];
+    double solid_angle = 0;  // Van Oosterom and Strackee, summed over the faces
+    for (const auto& f : mesh.faces) {
+      const std::array<Eigen::Vector3d, 3> t = {mesh.vertices[f[0]], mesh.vertices[f[1]],
+                                                mesh.vertices[f[2]]};
+      const Eigen::Vector3d a = t[0] - p, b = t[1] - p, d = t[2] - p;
+      const double la = a.norm(), lb = b.norm(), ld = d.norm();
+      solid_angle += 2 * std::atan2(a.dot(b.cross(d)),
+                                    la * lb * ld + a.dot(b) * ld + b.dot(d) * la + d.dot(a) * lb);
+      sides[c].distance = std::min(sides[c].distance, (p - ClosestPointOnTriangle(p, t)).norm());
+    }
+    sides[c].winding = static_cast<int>(std::lround(solid_angle / (4 * M_PI)));
+  });
+  return sides;
+}
+
 // Remeshing at the start of a level (docs/design/refine.md "Remeshing"): collapses, splits, flips,
 // with edge lengths in pixels of `views`.
 void Remesh(Mesh* mesh, const std::vector<RefineView>& views, const RefineOptions& options,
@@ -129,6 +155,40 @@ void Remesh(Mesh* mesh, const std::vector<RefineView>& views, const RefineOption
     const FlipStats flip = FlipEdges(mesh, options.flip_dihedral_deg, tolerance);
     stats->flips += flip.flips;
     stats->flips_refused += flip.refused;
+  }
+}
+
+// Remeshing as above, kept only where it keeps the cameras where they were. Collapses and flips
+// move the surface a little, and are checked for self-intersections but not against the cameras:
+// where a camera changed sides of the mesh, or the surface came nearer to it than the moves'
+// clearance (and nearer than before), the level keeps the mesh as it was (a camera inside the
+// matter sees nothing but the inside of a face).
+void RemeshKeepingCameras(Mesh* mesh, const std::vector<RefineView>& views,
+                          const RefineOptions& options, const MoveOptions& move_options, int level,
+                          RefineStats* stats) {
+  const std::vector<CameraSide> before = CameraSides(*mesh, move_options.keep_clear);
+  const Mesh kept = *mesh;
+  // The remeshing asked for, then splits alone (they move the surface by 8 tolerances at most).
+  RefineOptions splits_only = options;
+  splits_only.min_edge_px = 0;
+  splits_only.flip_dihedral_deg = 0;
+  for (const RefineOptions* attempt : {&options, static_cast<const RefineOptions*>(&splits_only)}) {
+    Remesh(mesh, views, *attempt, move_options.tolerance, stats);
+    const std::vector<CameraSide> after = CameraSides(*mesh, move_options.keep_clear);
+    size_t c = 0;
+    while (
+        c < after.size() && after[c].winding == before[c].winding &&
+        (after[c].distance >= move_options.clearance || after[c].distance >= before[c].distance)) {
+      ++c;
+    }
+    if (c == after.size()) return;
+    spdlog::warn("refine: remeshing at level {}{} put camera {} {} the mesh ({:.3g} from it); {}",
+                 level, attempt == &options ? "" : " by splits alone", c,
+                 after[c].winding == before[c].winding ? "too near" : "on the other side of",
+                 after[c].distance,
+                 attempt == &options ? "splitting alone instead" : "the level keeps the mesh");
+    *mesh = kept;
+    ++stats->remeshings_undone;
   }
 }
 
@@ -230,6 +290,7 @@ void RefineLevel(Refinement& r, int li, int l, int level, int count, const Refin
     RefineIteration it;
     it.level = level;
     it.iteration = ++r.iteration;
+    it.vertices = static_cast<int64_t>(r.mesh->vertices.size());
     it.pixels = data.pixels;
     it.energy = data.MeanEnergy();
     if (r.iteration == 1 && data.pixels == 0) {
@@ -314,7 +375,7 @@ RefineStats RefineMesh(Mesh* mesh, const std::vector<SweepCamera>& cameras,
     views.reserve(cameras.size());
     for (const SweepCamera& c : cameras) views.push_back(RefineViewAtLevel(c, level));
     if (options.max_edge_px > 0 && !resumed) {  // a resumed level was remeshed before
-      Remesh(mesh, views, options, r.move_options.tolerance, &stats);
+      RemeshKeepingCameras(mesh, views, options, r.move_options, level, &stats);
     }
     RefineLevel(r, li, l, level, count, resumed ? resume : nullptr, views);
   }

@@ -25,9 +25,10 @@
 namespace ms {
 
 struct RefineIteration {
-  int level = 0;      // pyramid level (0: full size)
-  int iteration = 0;  // 1-based, over all levels
-  double energy = 0;  // mean (1 - ZNCC) over the defined pixels, before the step
+  int level = 0;         // pyramid level (0: full size)
+  int iteration = 0;     // 1-based, over all levels
+  int64_t vertices = 0;  // of the mesh the step starts from
+  double energy = 0;     // mean (1 - ZNCC) over the defined pixels, before the step
   // The previous step raised the energy: it was undone, and this one is half as long.
   bool rejected = false;
   double step_scale = 1;  // of the step options (backtracking), in (0, 1]
@@ -46,6 +47,8 @@ struct RefineStats {
   int64_t splits_refused = 0;  // splits the checker objected to (undone)
   int64_t collapses = 0;       // edges collapsed by remeshing (vertices removed)
   int64_t collapses_refused = 0;
+  // Levels whose remeshing was undone: it moved the surface across or too near a camera.
+  int64_t remeshings_undone = 0;
   int64_t flips = 0;          // edges flipped by remeshing
   int64_t flips_refused = 0;  // flips the checker objected to (undone)
   double seconds = 0;
