@@ -81,7 +81,8 @@ def main():
     print(("ok  " if ok else "FAIL"), "reconstruct --refine:",
           r.stdout.strip().splitlines()[-1:] or r.stderr[-2000:])
     # The energy at the finest level: before its first step, and of the mesh written.
-    finest = [float(e) for e in re.findall(r"\(level 0\): energy ([0-9.]+)", r.stderr)]
+    finest = [float(e) for e in
+              re.findall(r"\(level 0, [0-9]+ vertices\): energy ([0-9.]+)", r.stderr)]
     final = re.findall(r"final energy ([0-9.]+)", r.stdout)
     if not finest or not final or not float(final[0]) < finest[0]:
         print("FAIL energy at the finest level does not fall:", finest, final)
