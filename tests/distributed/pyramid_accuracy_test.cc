@@ -155,11 +155,11 @@ Outcome Reconstruct(const std::string& scene_name, const gl::GlContext& gl, doub
 // the rows without noise (closed, surface proper, and refined) are bounded about 5% above the
 // worst of ten variants that must not matter (bench/accuracy_variants.py: seeds 1-4, scene.h5,
 // COLMAP text and binary, NVM; docs/design/accuracy.md, "One run is a draw"), of which this test
-// runs one (seed 1, scene.h5); the noisy rows about 5% above their one measured run. The workers run the CPU kernel, auto's
-// choice on a CPU machine, named so that a GPU machine measures the same thing; other kernels give
-// other figures within about +-0.003 (docs/design/sweep.md, "Which kernel auto picks"), and so do
-// other CPUs (docs/design/accuracy.md). The closed mesh is the headline (every pixel); the surface
-// proper covers fewer.
+// runs one (seed 1, scene.h5); the noisy rows about 5% above their one measured run. The workers
+// run the CPU kernel, auto's choice on a CPU machine, named so that a GPU machine measures the same
+// thing; other kernels give other figures within about +-0.003 (docs/design/sweep.md, "Which kernel
+// auto picks"), and so do other CPUs (docs/design/accuracy.md). The closed mesh is the headline
+// (every pixel); the surface proper covers fewer.
 struct Table1Row {
   const char* scene;
   double image_noise;  // grey levels
