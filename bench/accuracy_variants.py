@@ -17,6 +17,7 @@ import datetime
 import json
 import os
 import platform
+import shlex
 import shutil
 import statistics
 import subprocess
@@ -131,13 +132,9 @@ def main():
 
     meshes = ["initial", "final", "final_surface"] + ([] if a.no_refine else ["refined"])
     result = {
-        "bench": "accuracy_variants",
+        **provenance("accuracy_variants"),
         "scene": a.scene,
         "label": a.label,
-        "machine": {"host": platform.node(), "cpu": cpu_name(), "cores": os.cpu_count()},
-        "commit": git_commit(),
-        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "command": " ".join([os.path.relpath(sys.argv[0], ROOT)] + sys.argv[1:]),
         "reconstruct_options": a.options,
         "metric": "MAE of every ground-truth pixel from view 0, camera z, Sigma 0.06 (m)",
         # Every pixel for the closed meshes; the covered pixels for the surface proper.
@@ -155,6 +152,18 @@ def main():
         print(f"{a.scene} {m}: median {s['median']:.4f}, worst {s['worst']:.4f} "
               f"over {len(rows)} runs")
     print(f"wrote {path}")
+
+
+def provenance(bench):
+    """What every bench JSON starts with: the bench, where, at which commit, when, and the command
+    line that wrote it."""
+    return {
+        "bench": bench,
+        "machine": {"host": platform.node(), "cpu": cpu_name(), "cores": os.cpu_count()},
+        "commit": git_commit(),
+        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "command": shlex.join([os.path.relpath(sys.argv[0], ROOT)] + sys.argv[1:]),
+    }
 
 
 def cpu_name():

@@ -17,19 +17,16 @@ commit, date, command) and prints the markdown table docs/design/refine.md shows
   bench/peer_compare.py --table docs/results/peer_fountain-P11.json
 """
 import argparse
-import datetime
 import glob
 import json
 import os
-import platform
 import re
-import shlex
 import subprocess
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from accuracy_variants import cpu_name, git_commit  # noqa: E402
+from accuracy_variants import provenance  # noqa: E402
 
 OPENMVS_STEPS = ["InterfaceCOLMAP", "DensifyPointCloud", "ReconstructMesh", "RefineMesh"]
 
@@ -274,14 +271,8 @@ def main():
     if not os.path.exists(args.manisweep):
         a.error(f"no manisweep binary at {args.manisweep} (build first, or give --manisweep)")
     os.makedirs(args.work, exist_ok=True)
-    result = {
-        "bench": "peer_compare",
-        "dataset": os.path.basename(os.path.normpath(args.dataset)),
-        "machine": {"host": platform.node(), "cpu": cpu_name(), "cores": os.cpu_count()},
-        "commit": git_commit(),
-        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "command": shlex.join([os.path.relpath(sys.argv[0], ROOT)] + sys.argv[1:]),
-    }
+    result = {**provenance("peer_compare"),
+              "dataset": os.path.basename(os.path.normpath(args.dataset))}
     result.update(measure(args, args.work))
     with open(args.out, "w") as f:
         json.dump(result, f, indent=1)

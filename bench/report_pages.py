@@ -8,10 +8,8 @@ date, command) and prints the markdown table docs/guides/report.md shows.
   bench/report_pages.py --table docs/results/report_pages.json
 """
 import argparse
-import datetime
 import json
 import os
-import platform
 import re
 import shutil
 import subprocess
@@ -20,7 +18,7 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from accuracy_variants import cpu_name, git_commit  # noqa: E402
+from accuracy_variants import provenance  # noqa: E402
 
 
 def measure(manisweep, chrome, label, run_dir, work):
@@ -78,11 +76,7 @@ def main():
     with tempfile.TemporaryDirectory() as work:
         runs = [measure(args.manisweep, chrome, *spec.split("=", 1), work) for spec in args.runs]
     result = {
-        "bench": "report_pages",
-        "machine": {"host": platform.node(), "cpu": cpu_name(), "cores": os.cpu_count()},
-        "commit": git_commit(),
-        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "command": " ".join([os.path.relpath(sys.argv[0], ROOT)] + sys.argv[1:]),
+        **provenance("report_pages"),
         "runs": runs,
     }
     with open(args.out, "w") as f:
