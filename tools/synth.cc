@@ -18,7 +18,7 @@
 #include "mesh/mesh_io.h"
 #include "scene/scene_io.h"
 #include "tools/plot.h"
-#include "tools/ray_caster.h"
+#include "mesh/ray_caster.h"
 
 namespace fs = std::filesystem;
 

@@ -1,4 +1,4 @@
-#include "tools/ray_caster.h"
+#include "mesh/ray_caster.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
