@@ -159,9 +159,9 @@ class Coordinator::Impl : public WorkerMessageHandler {
           phase_ = Phase::kPreparing;
           std::vector<RayPoint> rest = batch_.SortedOf(std::vector<uint64_t>(
               job_order_.begin() + static_cast<std::ptrdiff_t>(early_jobs_), job_order_.end()));
-          step_ = std::async(std::launch::async, [this, rest = std::move(rest)] {
+          step_ = std::async(std::launch::async, [this, rest = std::move(rest)]() mutable {
             if (early_insert_.valid()) early_insert_.get();
-            return run_.Integrate(rest, round_);
+            return run_.Integrate(std::move(rest), round_);
           });
         } else {
           InsertEarly();
@@ -260,8 +260,9 @@ class Coordinator::Impl : public WorkerMessageHandler {
         std::vector<uint64_t>(job_order_.begin() + static_cast<std::ptrdiff_t>(early_jobs_),
                               job_order_.begin() + static_cast<std::ptrdiff_t>(end)));
     early_jobs_ = end;
-    early_insert_ =
-        std::async(std::launch::async, [this, part = std::move(part)] { run_.InsertEarly(part); });
+    early_insert_ = std::async(std::launch::async, [this, part = std::move(part)]() mutable {
+      run_.InsertEarly(std::move(part));
+    });
   }
 
   // Sends the jobs the scheduler hands out: built ahead when they could be (BuildAhead), else

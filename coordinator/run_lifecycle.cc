@@ -102,6 +102,7 @@ StepOutcome RunLifecycle::Prepare() {
   for (size_t c = 0; c < scene.views.size(); ++c) {
     neighbours_.push_back(SelectNeighbours(scene, static_cast<int>(c), options_.neighbours));
   }
+  if (options_.manifold.witness_tolerance > 0) witness_candidates_ = WitnessCandidates(scene);
   BuildOrReplay(resuming, run_file);
   return NextOrStop();
 }
@@ -188,22 +189,25 @@ void RunLifecycle::WriteInitial(const BuildStats& stats, double build_s) {
   spdlog::info("memory after the initial meshes: {}", MemoryReport());
 }
 
-void RunLifecycle::InsertEarly(const std::vector<RayPoint>& points) {
+void RunLifecycle::InsertEarly(std::vector<RayPoint> points) {
   Timer insert;
   if (!insert_open_) {
     manifold_->BeginInsert();
     insert_open_ = true;
   }
+  if (witnesses_) witness_rays_ += witnesses_->Add(&points);
   manifold_->InsertPart(points);
   early_points_.insert(early_points_.end(), points.begin(), points.end());
   early_seconds_ += insert.Seconds();
 }
 
-StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const SweepRound& round) {
+StepOutcome RunLifecycle::Integrate(std::vector<RayPoint> rest, const SweepRound& round) {
   WaitForCheckpoint();  // the previous iteration's, which reads record_
   const int iteration = record_.completed_iterations() + 1;
   Timer insert;
   if (!insert_open_) manifold_->BeginInsert();
+  if (witnesses_) witness_rays_ += witnesses_->Add(&rest);
+  witnesses_.reset();  // of this iteration's surface
   manifold_->InsertPart(rest);
   const InsertionStats s = manifold_->FinishInsert();
   const double insert_s = insert.Seconds();
@@ -238,6 +242,7 @@ StepOutcome RunLifecycle::Integrate(const std::vector<RayPoint>& rest, const Swe
   row.job_max_bytes = round.job_max_bytes;
   row.jobs_smoothed = round.jobs_smoothed;
   row.image_noise_max = round.image_noise_max;
+  row.witness_rays = std::exchange(witness_rays_, 0);
   row.seconds_sweep = round.seconds_sweep;
   row.seconds_insert = insert_s;
   row.seconds_insert_early = early_s;
@@ -307,6 +312,10 @@ void RunLifecycle::MakeSweepSurface() {
   SurfaceInfo info;
   const Mesh mesh = TakeMesh(&info);
   surface_ = std::make_shared<const Mesh>(SurfaceWithoutSteinerFaces(mesh, info));
+  if (options_.manifold.witness_tolerance > 0) {
+    witnesses_ = std::make_unique<WitnessCameras>(record_.scene, witness_candidates_, mesh,
+                                                  options_.manifold.witness_tolerance);
+  }
 }
 
 OutputMeshes RunLifecycle::WriteOutputMeshes(const std::string& name, bool with_surface,

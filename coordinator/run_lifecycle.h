@@ -18,6 +18,7 @@
 #include "coordinator/insertion_batch.h"
 #include "coordinator/job_builder.h"
 #include "coordinator/run_store.h"
+#include "coordinator/witness_cameras.h"
 #include "manifold/delaunay_manifold.h"
 #include "manifold/output_meshes.h"
 #include "mesh/mesh.h"
@@ -64,12 +65,13 @@ class RunLifecycle {
   StepOutcome Prepare();
   // While an iteration's sweep runs: inserts the points of the next cameras in order, whose
   // results are all in (DelaunayManifold::InsertPart), so that less is left for Integrate.
-  void InsertEarly(const std::vector<RayPoint>& points);
+  // Each point first gets the rays of the cameras that see it (witness_cameras.h).
+  void InsertEarly(std::vector<RayPoint> points);
   // An iteration's sweep is over: inserts `rest` (the points InsertEarly has not had, in
   // order), completes the insertion, extracts the surface, records the statistics, starts
   // writing the checkpoint in the background (it overlaps the next sweep); then the next jobs,
   // or the end (whose checkpoint is written before Integrate returns).
-  StepOutcome Integrate(const std::vector<RayPoint>& rest, const SweepRound& round);
+  StepOutcome Integrate(std::vector<RayPoint> rest, const SweepRound& round);
   // Waits for the checkpoint being written in the background, if any; rethrows its error.
   void WaitForCheckpoint();
   // While the sweep runs: rethrows the background checkpoint's error as soon as it is known
@@ -134,11 +136,16 @@ class RunLifecycle {
   std::unique_ptr<ImageCatalog> catalog_;
   std::atomic<bool> catalog_ready_{false};
   std::vector<std::vector<int>> neighbours_;
+  std::vector<std::vector<int>> witness_candidates_;  // empty when witness rays are off
   std::unique_ptr<DelaunayManifold> manifold_;
   // This iteration's insertion while its sweep runs: open, the points given, the seconds taken.
   bool insert_open_ = false;
   std::vector<RayPoint> early_points_;
   double early_seconds_ = 0;
+  // The cameras that see the iteration's points through its closed mesh (null when off; made
+  // with surface_), and how many they added so far.
+  std::unique_ptr<WitnessCameras> witnesses_;
+  int64_t witness_rays_ = 0;
   // The closed manifold (from Extract until the iteration's meshes are written), and the surface
   // proper (without the Steiner faces that close it): what the sweep jobs are built from
   // (docs/design/manifold.md), shared with the iteration's job source.

@@ -77,6 +77,7 @@ std::vector<Column<IterationStats>> IterationColumns() {
           Field("job_max_bytes", &S::job_max_bytes, Since::kAddedLater),
           Field("jobs_smoothed", &S::jobs_smoothed, Since::kAddedLater),
           Field("image_noise_max", &S::image_noise_max, Since::kAddedLater),
+          Field("witness_rays", &S::witness_rays, Since::kAddedLater),
           Field("cleanup_collapses", &S::cleanup_collapses),
           Field("cleanup_splits", &S::cleanup_splits),
           Field("float_problems_left", &S::float_problems_left),

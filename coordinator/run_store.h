@@ -53,6 +53,9 @@ struct IterationStats {
   // the noisiest job's estimate in grey levels of 255.
   int32_t jobs_smoothed = 0;
   double image_noise_max = 0;
+  // Rays added to the found points from cameras that see them besides the matching ones
+  // (coordinator/witness_cameras.h).
+  int64_t witness_rays = 0;
   // The float cleanup of the mesh written after this iteration (manifold/output_meshes.h): 0
   // when none was written; float_problems_left > 0 when it could not clean everything.
   int64_t cleanup_collapses = 0;

@@ -40,7 +40,8 @@ IterationStats DistinctStats(int32_t k) {
   s.job_bytes = k + 15;
   s.job_max_bytes = k + 16;
   s.jobs_smoothed = k + 17;
-  s.image_noise_max = k + 18.5;
+  s.image_noise_max = k + 17.5;
+  s.witness_rays = k + 18;
   s.cleanup_collapses = k + 19;
   s.cleanup_splits = k + 20;
   s.float_problems_left = k + 21;
@@ -75,6 +76,7 @@ void ExpectSameStats(const IterationStats& a, const IterationStats& b) {
   EXPECT_EQ(a.job_max_bytes, b.job_max_bytes);
   EXPECT_EQ(a.jobs_smoothed, b.jobs_smoothed);
   EXPECT_EQ(a.image_noise_max, b.image_noise_max);
+  EXPECT_EQ(a.witness_rays, b.witness_rays);
   EXPECT_EQ(a.cleanup_collapses, b.cleanup_collapses);
   EXPECT_EQ(a.cleanup_splits, b.cleanup_splits);
   EXPECT_EQ(a.float_problems_left, b.float_problems_left);
@@ -187,7 +189,7 @@ TEST(RunStore, RunH5WithoutTheLaterColumnsReads) {
   const std::string path = (dir.path() / "run.h5").string();
   WriteRunFile(written, path);
   for (const char* column : {"cameras_in_matter", "job_bytes", "job_max_bytes", "jobs_smoothed",
-                             "image_noise_max", "seconds_insert_early"}) {
+                             "image_noise_max", "seconds_insert_early", "witness_rays"}) {
     DropStatsColumn(path, column);
   }
   const RunRecord read = ReadRunFile(path);
@@ -199,6 +201,7 @@ TEST(RunStore, RunH5WithoutTheLaterColumnsReads) {
   expected.jobs_smoothed = 0;
   expected.image_noise_max = 0;
   expected.seconds_insert_early = 0;
+  expected.witness_rays = 0;
   ExpectSameStats(read.iterations[1], expected);
 }
 
@@ -225,7 +228,7 @@ TEST(RunStore, SummaryJsonHasEveryColumnAndTheTotals) {
   EXPECT_EQ(row["seconds_insert_early"], 126.5);
   EXPECT_EQ(row["points_discarded"], 108 + 109 + 110);
   EXPECT_EQ(row["points_duplicate"], 109);
-  EXPECT_EQ(row.size(), 30u + 2u);  // every column, and the two totals
+  EXPECT_EQ(row.size(), 31u + 2u);  // every column, and the two totals
   EXPECT_EQ(j["workers"]["worker-1"]["points"], 40);
 }
 

@@ -95,6 +95,14 @@ MS_OPTION(int, pocket_pinch_rounds, 2, "pocket-pinch-rounds",
           "after an insertion, rounds of pinching matter pieces joined with a free pocket that "
           "cannot join O alone (0 = the pocket alone)",
           InRange(0, 8))
+// A swept point gets the rays of every camera that sees it through the iteration's mesh, not
+// only of the cameras that matched it (coordinator/witness_cameras.h). A face nearer the point
+// than this share of the camera's distance to it does not hide it.
+MS_OPTION(double, witness_tolerance, 0.01, "witness-tolerance",
+          "rays from every camera that sees a swept point through the mesh, not only the "
+          "matching ones: faces within this share of the camera's distance of the point do not "
+          "hide it (0 = the matching cameras' rays only, the paper)",
+          InRange(0, 0.5))
 MS_OPTION(bool, grow_all_components, false, "grow-all-components",
           "grow every free-space component, not only the heaviest cell's", AnyValue())
 // Debugging: the full validity check after every step (slow).
