@@ -16,9 +16,9 @@
 #include "base/log.h"
 #include "gl/mesh_renderer.h"
 #include "mesh/mesh_io.h"
+#include "mesh/ray_caster.h"
 #include "scene/scene_io.h"
 #include "tools/plot.h"
-#include "mesh/ray_caster.h"
 
 namespace fs = std::filesystem;
 
