@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -82,7 +83,14 @@ SweepResult ReplayKernel::Run(const SweepJob& job) {
       point.pixel = {static_cast<float>((col + 0.5) / scale_x),
                      static_cast<float>((row + 0.5) / scale_y)};
       point.ncc = static_cast<float>(job.options.ncc_threshold);
-      point.cameras = recorded.cameras;
+      // The recorded cameras are the matching ones, then the witnesses the coordinator added
+      // (coordinator/witness_cameras.h); a sweep returns only the job's, and the coordinator
+      // adds the witnesses again.
+      for (int32_t c : recorded.cameras) {
+        const bool in_job = c == id || std::any_of(job.neighbours.begin(), job.neighbours.end(),
+                                                   [c](const SweepCamera& n) { return n.id == c; });
+        if (in_job) point.cameras.push_back(c);
+      }
     }
   }
   const double left = options_.delay_s - timer.Seconds();

@@ -51,6 +51,9 @@ class ReplayKernelTest : public ::testing::Test {
     job.camera.view = views_[camera];
     job.iteration = iteration;
     job.options.max_image_dimension = 1600;  // level 1: pixels are pairs of full-size pixels
+    for (int32_t n = 0; n < static_cast<int32_t>(views_.size()); ++n) {
+      if (n != camera) job.neighbours.push_back({n, views_[n], {}});
+    }
     return job;
   }
 
@@ -83,6 +86,18 @@ TEST_F(ReplayKernelTest, HandsBackTheCamerasRecordedPointsAtTheSweptPixelsCentre
   EXPECT_EQ(other.points[0].cameras, (std::vector<int32_t>{1, 0, 2}));
   EXPECT_TRUE(kernel.Run(Job(2, 1)).points.empty());  // camera 2 found nothing
   EXPECT_EQ(kernel.Run(Job(0, 2)).points.size(), 1u);
+}
+
+// The coordinator appends witness cameras to a point (coordinator/witness_cameras.h) before it
+// records the batch; a sweep returns only the job's cameras, and so does the replay.
+TEST_F(ReplayKernelTest, LeavesOutTheWitnessesTheCoordinatorAdded) {
+  batches_[0] = {FoundAt(views_[0], 10, 20, 9.5, {0, 1, 2})};
+  ReplayKernel kernel(options_, views_, batches_);
+  SweepJob job = Job(0, 1);
+  job.neighbours.pop_back();  // camera 2 is no neighbour of this job: a witness
+  const SweepResult result = kernel.Run(job);
+  ASSERT_EQ(result.points.size(), 1u);
+  EXPECT_EQ(result.points[0].cameras, (std::vector<int32_t>{0, 1}));
 }
 
 TEST_F(ReplayKernelTest, TakesTheDelayOfTheSweepItStandsFor) {
