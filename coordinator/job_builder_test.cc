@@ -6,6 +6,7 @@
 
 #include "proto/wire.h"
 #include "testing/scene_testing.h"
+#include "testing/test_meshes.h"
 
 namespace ms {
 namespace {
@@ -14,26 +15,7 @@ using testing::TempDir;
 
 // An octahedron of radius 0.3 around the origin, faces counter-clockwise seen from outside.
 std::shared_ptr<const Mesh> Octahedron() {
-  auto mesh = std::make_shared<Mesh>();
-  const Eigen::Vector3d axes[3] = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
-                                   Eigen::Vector3d::UnitZ()};
-  for (int a = 0; a < 3; ++a) {
-    mesh->vertices.push_back(0.3 * axes[a]);
-    mesh->vertices.push_back(-0.3 * axes[a]);
-  }
-  for (int sx = 0; sx < 2; ++sx) {
-    for (int sy = 0; sy < 2; ++sy) {
-      for (int sz = 0; sz < 2; ++sz) {
-        const int x = sx, y = 2 + sy, z = 4 + sz;
-        if ((sx + sy + sz) % 2 == 0) {
-          mesh->faces.push_back({x, y, z});
-        } else {
-          mesh->faces.push_back({x, z, y});
-        }
-      }
-    }
-  }
-  return mesh;
+  return std::make_shared<Mesh>(test_meshes::Octahedron(0.3));
 }
 
 struct Fixture {

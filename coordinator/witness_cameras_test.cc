@@ -5,30 +5,10 @@
 
 #include <cmath>
 
+#include "testing/test_meshes.h"
+
 namespace ms {
 namespace {
-
-// An octahedron of radius 0.3 around the origin.
-Mesh Octahedron() {
-  Mesh mesh;
-  for (int a = 0; a < 3; ++a) {
-    mesh.vertices.push_back(0.3 * Eigen::Vector3d::Unit(a));
-    mesh.vertices.push_back(-0.3 * Eigen::Vector3d::Unit(a));
-  }
-  for (int sx = 0; sx < 2; ++sx) {
-    for (int sy = 0; sy < 2; ++sy) {
-      for (int sz = 0; sz < 2; ++sz) {
-        const int x = sx, y = 2 + sy, z = 4 + sz;
-        if ((sx + sy + sz) % 2 == 0) {
-          mesh.faces.push_back({x, y, z});
-        } else {
-          mesh.faces.push_back({x, z, y});
-        }
-      }
-    }
-  }
-  return mesh;
-}
 
 // A 64x48 camera 3.7 from the origin at `degrees` around z, looking at the origin (or away).
 View CameraAt(double degrees, bool looking_away = false) {
@@ -51,7 +31,7 @@ View CameraAt(double degrees, bool looking_away = false) {
 
 struct Fixture {
   Scene scene;
-  Mesh mesh = Octahedron();
+  Mesh mesh = test_meshes::Octahedron(0.3);
   std::vector<std::vector<int>> candidates;
   Fixture() {
     for (double degrees : {0.0, 30.0, 180.0}) scene.views.push_back(CameraAt(degrees));

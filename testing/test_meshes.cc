@@ -30,6 +30,27 @@ Mesh Icosahedron() {
   return m;
 }
 
+Mesh Octahedron(double radius) {
+  Mesh mesh;
+  for (int a = 0; a < 3; ++a) {
+    mesh.vertices.push_back(radius * V::Unit(a));
+    mesh.vertices.push_back(-radius * V::Unit(a));
+  }
+  for (int sx = 0; sx < 2; ++sx) {
+    for (int sy = 0; sy < 2; ++sy) {
+      for (int sz = 0; sz < 2; ++sz) {
+        const int x = sx, y = 2 + sy, z = 4 + sz;
+        if ((sx + sy + sz) % 2 == 0) {
+          mesh.faces.push_back({x, y, z});
+        } else {
+          mesh.faces.push_back({x, z, y});
+        }
+      }
+    }
+  }
+  return mesh;
+}
+
 Mesh Cube() {
   Mesh m;
   for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);

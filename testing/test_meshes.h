@@ -1,4 +1,4 @@
-// Small closed meshes for the mesh checkers' and the float cleanup's tests.
+// Small closed meshes for the mesh checkers', the float cleanup's and the coordinator's tests.
 #pragma once
 
 #include <Eigen/Core>
@@ -13,6 +13,8 @@ using V = Eigen::Vector3d;
 // Faces counter-clockwise seen from outside for a convex mesh around the origin.
 void OrientOutward(Mesh* m);
 Mesh Icosahedron();
+// The octahedron |x| + |y| + |z| = radius, faces counter-clockwise seen from outside.
+Mesh Octahedron(double radius);
 Mesh Cube();
 // A tetrahedron with its right-angled corner at `apex` and its other vertices at apex + s*e_i,
 // s = +1 or -1 (outward faces either way).
