@@ -166,6 +166,13 @@ def provenance(bench):
     }
 
 
+def write_result(path, result, table):
+    """Writes a bench's RESULT as JSON to PATH and prints it as TABLE renders it."""
+    with open(path, "w") as f:
+        json.dump(result, f, indent=1)
+    print(table(result))
+
+
 def cpu_name():
     try:
         with open("/proc/cpuinfo") as f:

@@ -26,7 +26,7 @@ import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from accuracy_variants import provenance  # noqa: E402
+from accuracy_variants import provenance, write_result  # noqa: E402
 
 OPENMVS_STEPS = ["InterfaceCOLMAP", "DensifyPointCloud", "ReconstructMesh", "RefineMesh"]
 
@@ -274,9 +274,7 @@ def main():
     result = {**provenance("peer_compare"),
               "dataset": os.path.basename(os.path.normpath(args.dataset))}
     result.update(measure(args, args.work))
-    with open(args.out, "w") as f:
-        json.dump(result, f, indent=1)
-    print(table(result))
+    write_result(args.out, result, table)
     return 0
 
 

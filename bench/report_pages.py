@@ -18,7 +18,7 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from accuracy_variants import provenance  # noqa: E402
+from accuracy_variants import provenance, write_result  # noqa: E402
 
 
 def measure(manisweep, chrome, label, run_dir, work):
@@ -79,9 +79,7 @@ def main():
         **provenance("report_pages"),
         "runs": runs,
     }
-    with open(args.out, "w") as f:
-        json.dump(result, f, indent=1)
-    print(table(result))
+    write_result(args.out, result, table)
     return 0
 
 

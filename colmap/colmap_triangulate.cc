@@ -303,27 +303,7 @@ class ColmapRunner {
     std::error_code ec;
     const uint64_t start_offset = fs::file_size(log_path_, ec);
 
-    SubprocessOptions child;
-    // colmap prints progress through std::cout, which is block-buffered into a file; coreutils'
-    // stdbuf makes it line-buffered so progress shows while a stage runs.
-    if (!stdbuf_.empty()) child.argv = {stdbuf_, "-oL", "-eL"};
-    child.argv.push_back(executable_);
-    child.argv.push_back(stage);
-    child.argv.insert(child.argv.end(), args.begin(), args.end());
-    child.executable = child.argv[0];
-    // SIFT on the CPU needs no display; should any Qt code start anyway, it must not look for
-    // X. glog's own log files go to the workspace instead of /tmp.
-    bool has_qt_platform = false;
-    for (char** e = environ; e && *e; ++e) {
-      const std::string entry = *e;
-      if (entry.rfind("GLOG_log_dir=", 0) == 0) continue;
-      if (entry.rfind("QT_QPA_PLATFORM=", 0) == 0) has_qt_platform = true;
-      child.env.push_back(entry);
-    }
-    if (!has_qt_platform) child.env.push_back("QT_QPA_PLATFORM=offscreen");
-    child.env.push_back("GLOG_log_dir=" + log_path_.parent_path().string());
-    child.output_path = log_path_.string();
-    child.stdin_from_null = true;  // colmap dies with us (e.g. when a timeout kills manisweep)
+    const SubprocessOptions child = ChildOptions(stage, args);
     const auto launch = [&] { return StartSubprocess(child); };
     pid_t pid = launch();
 
@@ -389,6 +369,40 @@ class ColmapRunner {
     drain();
     if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return output;
 
+    ThrowFailure(stage, status, output);
+  }
+
+ private:
+  // How `colmap <stage> <args>` is started: line-buffered, appending to the log, no display.
+  SubprocessOptions ChildOptions(const std::string& stage,
+                                 const std::vector<std::string>& args) const {
+    SubprocessOptions child;
+    // colmap prints progress through std::cout, which is block-buffered into a file; coreutils'
+    // stdbuf makes it line-buffered so progress shows while a stage runs.
+    if (!stdbuf_.empty()) child.argv = {stdbuf_, "-oL", "-eL"};
+    child.argv.push_back(executable_);
+    child.argv.push_back(stage);
+    child.argv.insert(child.argv.end(), args.begin(), args.end());
+    child.executable = child.argv[0];
+    // SIFT on the CPU needs no display; should any Qt code start anyway, it must not look for
+    // X. glog's own log files go to the workspace instead of /tmp.
+    bool has_qt_platform = false;
+    for (char** e = environ; e && *e; ++e) {
+      const std::string entry = *e;
+      if (entry.rfind("GLOG_log_dir=", 0) == 0) continue;
+      if (entry.rfind("QT_QPA_PLATFORM=", 0) == 0) has_qt_platform = true;
+      child.env.push_back(entry);
+    }
+    if (!has_qt_platform) child.env.push_back("QT_QPA_PLATFORM=offscreen");
+    child.env.push_back("GLOG_log_dir=" + log_path_.parent_path().string());
+    child.output_path = log_path_.string();
+    child.stdin_from_null = true;  // colmap dies with us (e.g. when a timeout kills manisweep)
+    return child;
+  }
+
+  // The one error line for a stage that ended with `status`, after logging its output's tail.
+  [[noreturn]] void ThrowFailure(const std::string& stage, int status,
+                                 const std::string& output) const {
     const std::string how = WIFSIGNALED(status)
                                 ? fmt::format("was killed by signal {} ({})", WTERMSIG(status),
                                               strsignal(WTERMSIG(status)))
@@ -415,7 +429,6 @@ class ColmapRunner {
                                     log_kept_ ? "" : "; removed, rerun with --keep-workspace"));
   }
 
- private:
   std::string executable_;
   std::string stdbuf_;  // empty if coreutils' stdbuf is missing
   fs::path log_path_;

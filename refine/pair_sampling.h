@@ -1,11 +1,13 @@
 // What the photometric-gradient kernels (photometric_gradient.h) share, so that they sample the
-// same pixels the same way: the near plane of a rendering, a pixel's ray, the neighbour's
-// projection rate and bilinear sample with its derivatives, and a pixel's barycentric weights.
+// same pixels the same way: the near plane of a rendering, a pixel's ray, where a point falls in
+// the neighbour's image, the neighbour's projection rate and bilinear sample with its
+// derivatives, and a pixel's barycentric weights.
 #pragma once
 
 #include <algorithm>
 #include <array>
 #include <opencv2/core/mat.hpp>
+#include <optional>
 
 #include "mesh/mesh.h"
 #include "scene/camera.h"
@@ -37,6 +39,23 @@ inline Eigen::Vector2d ProjectionRate(const Intrinsics& kj, const Eigen::Vector3
   const double z2 = y.z() * y.z();
   return {kj.fx * (ray_j.x() * y.z() - y.x() * ray_j.z()) / z2,
           kj.fy * (ray_j.y() * y.z() - y.y() * ray_j.z()) / z2};
+}
+
+// Where the point y (the neighbour's camera coordinates) falls in the neighbour's image: the
+// array coordinates of its bilinear sample and the pixel that holds it. Nothing when y is not
+// beyond the near plane `near_j` or its sample leaves the image.
+struct NeighbourPixel {
+  double ax, ay;  // array coordinates of the sample
+  int col, row;
+};
+inline std::optional<NeighbourPixel> ProjectToNeighbour(const Intrinsics& kj,
+                                                        const Eigen::Vector3d& y, double near_j) {
+  if (y.z() <= near_j) return std::nullopt;
+  const double u = kj.fx * y.x() / y.z() + kj.cx, v = kj.fy * y.y() / y.z() + kj.cy;
+  const double ax = u - 0.5, ay = v - 0.5;
+  if (!(ax >= 0 && ay >= 0 && ax <= kj.width - 1 && ay <= kj.height - 1)) return std::nullopt;
+  return NeighbourPixel{ax, ay, std::min(static_cast<int>(u), kj.width - 1),
+                        std::min(static_cast<int>(v), kj.height - 1)};
 }
 
 // Bilinear sample of `image` (CV_64F) at array coordinates (x, y) with its exact derivatives.

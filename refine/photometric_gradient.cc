@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 
 #include "refine/pair_sampling.h"
 #include "sweep/software_raster.h"
@@ -76,16 +77,13 @@ PixelSamples SamplePixels(const Mesh& mesh, const RefineView& reference,
       if (std::abs(normal.dot(ray)) < options.min_cos_incidence) continue;
       const Eigen::Vector3d& x = seen.world()[p];
       const Eigen::Vector3d y = neighbour.view.ToCamera(x);
-      if (y.z() <= near_j) continue;
-      const double u = kj.fx * y.x() / y.z() + kj.cx, v = kj.fy * y.y() / y.z() + kj.cy;
-      const double ax = u - 0.5, ay = v - 0.5;  // array coordinates of the sample
-      if (!(ax >= 0 && ay >= 0 && ax <= kj.width - 1 && ay <= kj.height - 1)) continue;
-      const int qc = std::min(static_cast<int>(u), kj.width - 1);
-      const int qr = std::min(static_cast<int>(v), kj.height - 1);
-      if (y.z() > shadow.depth()[shadow.Index(qc, qr)] * (1 + options.occlusion_tolerance)) {
+      const std::optional<NeighbourPixel> q = ProjectToNeighbour(kj, y, near_j);
+      if (!q) continue;
+      if (y.z() >
+          shadow.depth()[shadow.Index(q->col, q->row)] * (1 + options.occlusion_tolerance)) {
         continue;  // something nearer hides the point from the neighbour
       }
-      const BilinearSample j = SampleBilinear(neighbour.image, ax, ay);
+      const BilinearSample j = SampleBilinear(neighbour.image, q->ax, q->ay);
       const Eigen::Vector2d rate = ProjectionRate(kj, y, rj * ray);
       const double du = rate.x(), dv = rate.y();
       s.mask.at<double>(row, col) = 1;

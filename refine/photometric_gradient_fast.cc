@@ -177,17 +177,13 @@ void SamplePixels(const Mesh& mesh, const RefineView& reference, const RefineVie
       const double depth = plane.offset / cos;
       const Eigen::Vector3d ray_j = vj.R * ray;  // d(camera-j coordinates)/dd
       const Eigen::Vector3d y = centre_j + depth * ray_j;
-      if (y.z() <= near_j) continue;
-      const double u = kj.fx * y.x() / y.z() + kj.cx, v = kj.fy * y.y() / y.z() + kj.cy;
-      const double ax = u - 0.5, ay = v - 0.5;  // array coordinates of the sample
-      if (!(ax >= 0 && ay >= 0 && ax <= kj.width - 1 && ay <= kj.height - 1)) continue;
-      const int qc = std::min(static_cast<int>(u), kj.width - 1);
-      const int qr = std::min(static_cast<int>(v), kj.height - 1);
+      const std::optional<NeighbourPixel> q = ProjectToNeighbour(kj, y, near_j);
+      if (!q) continue;
       // 1/z is 0 where the neighbour sees nothing: that passes, as the reference's infinity.
-      if (y.z() * shadow_inv_z[static_cast<size_t>(qr) * kj.width + qc] > max_depth_ratio) {
+      if (y.z() * shadow_inv_z[static_cast<size_t>(q->row) * kj.width + q->col] > max_depth_ratio) {
         continue;  // something nearer hides the point from the neighbour
       }
-      const BilinearSample s = SampleBilinear(neighbour.image, ax, ay);
+      const BilinearSample s = SampleBilinear(neighbour.image, q->ax, q->ay);
       const Eigen::Vector2d rate = ProjectionRate(kj, y, ray_j);
       const double du = rate.x(), dv = rate.y();
       const double i = image_i[col], j = s.value;

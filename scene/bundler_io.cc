@@ -19,9 +19,6 @@ namespace {
 using format::FormatDouble;
 using format::NextDouble;
 using format::NextInt;
-using format::Quote;
-
-using format::kMaxPixel;
 
 // Bundler's camera frame (y up, looking down -z) <-> ours (y down, looking down +z).
 const Eigen::Matrix3d& Flip() {
@@ -53,7 +50,7 @@ Scene ParseBundler(const std::string& bundle_name, std::string bundle, const std
   if (!r.NextDataLine(&header, 0)) r.Fail("empty file, expected '# Bundle file v0.3'");
   if (Trim(header) != "# Bundle file v0.3") {
     r.Fail("not a Bundler v0.3 file: the first line must be '# Bundle file v0.3', found " +
-           Quote(Trim(header)));
+           format::Quote(Trim(header)));
   }
   const int64_t num_cameras = NextInt(r, "number of cameras", 0, INT32_MAX);
   const int64_t num_points = NextInt(r, "number of points", 0, INT32_MAX);
@@ -112,7 +109,7 @@ Scene ParseBundler(const std::string& bundle_name, std::string bundle, const std
       NextInt(r, "view list key", INT32_MIN, INT64_MAX);
       const double x = NextDouble(r, "view list x");
       const double y = NextDouble(r, "view list y");
-      if (!(std::abs(x) <= kMaxPixel && std::abs(y) <= kMaxPixel)) {
+      if (!(std::abs(x) <= format::kMaxPixel && std::abs(y) <= format::kMaxPixel)) {
         r.Fail("view list: pixel coordinate out of range");
       }
       const int32_t view = view_of_camera[camera];

@@ -391,12 +391,7 @@ void ExpectInputError(const SweepJob& job, const std::string& fragment) {
 }
 
 TEST(ReferenceSweep, BadJobsThrowInputError) {
-  PyramidSceneOptions options;
-  options.width = 40;
-  options.height = 30;
-  options.supersample = 1;
-  const PyramidScene scene = MakePyramidScene(options);
-  const SweepJob good = MakeSmallSweepJob(scene, MakeFlatSquare(0.15, 1.3, 2));
+  const SweepJob good = MakeTinyValidSweepJob();
   EXPECT_NO_THROW(ReferenceSweepKernel().Run(good));
 
   SweepJob job = good;

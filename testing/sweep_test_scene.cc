@@ -214,6 +214,14 @@ SweepJob MakeSmallSweepJob(const PyramidScene& scene, const Mesh& mesh) {
   return job;
 }
 
+SweepJob MakeTinyValidSweepJob() {
+  PyramidSceneOptions options;
+  options.width = 40;
+  options.height = 30;
+  options.supersample = 1;
+  return MakeSmallSweepJob(MakePyramidScene(options), MakeFlatSquare(0.15, 1.3, 2));
+}
+
 const PyramidScene& NoisyPyramidScene() {
   static const PyramidScene scene = [] {
     PyramidSceneOptions options;

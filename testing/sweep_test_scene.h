@@ -52,6 +52,10 @@ SweepJob MakeBenchmarkSweepJob(int width, int height = 0);
 // tiles for 160 x 120 images (sigma 4 px, 10 px tiles instead of the defaults for megapixels).
 SweepJob MakeSmallSweepJob(const PyramidScene& scene, const Mesh& mesh);
 
+// A valid small job (a 40×30 pyramid scene without supersampling, a flat square as its mesh)
+// for the tests that break it one field at a time.
+SweepJob MakeTinyValidSweepJob();
+
 // The default pyramid scene with sensor noise 0.01, independent per camera (built once).
 const PyramidScene& NoisyPyramidScene();
 

@@ -1,11 +1,22 @@
-"""What the scalability benchmarks share: running a logged command, a free loopback port, and
-writing their figures (OUT/STEM.json with the rows and how they were taken, OUT/STEM.csv with
-the rows)."""
+"""What the scalability benchmarks share: their common arguments, running a logged command, a
+free loopback port, writing their figures (OUT/STEM.json with the rows and how they were taken,
+OUT/STEM.csv with the rows) and plotting them."""
+import argparse
 import csv
 import json
 import os
 import socket
 import subprocess
+import sys
+
+
+def argument_parser(doc):
+    """The parser every scalability bench starts from: its docstring, --manisweep and --out."""
+    parser = argparse.ArgumentParser(description=doc,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--manisweep", required=True)
+    parser.add_argument("--out", required=True)
+    return parser
 
 
 def run(cmd, log):
@@ -27,3 +38,15 @@ def write_figures(out, stem, setup, rows):
         writer = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
         writer.writeheader()
         writer.writerows(rows)
+
+
+def pyplot():
+    """matplotlib's pyplot without a display, or an exit that says how to get it."""
+    try:
+        import matplotlib
+    except ImportError:
+        sys.exit(f"no plot: matplotlib is missing for {sys.executable} (deploy/setup.sh installs "
+                 "Debian's python3-matplotlib for /usr/bin/python3); the figures are written")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt

@@ -26,7 +26,7 @@ import os
 import shutil
 import sys
 
-from bench_common import run, write_figures
+from bench_common import argument_parser, pyplot, run, write_figures
 
 STEPS = ["seconds_jobs", "seconds_sweep", "seconds_insert", "seconds_extract",
          "seconds_checkpoint"]
@@ -87,13 +87,7 @@ def fit(xs, ys):
 
 
 def plot(per_n, line, path, title):
-    try:
-        import matplotlib
-    except ImportError:
-        sys.exit(f"no plot: matplotlib is missing for {sys.executable} (deploy/setup.sh installs "
-                 "Debian's python3-matplotlib for /usr/bin/python3); the figures are written")
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
     ns = [p["cameras"] for p in per_n]
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
     for step in STEPS + ["seconds_iteration"]:
@@ -114,10 +108,7 @@ def plot(per_n, line, path, title):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--manisweep", required=True)
-    parser.add_argument("--out", required=True)
+    parser = argument_parser(__doc__)
     parser.add_argument("--scene", choices=["city", "castle"], default="city")
     parser.add_argument("--cameras", type=int, nargs="+")
     parser.add_argument("--iterations", type=int, default=3)

@@ -21,7 +21,6 @@ the insertion after the last result, extracting the surface) and for the tail of
 Jobs are built while the sweep runs and the checkpoint is written during the next one: their
 seconds are reported apart, and their cost shows where they slow what runs beside them.
 """
-import argparse
 import filecmp
 import json
 import os
@@ -30,7 +29,7 @@ import subprocess
 import sys
 import time
 
-from bench_common import free_port, run, write_figures
+from bench_common import argument_parser, pyplot, free_port, run, write_figures
 
 # The coordinator's steps while no job is out: the rest of the insertion and the surface. Jobs
 # are built while the sweep runs (seconds_jobs) and the checkpoint is written during the next
@@ -100,13 +99,7 @@ def rows_of(workers, delay, summary, rss_kib):
 
 
 def plot(rows, path, delay, views):
-    try:
-        import matplotlib
-    except ImportError:
-        sys.exit(f"no plot: matplotlib is missing for {sys.executable} (deploy/setup.sh installs "
-                 "Debian's python3-matplotlib for /usr/bin/python3); the figures are written")
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
     counts = sorted({r["workers"] for r in rows})
 
     def mean(key, w):
@@ -136,10 +129,7 @@ def plot(rows, path, delay, views):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--manisweep", required=True)
-    parser.add_argument("--out", required=True)
+    parser = argument_parser(__doc__)
     parser.add_argument("--views", type=int, default=1024)
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2, 4, 8, 16, 32, 64])
     parser.add_argument("--delay", type=float, default=0.3, help="seconds per job (a GPU's)")

@@ -7,7 +7,6 @@ options: no result lost or inserted twice. Prints the kills survived.
 
   chaos_test.py --manisweep BIN --workdir DIR [--seed 1] [--kills 20] [--iterations 4]
 """
-import argparse
 import filecmp
 import os
 import random
@@ -16,13 +15,12 @@ import subprocess
 import sys
 import time
 
-from run_helpers import HEARTBEAT, SWEEP, free_port, fresh_workdir, make_scene, start_worker
+from run_helpers import (HEARTBEAT, SWEEP, argument_parser, free_port, fresh_workdir, make_scene,
+                         start_worker)
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--manisweep", required=True)
-    parser.add_argument("--workdir", required=True)
+    parser = argument_parser(__doc__)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--kills", type=int, default=20, help="kills in all (workers and coordinator)")
     parser.add_argument("--iterations", type=int, default=4)

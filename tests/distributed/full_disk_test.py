@@ -6,19 +6,17 @@ space back must finish to the mesh of an undisturbed run, byte for byte.
 
   full_disk_test.py --manisweep BIN --workdir DIR
 """
-import argparse
 import filecmp
 import os
 import subprocess
 import sys
 
-from run_helpers import HEARTBEAT, SWEEP, free_port, fresh_workdir, make_scene, start_worker
+from run_helpers import (HEARTBEAT, SWEEP, argument_parser, free_port, fresh_workdir, make_scene,
+                         start_worker)
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--manisweep", required=True)
-    parser.add_argument("--workdir", required=True)
+    parser = argument_parser(__doc__)
     args = parser.parse_args()
     ms, work = args.manisweep, args.workdir
     log = fresh_workdir(work)

@@ -8,22 +8,20 @@ capacity benchmark (bench/scalability/capacity.sh) rests on.
 
   replay_test.py --manisweep BIN --workdir DIR
 """
-import argparse
 import filecmp
 import json
 import os
 import subprocess
 import sys
 
-from run_helpers import HEARTBEAT, SWEEP, free_port, fresh_workdir, make_scene, start_worker
+from run_helpers import (HEARTBEAT, SWEEP, argument_parser, free_port, fresh_workdir, make_scene,
+                         start_worker)
 
 ITERATIONS = ["--max-iterations", "4"]
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--manisweep", required=True)
-    parser.add_argument("--workdir", required=True)
+    parser = argument_parser(__doc__)
     args = parser.parse_args()
     ms, work = args.manisweep, args.workdir
     logs = fresh_workdir(work)

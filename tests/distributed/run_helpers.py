@@ -1,6 +1,7 @@
 """What the process-level Python tests here share (chaos_test.py, full_disk_test.py,
-replay_test.py): a fresh work folder, a free loopback port, the small scene's sweep options, and
-workers that reconnect fast."""
+replay_test.py): their arguments, a fresh work folder, a free loopback port, the small scene's
+sweep options, and workers that reconnect fast."""
+import argparse
 import os
 import shutil
 import socket
@@ -10,6 +11,14 @@ import subprocess
 SWEEP = ["--sweep.tile-size-px", "10", "--sweep.gaussian-sigma-px", "4"]
 # Fast failure detection for the coordinator; workers use the same heartbeat.
 HEARTBEAT = ["--heartbeat-interval", "0.1", "--liveness", "8"]
+
+
+def argument_parser(doc):
+    """The parser every test here starts from: its docstring, --manisweep and --workdir."""
+    parser = argparse.ArgumentParser(description=doc)
+    parser.add_argument("--manisweep", required=True)
+    parser.add_argument("--workdir", required=True)
+    return parser
 
 
 def fresh_workdir(work):
