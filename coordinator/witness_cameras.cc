@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstddef>
 
 #include "base/parallel_for.h"
 #include "scene/view_selection.h"
@@ -41,9 +42,10 @@ int64_t WitnessCameras::Add(std::vector<RayPoint>* points) const {
   ParallelFor(points->size(), [&](size_t i) {
     RayPoint& p = (*points)[i];
     if (p.cameras.empty()) return;
-    const std::vector<int32_t> matched = p.cameras;
+    const auto matched = static_cast<std::ptrdiff_t>(p.cameras.size());  // C and its matches
     for (int c : candidates_[p.cameras.front()]) {
-      if (std::find(matched.begin(), matched.end(), c) != matched.end()) continue;
+      const auto matched_end = p.cameras.begin() + matched;
+      if (std::find(p.cameras.begin(), matched_end, c) != matched_end) continue;
       if (!Sees(c, p.position)) continue;
       p.cameras.push_back(c);
       added.fetch_add(1, std::memory_order_relaxed);

@@ -8,18 +8,19 @@
 
 namespace ms {
 
-RayCaster::RayCaster(const Mesh& mesh) {
-  triangles_.reserve(mesh.faces.size());
+RayCaster::RayCaster(const Mesh& mesh) : vertices_(mesh.vertices) {
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const auto& face = mesh.faces[f];
-    const Eigen::Vector3d& a = mesh.vertices[face[0]];
-    const Eigen::Vector3d e1 = mesh.vertices[face[1]] - a, e2 = mesh.vertices[face[2]] - a;
-    if (e1.cross(e2).squaredNorm() == 0) continue;
-    triangles_.push_back({a, e1, e2, static_cast<int32_t>(f)});
-    const Eigen::Vector3d b = a + e1, c = a + e2;
+    const Edges e = EdgesOf(face);
+    if (e.e1.cross(e.e2).squaredNorm() == 0) continue;
+    faces_.push_back({face, static_cast<int32_t>(f)});
+    const Eigen::Vector3d& a = vertices_[face[0]];
+    const Eigen::Vector3d b = a + e.e1, c = a + e.e2;
     boxes_.push_back(FloatBox3::Around(a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c)));
   }
-  std::vector<int32_t> items(triangles_.size());
+  faces_.shrink_to_fit();
+  boxes_.shrink_to_fit();
+  std::vector<int32_t> items(faces_.size());
   std::iota(items.begin(), items.end(), 0);
   tree_.Build(boxes_, std::move(items));
 }
@@ -29,12 +30,12 @@ bool RayCaster::Traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& d
                          double t_min, double t_max, Hit* hit) const {
   bool found = false;
   tree_.QueryRay(origin, direction, t_min, &t_max, [&](int32_t i, double* nearest) {
-    const Triangle& tri = triangles_[i];
+    const Edges tri = EdgesOf(faces_[i].vertices);
     const Eigen::Vector3d p = direction.cross(tri.e2);
     const double det = tri.e1.dot(p);
     if (det == 0) return false;
     const double inv_det = 1 / det;
-    const Eigen::Vector3d s = origin - tri.a;
+    const Eigen::Vector3d s = origin - vertices_[faces_[i].vertices[0]];
     const double u = s.dot(p) * inv_det;
     if (u < 0 || u > 1) return false;
     const Eigen::Vector3d q = s.cross(tri.e1);
@@ -46,7 +47,7 @@ bool RayCaster::Traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& d
     if (kAnyHit) return true;
     *nearest = t;
     hit->t = t;
-    hit->face = tri.face;
+    hit->face = faces_[i].face;
     return false;
   });
   return found;
