@@ -36,7 +36,9 @@ def main():
     print("|" + "---|" * len(header))
     for r in results:
         by_variant = {(run["seed"], run["format"]): run for run in r["runs"]}
-        options = " ".join(r.get("reconstruct_options") or []) or "defaults"
+        # A file run with an earlier commit's defaults names the options that give them now.
+        options = " ".join(r.get("equivalent_options") or r.get("reconstruct_options") or [])
+        options = options or "defaults"
         options = f"{options}` of `{r['commit']}"
         s = r["summary"][mesh]
         row = [r["scene"], f"`{options}`", str(len(r["runs"])), f"{s['median']:.4f}",

@@ -95,13 +95,16 @@ MS_OPTION(int, pocket_pinch_rounds, 2, "pocket-pinch-rounds",
           "after an insertion, rounds of pinching matter pieces joined with a free pocket that "
           "cannot join O alone (0 = the pocket alone)",
           InRange(0, 8))
-// A swept point gets the rays of every camera that sees it through the iteration's mesh, not
-// only of the cameras that matched it (coordinator/witness_cameras.h). A face nearer the point
-// than this share of the camera's distance to it does not hide it.
-MS_OPTION(double, witness_tolerance, 0.01, "witness-tolerance",
+// Optionally a swept point gets the rays of every camera that sees it through the iteration's
+// mesh, not only of the cameras that matched it (coordinator/witness_cameras.h). A face nearer
+// the point than this share of the camera's distance to it does not hide it. Off by default:
+// on the street those rays carve the corners of nearer buildings away (docs/design/accuracy.md,
+// "Witness rays").
+MS_OPTION(double, witness_tolerance, 0, "witness-tolerance",
           "rays from every camera that sees a swept point through the mesh, not only the "
           "matching ones: faces within this share of the camera's distance of the point do not "
-          "hide it (0 = the matching cameras' rays only, the paper)",
+          "hide it (0 = the matching cameras' rays only, the paper; 0.01 helps the pyramids and "
+          "hurts streets)",
           InRange(0, 0.5))
 MS_OPTION(bool, grow_all_components, false, "grow-all-components",
           "grow every free-space component, not only the heaviest cell's", AnyValue())
