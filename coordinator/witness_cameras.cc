@@ -44,7 +44,7 @@ int64_t WitnessCameras::Add(std::vector<RayPoint>* points) const {
     if (p.cameras.empty()) return;
     const auto matched = static_cast<std::ptrdiff_t>(p.cameras.size());  // C and its matches
     for (int c : candidates_[p.cameras.front()]) {
-      const auto matched_end = p.cameras.begin() + matched;
+      const auto matched_end = p.cameras.begin() + matched;  // anew: push_back reallocates
       if (std::find(p.cameras.begin(), matched_end, c) != matched_end) continue;
       if (!Sees(c, p.position)) continue;
       p.cameras.push_back(c);

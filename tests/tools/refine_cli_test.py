@@ -11,11 +11,12 @@ file, a missing image) end with exit 2 and one line naming the file. Exit 0 when
 import argparse
 import os
 import re
-import shutil
 import signal
 import socket
 import subprocess
 import sys
+
+from small_pyramid import fresh_small_pyramid, run
 
 
 def free_port():
@@ -34,9 +35,6 @@ def interrupt_after(cmd, marker):
     p.stderr.read()
     return p.wait(timeout=120)
 
-
-def run(cmd, **kw):
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=600, **kw)
 
 
 def expect_bad_input(manisweep, scene, mesh, name, out):
@@ -176,15 +174,10 @@ def main():
     parser.add_argument("--workdir", required=True)
     args = parser.parse_args()
     ms = args.manisweep
-    shutil.rmtree(args.workdir, ignore_errors=True)
-    os.makedirs(args.workdir)
-    data = os.path.join(args.workdir, "pyramid")
-    scene = os.path.join(data, "scene.h5")
-    r = run([ms, "synth", "pyramid-down", "--output", data, "--views", "6", "--width", "320",
-             "--height", "240"])
-    if r.returncode != 0:
-        print("FAIL synth:", r.stderr[-2000:])
+    data = fresh_small_pyramid(ms, args.workdir)
+    if data is None:
         return 1
+    scene = os.path.join(data, "scene.h5")
     initial = os.path.join(args.workdir, "initial.ply")
     r = run([ms, "manifold", "-i", scene, "-o", initial])
     if r.returncode != 0:

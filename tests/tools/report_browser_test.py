@@ -10,12 +10,10 @@ import argparse
 import os
 import re
 import shutil
-import subprocess
 import sys
 
+from small_pyramid import fresh_small_pyramid, run
 
-def run(cmd, **kw):
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=600, **kw)
 
 
 def browser():
@@ -66,13 +64,8 @@ def main():
         print("FAIL no Chromium found (chromium, chromium-browser, google-chrome): "
               "deploy/setup.sh installs Debian's chromium; this test needs a real browser")
         return 1
-    shutil.rmtree(args.workdir, ignore_errors=True)
-    os.makedirs(args.workdir)
-    data = os.path.join(args.workdir, "pyramid")
-    r = run([ms, "synth", "pyramid-down", "--output", data, "--views", "6", "--width", "320",
-             "--height", "240"])
-    if r.returncode != 0:
-        print("FAIL synth:", r.stderr[-2000:])
+    data = fresh_small_pyramid(ms, args.workdir)
+    if data is None:
         return 1
     out = os.path.join(args.workdir, "run")
     r = run([ms, "reconstruct", "-i", os.path.join(data, "scene.h5"), "-o", out, "--workers", "2",
