@@ -416,6 +416,10 @@ void DelaunayManifold::Impl::CheckNewPoints(const std::vector<RayPoint>& points)
   }
 }
 
+bool DelaunayManifold::Impl::InSteinerBox(const Eigen::Vector3d& position) const {
+  return (position.array() > box_min_.array()).all() && (position.array() < box_max_.array()).all();
+}
+
 DelaunayManifold::Impl::InsertionBatch DelaunayManifold::Impl::StartBatch() {
   InsertionBatch batch;
   batch.number = ++batch_;
@@ -446,8 +450,7 @@ bool DelaunayManifold::Impl::FindConflictRegion(const RayPoint& point, const Poi
                                                 InsertionBatch* batch, Cell_handle* located,
                                                 InsertionStats* stats) {
   const Eigen::Vector3d& position = point.position;
-  if (!((position.array() > box_min_.array()).all() &&
-        (position.array() < box_max_.array()).all())) {
+  if (!InSteinerBox(position)) {
     ++stats->discarded_outside;
     return false;
   }
@@ -966,19 +969,88 @@ std::vector<uint8_t> SteinerFlags(const SurfaceInfo& info) {
 
 DelaunayManifold::DelaunayManifold(std::vector<ManifoldCamera> cameras,
                                    const ManifoldOptions& options)
-    : impl_(std::make_unique<Impl>(std::move(cameras), options)) {}
+    : impl_(std::make_unique<Impl>(cameras, options)) {
+  if (options.insertion == InsertionMode::kRebuild) {
+    rebuild_ = std::make_unique<Rebuild>();
+    rebuild_->cameras = std::move(cameras);
+    rebuild_->options = options;
+  }
+}
 DelaunayManifold::~DelaunayManifold() = default;
 BuildStats DelaunayManifold::Build(std::vector<RayPoint> points) {
-  return impl_->Build(std::move(points));
+  if (!rebuild_) return impl_->Build(std::move(points));
+  rebuild_->points = points;
+  const BuildStats stats = impl_->Build(std::move(points));
+  rebuild_->merged_duplicates = stats.merged_duplicates;
+  return stats;
 }
 InsertionStats DelaunayManifold::Insert(const std::vector<RayPoint>& points) {
-  return impl_->Insert(points);
+  BeginInsert();
+  InsertPart(points);
+  return FinishInsert();
 }
-void DelaunayManifold::BeginInsert() { impl_->BeginInsert(); }
+void DelaunayManifold::BeginInsert() {
+  if (rebuild_) return RebuildBegin();
+  impl_->BeginInsert();
+}
 void DelaunayManifold::InsertPart(const std::vector<RayPoint>& points) {
+  if (rebuild_) return RebuildAppend(points);
   impl_->InsertPart(points);
 }
-InsertionStats DelaunayManifold::FinishInsert() { return impl_->FinishInsert(); }
+InsertionStats DelaunayManifold::FinishInsert() {
+  return rebuild_ ? RebuildFinish() : impl_->FinishInsert();
+}
+
+void DelaunayManifold::RebuildBegin() {
+  MS_CHECK(impl_->built()) << "Insert before Build";
+  MS_CHECK(!rebuild_->open) << "BeginInsert with a batch open";
+  rebuild_->open = true;
+  rebuild_->stats = InsertionStats();
+  rebuild_->batch_begin = rebuild_->points.size();
+}
+
+void DelaunayManifold::RebuildAppend(const std::vector<RayPoint>& points) {
+  MS_CHECK(rebuild_->open) << "InsertPart without BeginInsert";
+  impl_->CheckNewPoints(points);
+  InsertionStats& stats = rebuild_->stats;
+  stats.requested += static_cast<int64_t>(points.size());
+  for (const RayPoint& point : points) {
+    if (impl_->InSteinerBox(point.position)) {
+      rebuild_->points.push_back(point);
+    } else {
+      ++stats.discarded_outside;
+    }
+  }
+}
+
+InsertionStats DelaunayManifold::RebuildFinish() {
+  MS_CHECK(rebuild_->open) << "FinishInsert without BeginInsert";
+  rebuild_->open = false;
+  InsertionStats stats = rebuild_->stats;
+  // Build lets go of its points; the copy is what the next batch rebuilds from.
+  auto fresh = std::make_unique<Impl>(rebuild_->cameras, rebuild_->options);
+  fresh->set_walk_threads(rebuild_->walk_threads);
+  const BuildStats built = fresh->Build(rebuild_->points);
+  impl_ = std::move(fresh);
+  const int64_t appended = static_cast<int64_t>(rebuild_->points.size() - rebuild_->batch_begin);
+  // A near-duplicate joins the point it duplicates, as in Build: its cameras are gained.
+  stats.discarded_duplicate =
+      std::max<int64_t>(0, built.merged_duplicates - rebuild_->merged_duplicates);
+  stats.inserted = appended - stats.discarded_duplicate;
+  rebuild_->merged_duplicates = built.merged_duplicates;
+  stats.new_rays = built.rays;
+  stats.outside_cells = built.outside_cells;
+  stats.camera_stars_completed = built.camera_stars_completed;
+  stats.pockets_joined = built.pockets_joined;
+  stats.slivers_joined = built.slivers_joined;
+  stats.seconds_insertion = built.seconds_triangulation + built.seconds_ray_tracing;
+  stats.seconds_growing = built.seconds_growing;
+  spdlog::info("manifold: rebuilt from {} points ({} new, {} merged into others, {} outside)",
+               rebuild_->points.size(), appended, stats.discarded_duplicate,
+               stats.discarded_outside);
+  return stats;
+}
+
 Mesh DelaunayManifold::ExtractSurface(SurfaceInfo* info) const {
   return impl_->ExtractSurface(info);
 }
@@ -988,7 +1060,10 @@ Mesh DelaunayManifold::ExtractFreeSpaceBoundary() const {
 std::string DelaunayManifold::Validate(bool check_weights) const {
   return impl_->Validate(check_weights);
 }
-void DelaunayManifold::set_walk_threads(int threads) { impl_->set_walk_threads(threads); }
+void DelaunayManifold::set_walk_threads(int threads) {
+  if (rebuild_) rebuild_->walk_threads = threads;
+  impl_->set_walk_threads(threads);
+}
 int64_t DelaunayManifold::num_points() const { return impl_->num_points(); }
 int64_t DelaunayManifold::num_vertices() const { return impl_->num_vertices(); }
 int64_t DelaunayManifold::num_cells() const { return impl_->num_cells(); }
@@ -996,6 +1071,14 @@ int64_t DelaunayManifold::num_outside_cells() const { return impl_->num_outside_
 int64_t DelaunayManifold::num_joinable_cells() const { return impl_->CountJoinableCells(); }
 int64_t DelaunayManifold::num_free_cells_inside() const { return impl_->CountFreeCellsInside(); }
 std::vector<int32_t> DelaunayManifold::CamerasInMatter() { return impl_->CamerasInMatter(); }
-size_t DelaunayManifold::MemoryBytes() const { return impl_->MemoryBytes(); }
+size_t DelaunayManifold::MemoryBytes() const {
+  size_t bytes = impl_->MemoryBytes();
+  if (rebuild_) {
+    for (const RayPoint& p : rebuild_->points) {
+      bytes += sizeof(RayPoint) + p.cameras.capacity() * sizeof(int32_t);
+    }
+  }
+  return bytes;
+}
 
 }  // namespace ms

@@ -117,7 +117,9 @@ class DelaunayManifold {
   // Incremental refinement (section 2.3): for each point in order, shrink O around its
   // conflict region, discard it if the region still meets O, otherwise insert it and update
   // the weights of the new cells exactly. Then regrow O from its boundary. New point ids
-  // continue after the existing ones.
+  // continue after the existing ones. With --manifold.insertion rebuild, the points outside
+  // the Steiner box are discarded and Build runs again on every point so far (merging
+  // near-duplicates as Build does); no point is discarded for a conflict.
   InsertionStats Insert(const std::vector<RayPoint>& points);
 
   // Insert in pieces, for a caller that receives a batch in order (the coordinator inserts the
@@ -167,7 +169,14 @@ class DelaunayManifold {
   size_t MemoryBytes() const;  // estimate of the triangulation + ray data
 
  private:
+  // --manifold.insertion rebuild: every point so far and the open batch (manifold_impl.h).
+  struct Rebuild;
+  void RebuildBegin();
+  void RebuildAppend(const std::vector<RayPoint>& points);
+  InsertionStats RebuildFinish();
+
   std::unique_ptr<Impl> impl_;
+  std::unique_ptr<Rebuild> rebuild_;  // null with incremental insertion
 };
 
 }  // namespace ms

@@ -56,6 +56,7 @@ class DelaunayManifold::Impl {
   std::string Validate(bool check_weights);
 
   int64_t num_points() const { return static_cast<int64_t>(positions_.size()); }
+  bool built() const { return built_; }
   void set_walk_threads(int threads) { walks_.set_threads(threads); }
   int64_t num_vertices() const { return static_cast<int64_t>(dt_.number_of_vertices()); }
   int64_t num_cells() const { return static_cast<int64_t>(dt_.number_of_finite_cells()); }
@@ -153,6 +154,8 @@ class DelaunayManifold::Impl {
   // --- Insert steps ---
   // Throws InputError for a non-finite point or a camera out of range.
   void CheckNewPoints(const std::vector<RayPoint>& points) const;
+  // Strictly inside the Steiner box (a new point elsewhere is discarded).
+  bool InSteinerBox(const Eigen::Vector3d& position) const;
   InsertionBatch StartBatch();
   // One new point: discarded, or O shrunk around it and the point inserted.
   void InsertOne(const RayPoint& point, InsertionBatch* batch, InsertionStats* stats);
@@ -220,6 +223,19 @@ class DelaunayManifold::Impl {
   std::optional<InsertionBatch> open_batch_;
   InsertionStats open_stats_;
   bool built_ = false;
+};
+
+// What --manifold.insertion rebuild keeps between batches: a new Impl is built from `points`
+// (the built ones and every batch's, in order, so point ids are as incremental insertion's).
+struct DelaunayManifold::Rebuild {
+  std::vector<ManifoldCamera> cameras;
+  ManifoldOptions options;
+  std::vector<RayPoint> points;
+  int64_t merged_duplicates = 0;  // of the last build
+  int walk_threads = 0;
+  bool open = false;       // between BeginInsert and FinishInsert
+  InsertionStats stats;    // of the open batch
+  size_t batch_begin = 0;  // index in points of the open batch's first point
 };
 
 }  // namespace ms

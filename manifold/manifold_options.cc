@@ -20,4 +20,10 @@ const std::vector<std::pair<const char*, RegrowSeeds>>& OptionChoices(RegrowSeed
   return choices;
 }
 
+const std::vector<std::pair<const char*, InsertionMode>>& OptionChoices(InsertionMode) {
+  static const std::vector<std::pair<const char*, InsertionMode>> choices = {
+      {"incremental", InsertionMode::kIncremental}, {"rebuild", InsertionMode::kRebuild}};
+  return choices;
+}
+
 }  // namespace ms

@@ -37,6 +37,17 @@ enum class RegrowSeeds {
 };
 const std::vector<std::pair<const char*, RegrowSeeds>>& OptionChoices(RegrowSeeds);
 
+// How swept points join the triangulation (--manifold.insertion, docs/design/accuracy.md).
+enum class InsertionMode {
+  // Point by point (paper section 2.3): O shrinks around each point's conflict region, a point
+  // whose region cannot leave O is discarded, then O regrows from its boundary.
+  kIncremental,
+  // Every batch rebuilds the triangulation, the visibility and O from all points so far: no
+  // point is discarded for a conflict, and O grows again from its heaviest cell.
+  kRebuild,
+};
+const std::vector<std::pair<const char*, InsertionMode>>& OptionChoices(InsertionMode);
+
 struct ManifoldOptions {
   static constexpr const char* kOptionGroup = "manifold";
 #define MS_OPTION_LIST "manifold/manifold_options_def.h"

@@ -65,6 +65,14 @@ MS_OPTION(bool, float_cleanup, true, "float-cleanup",
           "make written meshes robust in floating point (Open3D, MeshLab): collapse and split "
           "edges until check-mesh's float report passes",
           AnyValue())
+// How a batch of swept points joins: point by point with the paper's conflict rule, or a
+// rebuild from every point so far. On the pyramids many points the conflict rule discards are
+// the surface's (a Steiner point's disc of O cannot shrink); docs/design/accuracy.md measures both.
+MS_OPTION(InsertionMode, insertion, InsertionMode::kIncremental, "insertion",
+          "how swept points join: incremental (point by point, discarding a point whose conflict "
+          "region cannot leave O: the paper) or rebuild (triangulation, rays and O again from "
+          "every point so far after each batch; holds the points)",
+          AnyValue())
 // Incremental insertion: E, the cells shrunk out of O before inserting a point, is the conflict
 // region D plus its face neighbours (0), every cell sharing a vertex with D (1), or the face
 // neighbours first and, only if D still meets O, the stars of D's vertices that are points, not
