@@ -686,6 +686,43 @@ TEST(DelaunayManifold, ManySmallPartsEqualInsertingTheBatchWhole) {
   }
 }
 
+// --manifold.insertion rebuild: every batch, in parts or whole, gives exactly the manifold that
+// Build makes of all points so far, the conflict rule discards nothing, and a point outside the
+// Steiner box is discarded as incremental insertion discards it.
+TEST(DelaunayManifold, RebuildInsertionEqualsBuildingFromAllPoints) {
+  ManifoldOptions rebuild;
+  rebuild.insertion = InsertionMode::kRebuild;
+  const RandomScene scene = SphereScene(150, 10, 9, 1.0);
+  DelaunayManifold rebuilt(scene.cameras, rebuild);
+  rebuilt.Build(scene.points);
+  std::vector<RayPoint> all = scene.points;
+  for (int batch = 0; batch < 2; ++batch) {
+    RandomScene more = SphereScene(90, 10, 500 + batch, 1.0 + 0.03 * (batch - 1));
+    RayPoint far;
+    far.position = Eigen::Vector3d(1e6, 0, 0);
+    far.cameras = {0};
+    more.points.push_back(far);
+    rebuilt.BeginInsert();
+    rebuilt.InsertPart(std::vector<RayPoint>(more.points.begin(), more.points.begin() + 30));
+    rebuilt.InsertPart(std::vector<RayPoint>(more.points.begin() + 30, more.points.end()));
+    const InsertionStats stats = rebuilt.FinishInsert();
+    EXPECT_EQ(stats.requested, 91) << "batch " << batch;
+    EXPECT_EQ(stats.discarded_outside, 1) << "batch " << batch;
+    EXPECT_EQ(stats.discarded_conflict, 0) << "batch " << batch;
+    EXPECT_EQ(stats.inserted + stats.discarded_duplicate, 90) << "batch " << batch;
+    all.insert(all.end(), more.points.begin(), more.points.end() - 1);
+
+    DelaunayManifold built(scene.cameras, ManifoldOptions{});
+    const BuildStats expected = built.Build(all);
+    EXPECT_EQ(stats.outside_cells, expected.outside_cells) << "batch " << batch;
+    const Mesh a = rebuilt.ExtractSurface(), b = built.ExtractSurface();
+    ASSERT_EQ(a.faces, b.faces) << "batch " << batch;
+    ASSERT_EQ(a.vertices, b.vertices) << "batch " << batch;
+    ASSERT_EQ(rebuilt.Validate(true), "") << "batch " << batch;
+    EXPECT_EQ(rebuilt.num_points(), static_cast<int64_t>(all.size()));
+  }
+}
+
 // Duplicates of points inserted earlier in the same batch bring their cameras to those new
 // vertices, in the same part or a later one: each such ray must be counted once.
 TEST(DelaunayManifold, DuplicatesOfNewPointsAddEachRayOnce) {
