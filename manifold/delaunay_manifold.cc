@@ -316,11 +316,9 @@ void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
   grow_shrink_.GrowFromHeaviest();
   const int64_t slivers_before = grow_shrink_.slivers_joined();
   stats->camera_stars_completed = FreeEnclosedCameras(nullptr);
-  // Without the pinch joins on the sparse SfM points: there they take real matter into O, and
-  // the fins they mend come from swept points (docs/design/accuracy.md, "Fins in front of the
-  // cameras"), which a rebuild holds.
-  const int pinch_rounds = rebuilding_ ? options_.pocket_pinch_rounds : 0;
-  stats->pockets_joined = JoinFreePockets(RegrowSeeds::kBoundary, 0, pinch_rounds);
+  // Without the pinch joins: on sparse SfM points they take real matter into O, and the fins
+  // they mend come from insertions (docs/design/accuracy.md, "Fins in front of the cameras").
+  stats->pockets_joined = JoinFreePockets(RegrowSeeds::kBoundary, 0, /*pinch_rounds=*/0);
   stats->slivers_joined = grow_shrink_.slivers_joined() - slivers_before;
   stats->outside_cells = labels_.outside_count();
   stats->free_cells_left_inside = CountFreeCellsInside();
@@ -1032,10 +1030,9 @@ InsertionStats DelaunayManifold::RebuildFinish() {
   // Build lets go of its points; the copy is what the next batch rebuilds from.
   auto fresh = std::make_unique<Impl>(rebuild_->cameras, rebuild_->options);
   fresh->set_walk_threads(rebuild_->walk_threads);
-  fresh->set_rebuilding();
-  const int64_t appended = static_cast<int64_t>(rebuild_->points.size() - rebuild_->batch_begin);
   const BuildStats built = fresh->Build(rebuild_->points);
   impl_ = std::move(fresh);
+  const int64_t appended = static_cast<int64_t>(rebuild_->points.size() - rebuild_->batch_begin);
   // A near-duplicate joins the point it duplicates, as in Build: its cameras are gained.
   stats.discarded_duplicate =
       std::max<int64_t>(0, built.merged_duplicates - rebuild_->merged_duplicates);

@@ -688,12 +688,10 @@ TEST(DelaunayManifold, ManySmallPartsEqualInsertingTheBatchWhole) {
 
 // --manifold.insertion rebuild: every batch, in parts or whole, gives exactly the manifold that
 // Build makes of all points so far, the conflict rule discards nothing, and a point outside the
-// Steiner box is discarded as incremental insertion discards it. (A rebuild's growing also joins
-// pockets with their pinching matter, as after an insertion; without those rounds it is Build.)
+// Steiner box is discarded as incremental insertion discards it.
 TEST(DelaunayManifold, RebuildInsertionEqualsBuildingFromAllPoints) {
   ManifoldOptions rebuild;
   rebuild.insertion = InsertionMode::kRebuild;
-  rebuild.pocket_pinch_rounds = 0;
   const RandomScene scene = SphereScene(150, 10, 9, 1.0);
   DelaunayManifold rebuilt(scene.cameras, rebuild);
   rebuilt.Build(scene.points);
@@ -725,9 +723,9 @@ TEST(DelaunayManifold, RebuildInsertionEqualsBuildingFromAllPoints) {
   }
 }
 
-// With the pinch joins a rebuild's surface stays a closed 2-manifold, batch after batch, and
-// O stays maximal.
-TEST(DelaunayManifold, RebuildInsertionWithPinchJoinsKeepsTheSurfaceManifold) {
+// With outliers among the new points a rebuild's surface stays a closed 2-manifold, batch after
+// batch, and O stays maximal.
+TEST(DelaunayManifold, RebuildInsertionKeepsTheSurfaceManifold) {
   ManifoldOptions rebuild;
   rebuild.insertion = InsertionMode::kRebuild;
   for (uint32_t seed = 1; seed <= 3; ++seed) {

@@ -57,9 +57,6 @@ class DelaunayManifold::Impl {
 
   int64_t num_points() const { return static_cast<int64_t>(positions_.size()); }
   bool built() const { return built_; }
-  // A Build that rebuilds after swept points (--manifold.insertion rebuild) joins pockets with
-  // their pinching matter as regrowing after an insertion does.
-  void set_rebuilding() { rebuilding_ = true; }
   void set_walk_threads(int threads) { walks_.set_threads(threads); }
   int64_t num_vertices() const { return static_cast<int64_t>(dt_.number_of_vertices()); }
   int64_t num_cells() const { return static_cast<int64_t>(dt_.number_of_finite_cells()); }
@@ -226,7 +223,6 @@ class DelaunayManifold::Impl {
   std::optional<InsertionBatch> open_batch_;
   InsertionStats open_stats_;
   bool built_ = false;
-  bool rebuilding_ = false;
 };
 
 // What --manifold.insertion rebuild keeps between batches: a new Impl is built from `points`
