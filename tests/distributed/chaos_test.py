@@ -25,6 +25,8 @@ def main():
     parser.add_argument("--kills", type=int, default=20, help="kills in all (workers and coordinator)")
     parser.add_argument("--iterations", type=int, default=4)
     parser.add_argument("--time-limit", type=float, default=240)
+    parser.add_argument("--option", action="append", default=[],
+                        help="one more option for both runs, e.g. --option=--manifold.insertion=rebuild")
     args = parser.parse_args()
     ms, work = args.manisweep, args.workdir
     logs = fresh_workdir(work)
@@ -33,7 +35,7 @@ def main():
         subprocess.run(cmd, check=True, stdout=logs, stderr=subprocess.STDOUT)
 
     scene = make_scene(ms, work, logs)
-    iterations = ["--max-iterations", str(args.iterations)]
+    iterations = ["--max-iterations", str(args.iterations)] + args.option
     run([ms, "reconstruct", "--input", scene, "--output", os.path.join(work, "undisturbed"),
          "--workers", "2", "--no-refine"] + iterations + SWEEP)
 
