@@ -969,12 +969,8 @@ std::vector<uint8_t> SteinerFlags(const SurfaceInfo& info) {
 
 DelaunayManifold::DelaunayManifold(std::vector<ManifoldCamera> cameras,
                                    const ManifoldOptions& options)
-    : impl_(std::make_unique<Impl>(cameras, options)) {
-  if (options.insertion == InsertionMode::kRebuild) {
-    rebuild_ = std::make_unique<Rebuild>();
-    rebuild_->cameras = std::move(cameras);
-    rebuild_->options = options;
-  }
+    : impl_(std::make_unique<Impl>(std::move(cameras), options)) {
+  if (options.insertion == InsertionMode::kRebuild) rebuild_ = std::make_unique<Rebuild>();
 }
 DelaunayManifold::~DelaunayManifold() = default;
 BuildStats DelaunayManifold::Build(std::vector<RayPoint> points) {
@@ -1028,8 +1024,8 @@ InsertionStats DelaunayManifold::RebuildFinish() {
   rebuild_->open = false;
   InsertionStats stats = rebuild_->stats;
   // Build lets go of its points; the copy is what the next batch rebuilds from.
-  auto fresh = std::make_unique<Impl>(rebuild_->cameras, rebuild_->options);
-  fresh->set_walk_threads(rebuild_->walk_threads);
+  auto fresh = std::make_unique<Impl>(impl_->cameras(), impl_->options());
+  fresh->set_walk_threads(impl_->walk_threads());
   const BuildStats built = fresh->Build(rebuild_->points);
   impl_ = std::move(fresh);
   const int64_t appended = static_cast<int64_t>(rebuild_->points.size() - rebuild_->batch_begin);
@@ -1060,10 +1056,7 @@ Mesh DelaunayManifold::ExtractFreeSpaceBoundary() const {
 std::string DelaunayManifold::Validate(bool check_weights) const {
   return impl_->Validate(check_weights);
 }
-void DelaunayManifold::set_walk_threads(int threads) {
-  if (rebuild_) rebuild_->walk_threads = threads;
-  impl_->set_walk_threads(threads);
-}
+void DelaunayManifold::set_walk_threads(int threads) { impl_->set_walk_threads(threads); }
 int64_t DelaunayManifold::num_points() const { return impl_->num_points(); }
 int64_t DelaunayManifold::num_vertices() const { return impl_->num_vertices(); }
 int64_t DelaunayManifold::num_cells() const { return impl_->num_cells(); }

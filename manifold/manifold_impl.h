@@ -58,6 +58,9 @@ class DelaunayManifold::Impl {
   int64_t num_points() const { return static_cast<int64_t>(positions_.size()); }
   bool built() const { return built_; }
   void set_walk_threads(int threads) { walks_.set_threads(threads); }
+  int walk_threads() const { return walks_.threads(); }
+  const std::vector<ManifoldCamera>& cameras() const { return cameras_; }
+  const ManifoldOptions& options() const { return options_; }
   int64_t num_vertices() const { return static_cast<int64_t>(dt_.number_of_vertices()); }
   int64_t num_cells() const { return static_cast<int64_t>(dt_.number_of_finite_cells()); }
   int64_t num_outside_cells() const { return labels_.outside_count(); }
@@ -225,17 +228,15 @@ class DelaunayManifold::Impl {
   bool built_ = false;
 };
 
-// What --manifold.insertion rebuild keeps between batches: a new Impl is built from `points`
-// (the built ones and every batch's, in order, so point ids are as incremental insertion's).
+// What --manifold.insertion rebuild keeps between batches: a new Impl, with the cameras,
+// options and threads of the last, is built from `points` (the built ones and every batch's, in
+// order, so point ids are as incremental insertion's).
 struct DelaunayManifold::Rebuild {
-  std::vector<ManifoldCamera> cameras;
-  ManifoldOptions options;
   std::vector<RayPoint> points;
   int64_t merged_duplicates = 0;  // of the last build
-  int walk_threads = 0;
-  bool open = false;       // between BeginInsert and FinishInsert
-  InsertionStats stats;    // of the open batch
-  size_t batch_begin = 0;  // index in points of the open batch's first point
+  bool open = false;              // between BeginInsert and FinishInsert
+  InsertionStats stats;           // of the open batch
+  size_t batch_begin = 0;         // index in points of the open batch's first point
 };
 
 }  // namespace ms

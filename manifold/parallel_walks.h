@@ -29,6 +29,7 @@ class ParallelWalks {
       : walker_(walker), labels_(labels) {
     set_threads(threads);
   }
+  int threads() const { return threads_; }
   void set_threads(int threads) {
     threads_ =
         threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
