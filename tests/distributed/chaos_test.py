@@ -6,6 +6,7 @@ The final mesh must be byte-identical to an undisturbed `reconstruct` of the sam
 options: no result lost or inserted twice. Prints the kills survived.
 
   chaos_test.py --manisweep BIN --workdir DIR [--seed 1] [--kills 20] [--iterations 4]
+  [--option=--manifold.insertion=rebuild ...]
 """
 import filecmp
 import os
@@ -35,9 +36,9 @@ def main():
         subprocess.run(cmd, check=True, stdout=logs, stderr=subprocess.STDOUT)
 
     scene = make_scene(ms, work, logs)
-    iterations = ["--max-iterations", str(args.iterations)] + args.option
+    run_options = ["--max-iterations", str(args.iterations)] + args.option + SWEEP
     run([ms, "reconstruct", "--input", scene, "--output", os.path.join(work, "undisturbed"),
-         "--workers", "2", "--no-refine"] + iterations + SWEEP)
+         "--workers", "2", "--no-refine"] + run_options)
 
     port = free_port()
     out = os.path.join(work, "chaos")
@@ -45,7 +46,7 @@ def main():
                        "--output", out, "--resume"] + HEARTBEAT + ["--lease", "60", "--progress-interval", "1",
                        # The driver kills workers mid-job on purpose: a job that loses 5 of them
                        # is not the poison job --max-attempts is there to stop.
-                       "--max-attempts", "1000"] + iterations + SWEEP
+                       "--max-attempts", "1000"] + run_options
     next_worker = [0]
 
     def new_worker():

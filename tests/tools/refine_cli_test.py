@@ -36,7 +36,6 @@ def interrupt_after(cmd, marker):
     return p.wait(timeout=120)
 
 
-
 def expect_bad_input(manisweep, scene, mesh, name, out):
     r = run([manisweep, "refine", "-i", scene, "-m", mesh, "-o", out])
     lines = [l for l in r.stderr.strip().splitlines() if l.strip()]

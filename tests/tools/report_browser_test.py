@@ -15,7 +15,6 @@ import sys
 from small_pyramid import fresh_small_pyramid, run
 
 
-
 def browser():
     for name in ("chromium", "chromium-browser", "google-chrome"):
         path = shutil.which(name)
