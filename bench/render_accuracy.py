@@ -11,6 +11,13 @@ import json
 import sys
 
 
+def options_of(result):
+    """The options a file ran with; a file run with an earlier commit's defaults names the
+    options that give them now."""
+    options = " ".join(result.get("equivalent_options") or result.get("reconstruct_options") or [])
+    return options or "defaults"
+
+
 def main():
     args = sys.argv[1:]
     mesh = "final"
@@ -34,14 +41,14 @@ def main():
     header += [f"seed {s} {f}" for s, f in variants]
     print("| " + " | ".join(header) + " |")
     print("|" + "---|" * len(header))
-    for r in results:
+    configurations = [(r["scene"], options_of(r)) for r in results]
+    for r, configuration in zip(results, configurations):
         by_variant = {(run["seed"], run["format"]): run for run in r["runs"]}
-        # A file run with an earlier commit's defaults names the options that give them now.
-        options = " ".join(r.get("equivalent_options") or r.get("reconstruct_options") or [])
-        options = options or "defaults"
-        options = f"{options}` of `{r['commit']}"
+        cell = f"`{configuration[1]}` of `{r['commit']}`"
+        if configurations.count(configuration) > 1:  # the same options ran other code
+            cell += f" ({r['label']})"
         s = r["summary"][mesh]
-        row = [r["scene"], f"`{options}`", str(len(r["runs"])), f"{s['median']:.4f}",
+        row = [r["scene"], cell, str(len(r["runs"])), f"{s['median']:.4f}",
                f"**{s['worst']:.4f}**"]
         for key in variants:
             run = by_variant.get(key)
