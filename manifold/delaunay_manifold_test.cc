@@ -603,7 +603,8 @@ TEST_P(RandomInsertions, KeepTheSurfaceManifold) {
       for (int k = 0; k < 10; ++k) {
         RayPoint p;
         p.position = Eigen::Vector3d(u(rng), u(rng), u(rng));
-        p.cameras = {k % 10, (k + 3) % 10};
+        p.cameras.push_back(k % 10);
+        p.cameras.push_back((k + 3) % 10);
         more.points.push_back(p);
       }
       const InsertionStats stats = manifold.Insert(more.points);
@@ -686,12 +687,17 @@ TEST(DelaunayManifold, ManySmallPartsEqualInsertingTheBatchWhole) {
   }
 }
 
+ManifoldOptions RebuildOptions() {
+  ManifoldOptions options;
+  options.insertion = InsertionMode::kRebuild;
+  return options;
+}
+
 // --manifold.insertion rebuild: every batch, in parts or whole, gives exactly the manifold that
 // Build makes of all points so far, the conflict rule discards nothing, and a point outside the
 // Steiner box is discarded as incremental insertion discards it.
 TEST(DelaunayManifold, RebuildInsertionEqualsBuildingFromAllPoints) {
-  ManifoldOptions rebuild;
-  rebuild.insertion = InsertionMode::kRebuild;
+  const ManifoldOptions rebuild = RebuildOptions();
   const RandomScene scene = SphereScene(150, 10, 9, 1.0);
   DelaunayManifold rebuilt(scene.cameras, rebuild);
   rebuilt.Build(scene.points);
@@ -700,7 +706,7 @@ TEST(DelaunayManifold, RebuildInsertionEqualsBuildingFromAllPoints) {
     RandomScene more = SphereScene(90, 10, 500 + batch, 1.0 + 0.03 * (batch - 1));
     RayPoint far;
     far.position = Eigen::Vector3d(1e6, 0, 0);
-    far.cameras = {0};
+    far.cameras.push_back(0);
     more.points.push_back(far);
     rebuilt.BeginInsert();
     rebuilt.InsertPart(std::vector<RayPoint>(more.points.begin(), more.points.begin() + 30));
@@ -723,11 +729,29 @@ TEST(DelaunayManifold, RebuildInsertionEqualsBuildingFromAllPoints) {
   }
 }
 
+// A rebuild's Steiner box holds its points, so a point in the margin widens the next one; new
+// points are filtered against the first build's box, which cannot creep outwards.
+TEST(DelaunayManifold, RebuildFiltersNewPointsAgainstTheFirstBox) {
+  const ManifoldOptions rebuild = RebuildOptions();
+  const RandomScene scene = SphereScene(150, 10, 4, 1.0);
+  DelaunayManifold manifold(scene.cameras, rebuild);
+  manifold.Build(scene.points);
+  // Points and cameras span z in [-1.5, 1.5] and 11.7 m of diagonal: the box reaches z = 7.35.
+  // With the point at z = 7 the next box would reach past z = 13.
+  for (const double z : {7.0, 10.0}) {
+    RayPoint outlier;
+    outlier.position = Eigen::Vector3d(0, 0, z);
+    outlier.cameras.push_back(0);
+    const InsertionStats stats = manifold.Insert({outlier});
+    EXPECT_EQ(stats.discarded_outside, z < 7.35 ? 0 : 1) << "z = " << z;
+    ASSERT_EQ(manifold.Validate(true), "") << "z = " << z;
+  }
+}
+
 // With outliers among the new points a rebuild's surface stays a closed 2-manifold, batch after
 // batch, and O stays maximal.
 TEST(DelaunayManifold, RebuildInsertionKeepsTheSurfaceManifold) {
-  ManifoldOptions rebuild;
-  rebuild.insertion = InsertionMode::kRebuild;
+  const ManifoldOptions rebuild = RebuildOptions();
   for (uint32_t seed = 1; seed <= 3; ++seed) {
     const RandomScene scene = SphereScene(150, 10, seed, 1.0);
     DelaunayManifold manifold(scene.cameras, rebuild);
@@ -739,7 +763,8 @@ TEST(DelaunayManifold, RebuildInsertionKeepsTheSurfaceManifold) {
       for (int k = 0; k < 10; ++k) {  // outliers, as sweeping finds some
         RayPoint p;
         p.position = Eigen::Vector3d(u(rng), u(rng), u(rng));
-        p.cameras = {k % 10, (k + 3) % 10};
+        p.cameras.push_back(k % 10);
+        p.cameras.push_back((k + 3) % 10);
         more.points.push_back(p);
       }
       const InsertionStats stats = manifold.Insert(more.points);
