@@ -233,6 +233,9 @@ class DelaunayManifold::Impl {
 // order, so point ids are as incremental insertion's).
 struct DelaunayManifold::Rebuild {
   std::vector<RayPoint> points;
+  // The first build's Steiner box. New points outside it are discarded: each rebuild's box
+  // grows with its points, so filtering against the latest one would let it creep outwards.
+  Eigen::Vector3d box_min, box_max;
   int64_t merged_duplicates = 0;  // of the last build
   bool open = false;              // between BeginInsert and FinishInsert
   InsertionStats stats;           // of the open batch
