@@ -13,8 +13,8 @@ namespace {
 constexpr size_t kHugePage = size_t{2} << 20;
 
 // Freed large blocks kept for the next allocation of the same size: a worker allocates the same
-// buffers job after job, and memory fresh from the kernel is zeroed there first (about 1 s of
-// system time per full-size job on a virtual machine). The cache never holds more than the most
+// buffers job after job, and memory fresh from the kernel is zeroed there first (system time
+// that grows with the job's size). The cache never holds more than the most
 // the process had in large buffers at once, so it adds nothing to the peak.
 struct Cache {
   std::mutex mutex;

@@ -1,9 +1,9 @@
 // Large per-pixel buffers backed by transparent huge pages where the kernel offers them.
 //
-// A full-size sweep job touches about 1 GB of fresh buffers; with 4 KiB pages that is ~250,000
-// page faults, which cost a virtual machine about 2 s of system time per job (fountain-P11,
-// 3072x2048). Aligned to 2 MiB and advised MADV_HUGEPAGE (the kernel's default THP mode on
-// Debian is "madvise"), the same buffers take ~500 faults; freed ones are kept for the next
+// A full-size sweep job touches its per-pixel buffers fresh; with 4 KiB pages that is a page
+// fault per 4 KiB, seconds of system time per job on a virtual machine (docs/design/sweep.md).
+// Aligned to 2 MiB and advised MADV_HUGEPAGE (the kernel's default THP mode on Debian is
+// "madvise"), the same buffers take 512 times fewer faults; freed ones are kept for the next
 // allocation of the same size (large_buffer.cc). Small allocations go to the usual allocator,
 // aligned to a cache line (the NCC's streaming stores need 64 bytes); contents and results are
 // the same either way.

@@ -186,7 +186,7 @@ class GrowShrink {
 // (Regularity::FlipKeepsManifold), so a refused cell waits aside until a cell around one of its
 // vertices flips, and only then goes back into the queue, where it would have stood among the
 // others: the same cells join in the same order as when every refusal is queued again, which
-// on a street cost 30-60 ms for each camera star completed (10^5 refusals).
+// on a many-camera street costs a pass over every refusal for each camera star completed.
 // Kept aside across Grows (regrowing) they need an index by vertex; within one Grow (the build)
 // they are simply queued again each round, which keeps the build's memory.
 // Valid while no cell is made or destroyed and no weight changes (within one regrowing).

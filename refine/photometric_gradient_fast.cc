@@ -1,11 +1,10 @@
-// The fast CPU kernel of the photometric gradient (photometric_gradient.h). Where the reference
-// spends its time (a profile of fountain-P11 at 1536x1024: its rasteriser 24%, page faults on
-// its per-pair double maps and per-pixel world points a third, OpenCV's double filters 9%), this
-// kernel draws with the sweep's span rasteriser, keeps no per-pixel point (each pixel's point is
-// recomputed from its ray and its face's plane), filters float maps, reuses its buffers pair
-// after pair (pooled, not thread_local: workers use a thread per job), and sums the chain rule
-// per face first, so the vertex arrays are touched once per face instead of three times per
-// pixel.
+// The fast CPU kernel of the photometric gradient (photometric_gradient.h). Where a profile of
+// the reference shows its time going (its rasteriser, page faults on its per-pair double maps
+// and per-pixel world points, OpenCV's double filters; docs/design/refine.md), this kernel draws
+// with the sweep's span rasteriser, keeps no per-pixel point (each pixel's point is recomputed from
+// its ray and its face's plane), filters float maps, reuses its buffers pair after pair (pooled,
+// not thread_local: workers use a thread per job), and sums the chain rule per face first, so the
+// vertex arrays are touched once per face instead of three times per pixel.
 #include <array>
 #include <cmath>
 #include <memory>

@@ -2,9 +2,9 @@
 // Gaussians (sweep/windowed_ncc.h) decay through subnormals wherever the mask leaves a gap: the
 // truncation that ends a window subtracts the sample leaving it, and what remains of the state
 // shrinks by the pole's modulus every step. Intel processors take a microcode assist for each
-// operation on a subnormal, about 100 times the cost of a normal one: on an Intel Xeon a
-// full-size fountain-P11 job spent 27 s of CPU in the NCC with them and 3.7 s without
-// (docs/design/performance.md, "Subnormal floats"). A value that small never changes a sum of
+// operation on a subnormal, many times the cost of a normal one, and a full-size job's NCC
+// slows several-fold (docs/design/performance.md, "Subnormal floats"). A value that small never
+// changes a sum of
 // normal values, so every NCC a mask defines stays the same. x86 only (MXCSR's flush-to-zero and
 // denormals-are-zero bits); elsewhere nothing changes.
 #pragma once

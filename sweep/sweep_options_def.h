@@ -28,8 +28,7 @@ MS_OPTION(int, min_matching_neighbours, 2, "min-matching-neighbours",
           "unless --sweep.strict-support; 1 = the paper's rule)",
           InRange(0, 64))
 // Also where the other neighbours do not see the pixel: on the noisy street, points one
-// neighbour matched where the other did not see lie beyond Sigma 10 times as often (1.07%
-// against 0.11%), and winners that must move insert 2-3 times as many points
+// neighbour matched where the other did not see are far more often outliers
 // (docs/design/accuracy.md "Winners that move the surface").
 MS_OPTION(bool, strict_support, true, "strict-support",
           "a neighbour that does not see a pixel counts as not supporting it, so "

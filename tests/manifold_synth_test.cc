@@ -121,8 +121,7 @@ TEST(Insertion, SmallBatchRecountWalksOnlyFromTheHoles) {
   const GradedInsertion run = InsertHeldBackPoints(20);  // 150 points
   EXPECT_GT(run.inserted.inserted, 50);
   ASSERT_GT(run.inserted.rewalked_rays, 0);
-  // Backwards from the point, only as far as the holes: fewer cells than whole rays
-  // (measured: 17.2 against 24.6).
+  // Backwards from the point, only as far as the holes: fewer cells than whole rays.
   EXPECT_LT(static_cast<double>(run.inserted.rewalk_steps) / run.inserted.rewalked_rays,
             static_cast<double>(run.built.ray_cell_steps) / run.built.rays);
 }

@@ -153,7 +153,7 @@ SynthGeometry MakePyramidScene(bool apex_up, const SynthLayout& layout) {
   // A Fibonacci spiral on the cap from 88 to 70 degrees of elevation, 1.2 m from the centre:
   // neighbours ~10 degrees apart, every view sees the whole pyramid. View 0 is almost vertical.
   // At 1.2 m the base square's mean relative error from view 0 matches the paper's Table 1
-  // (MRE 0.067 / 0.111 against 0.072 / 0.114), i.e. the paper's viewing distance.
+  // (docs/reference/evaluation.md), i.e. the paper's viewing distance.
   const double distance = 1.2;
   const double golden = M_PI * (3 - std::sqrt(5.0));
   const int n = layout.views;
