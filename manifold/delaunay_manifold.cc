@@ -416,10 +416,6 @@ void DelaunayManifold::Impl::CheckNewPoints(const std::vector<RayPoint>& points)
   }
 }
 
-bool DelaunayManifold::Impl::InSteinerBox(const Eigen::Vector3d& position) const {
-  return (position.array() > box_min_.array()).all() && (position.array() < box_max_.array()).all();
-}
-
 DelaunayManifold::Impl::InsertionBatch DelaunayManifold::Impl::StartBatch() {
   InsertionBatch batch;
   batch.number = ++batch_;
@@ -1013,8 +1009,7 @@ void DelaunayManifold::RebuildAppend(const std::vector<RayPoint>& points) {
   InsertionStats& stats = rebuild_->stats;
   stats.requested += static_cast<int64_t>(points.size());
   for (const RayPoint& point : points) {
-    const Eigen::Array3d p = point.position.array();
-    if ((p > rebuild_->box_min.array()).all() && (p < rebuild_->box_max.array()).all()) {
+    if (StrictlyInsideBox(point.position, rebuild_->box_min, rebuild_->box_max)) {
       rebuild_->points.push_back(point);
     } else {
       ++stats.discarded_outside;

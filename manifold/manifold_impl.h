@@ -35,6 +35,12 @@
 
 namespace ms {
 
+// The Steiner box test of incremental insertion and of rebuilds (against the first box).
+inline bool StrictlyInsideBox(const Eigen::Vector3d& position, const Eigen::Vector3d& box_min,
+                              const Eigen::Vector3d& box_max) {
+  return (position.array() > box_min.array()).all() && (position.array() < box_max.array()).all();
+}
+
 class DelaunayManifold::Impl {
  public:
   using Delaunay = manifold_detail::Delaunay;
@@ -158,7 +164,9 @@ class DelaunayManifold::Impl {
   // Throws InputError for a non-finite point or a camera out of range.
   void CheckNewPoints(const std::vector<RayPoint>& points) const;
   // Strictly inside the Steiner box (a new point elsewhere is discarded).
-  bool InSteinerBox(const Eigen::Vector3d& position) const;
+  bool InSteinerBox(const Eigen::Vector3d& position) const {
+    return StrictlyInsideBox(position, box_min_, box_max_);
+  }
   InsertionBatch StartBatch();
   // One new point: discarded, or O shrunk around it and the point inserted.
   void InsertOne(const RayPoint& point, InsertionBatch* batch, InsertionStats* stats);
