@@ -1,5 +1,6 @@
 // Throughput of the manifold reconstruction steps (docs/design/performance.md):
-//   manifold_bench [points ...] [--insert N] [--threads N] [--export DIR] [--manifold.* ...]
+//   manifold_bench [points ...] [--insert N] [--threads N] [--export DIR] [--json FILE]
+//                  [--manifold.* ...]
 //   default sizes: 10^4 10^5 10^6; the manifold options are the library's (`--help` lists them)
 // For each size: Delaunay insertion, ray tracing (rays/s), growing (cells/s), peak memory per
 // point; then incremental insertion of N (default 10^4) points near the surface (points/s), in
@@ -7,10 +8,13 @@
 // --export=DIR writes, per size, the input points (PLY, normals = mean unit direction to the
 // cameras that see each point, for the Poisson baseline), the initial manifold and the
 // manifold after the incremental insertion.
+// --json=FILE writes the rows as a JSON array, for bench/manifold_figures.py.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -30,12 +34,13 @@ struct BenchOptions {
   int64_t insert_count = 10000;
   int walk_threads = 0;  // one per core
   std::string export_dir;
+  std::string json_path;
   ms::ManifoldOptions manifold;
 };
 
-// One blob of `n` points: build, then insert points near the surface as sweeping would; one
-// table row and its details.
-void RunSize(int64_t n, const BenchOptions& o) {
+// One blob of `n` points: build, then insert points near the surface as sweeping would; prints
+// one table row and its details and returns them.
+nlohmann::json RunSize(int64_t n, const BenchOptions& o) {
   const int64_t insert_count = o.insert_count;
   const std::string& export_dir = o.export_dir;
   const ms::bench::ManifoldBenchScene scene = ms::bench::MakeBlobScene(n, 48, 5, 42);
@@ -93,6 +98,25 @@ void RunSize(int64_t n, const BenchOptions& o) {
   std::printf("          after regrowing: %lld cells in O, %lld free cells could still join it\n",
               static_cast<long long>(manifold.num_outside_cells()),
               static_cast<long long>(manifold.num_joinable_cells()));
+  return {{"points", n},
+          {"rays", stats.rays},
+          {"cells", stats.cells},
+          {"seconds_triangulation", stats.seconds_triangulation},
+          {"seconds_ray_tracing", stats.seconds_ray_tracing},
+          {"seconds_growing", stats.seconds_growing},
+          {"seconds_build", total},
+          {"peak_rss_bytes_per_point", static_cast<double>(rss) / n},
+          {"cell_steps_per_ray",
+           static_cast<double>(stats.ray_cell_steps) / std::max<int64_t>(stats.rays, 1)},
+          {"insert_count", insert_count},
+          {"seconds_insert", insert_total},
+          {"inserted", ins.inserted},
+          {"discarded_conflict", ins.discarded_conflict},
+          {"rewalked_rays", ins.rewalked_rays},
+          {"cells_per_rewalked_ray",
+           static_cast<double>(ins.rewalk_steps) / std::max<int64_t>(ins.rewalked_rays, 1)},
+          {"seconds_insertion", ins.seconds_insertion},
+          {"seconds_regrowing", ins.seconds_growing}};
 }
 
 }  // namespace
@@ -113,6 +137,7 @@ int main(int argc, char** argv) {
   cli.add_option("--threads", o.walk_threads, "ray-walking threads (0: one per core)")
       ->capture_default_str();
   cli.add_option("--export", o.export_dir, "write the points and meshes into this folder");
+  cli.add_option("--json", o.json_path, "write the rows into this JSON file");
   ms::app::AddOptionGroup(&cli, &o.manifold);
   CLI11_PARSE(cli, argc, argv);
   try {
@@ -124,9 +149,18 @@ int main(int argc, char** argv) {
   std::printf("%9s %8s %9s %8s %9s %11s %8s %11s %9s %8s %10s %11s\n", "points", "rays", "cells",
               "DT s", "trace s", "rays/s", "grow s", "cells/s", "total s", "B/point", "ins pts/s",
               "ins total s");
+  nlohmann::json rows = nlohmann::json::array();
   for (int64_t n : o.sizes) {
-    RunSize(n, o);
+    rows.push_back(RunSize(n, o));
     std::fflush(stdout);
+  }
+  if (!o.json_path.empty()) {
+    std::ofstream json(o.json_path);
+    json << rows.dump(1) << "\n";
+    if (!json) {
+      std::fprintf(stderr, "manifold_bench: cannot write %s\n", o.json_path.c_str());
+      return 1;
+    }
   }
   return 0;
 }
