@@ -9,7 +9,8 @@ check-mesh (topology only: `--no-self-intersections --allow-float-issues`; the c
 about manifoldness).
 
   bench/manifold_figures.py --out docs/results/manifold_figures.json \\
-      [--speed 100000:6 1000000:1] [--poisson 10000 100000 1000000] [--build build]
+      [--speed 100000:6 1000000:1] [--variant LABEL=MANIFOLD_OPTIONS ...]
+      [--poisson 10000 100000 1000000] [--build build]
   bench/manifold_figures.py --table docs/results/manifold_figures.json
 
 The speed runs insert 10^4 points after the build and walk rays on 2 threads (the machines
@@ -18,6 +19,7 @@ these figures are for have 2 cores).
 import argparse
 import json
 import os
+import shlex
 import statistics
 import subprocess
 import sys
@@ -35,6 +37,7 @@ SPEED_COLUMNS = [
     ("B/point (peak RSS)", "peak_rss_bytes_per_point", "{:.0f}"),
     ("cell steps per ray", "cell_steps_per_ray", "{:.0f}"),
     ("10^4 insertions", "seconds_insert", "{:.2f} s"),
+    ("cells per re-walked ray", "cells_per_rewalked_ray", "{:.1f}"),
 ]
 
 
@@ -49,15 +52,17 @@ def timed(cmd, stdout):
     return float(seconds), int(rss_kb) * 1024
 
 
-def run_speed(bench, points, repeats, work):
-    """`repeats` runs of one size; the rows manifold_bench writes."""
+def run_speed(bench, points, repeats, variant, work):
+    """`repeats` runs of one size with the variant's manifold options; manifold_bench's rows."""
+    label, options = variant
     rows = []
     for i in range(repeats):
-        path = os.path.join(work, f"speed_{points}_{i}.json")
-        print(f"manifold_figures: manifold_bench {points}, run {i + 1} of {repeats}", flush=True)
-        timed([bench, str(points), "--insert", "10000", "--threads", "2", "--json", path],
-              subprocess.DEVNULL)
-        rows += json.load(open(path))
+        path = os.path.join(work, f"speed_{label}_{points}_{i}.json")
+        print(f"manifold_figures: manifold_bench {points} {options}, run {i + 1} of {repeats}",
+              flush=True)
+        timed([bench, str(points), "--insert", "10000", "--threads", "2", "--json", path] +
+              shlex.split(options), subprocess.DEVNULL)
+        rows += [{**r, "variant": label, "options": options} for r in json.load(open(path))]
     return rows
 
 
@@ -103,13 +108,14 @@ def spread(values, fmt):
 
 
 def speed_table(result):
-    sizes = sorted({r["points"] for r in result["speed"]})
-    lines = ["| points | runs | " + " | ".join(c[0] for c in SPEED_COLUMNS) + " |",
-             "|---" * (len(SPEED_COLUMNS) + 2) + "|"]
-    for n in sizes:
-        rows = [r for r in result["speed"] if r["points"] == n]
+    groups = list(dict.fromkeys((r.get("options", ""), r["points"]) for r in result["speed"]))
+    lines = ["| options | points | runs | " + " | ".join(c[0] for c in SPEED_COLUMNS) + " |",
+             "|---" * (len(SPEED_COLUMNS) + 3) + "|"]
+    for options, n in groups:
+        rows = [r for r in result["speed"] if (r.get("options", ""), r["points"]) == (options, n)]
         cells = [spread([r[key] for r in rows], fmt) for _, key, fmt in SPEED_COLUMNS]
-        lines.append(f"| {n:,} | {len(rows)} | " + " | ".join(cells) + " |")
+        lines.append(f"| {'`' + options + '`' if options else 'defaults'} | {n:,} | {len(rows)} | "
+                     + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
@@ -148,6 +154,8 @@ def main():
     a.add_argument("--build", default=os.path.join(ROOT, "build"))
     a.add_argument("--speed", nargs="*", default=["100000:6", "1000000:1"],
                    metavar="POINTS:RUNS")
+    a.add_argument("--variant", action="append", metavar="LABEL=OPTIONS",
+                   help="manifold options of the speed runs, repeatable (default: the defaults)")
     a.add_argument("--poisson", nargs="*", type=int, default=[10000, 100000, 1000000])
     a.add_argument("--work", help="folder for the meshes (default: a temporary one)")
     a.add_argument("--out", help="JSON to write")
@@ -167,9 +175,11 @@ def main():
     os.makedirs(work, exist_ok=True)
     result = provenance("manifold_figures")
     result["speed"] = []
-    for spec in args.speed:
-        points, _, runs = spec.partition(":")
-        result["speed"] += run_speed(bench, int(points), int(runs or 1), work)
+    variants = [v.partition("=")[::2] for v in (args.variant or ["defaults="])]
+    for variant in variants:
+        for spec in args.speed:
+            points, _, runs = spec.partition(":")
+            result["speed"] += run_speed(bench, int(points), int(runs or 1), variant, work)
     result["poisson"] = [run_poisson(bench, manisweep, n, work) for n in args.poisson]
     write_result(args.out, result, table)
 
