@@ -63,10 +63,12 @@ def kernels(bench, args, work):
     rows = list(csv.DictReader(open(tsv), delimiter="\t"))
     for r in rows:
         for k, v in r.items():
-            try:
-                r[k] = float(v)
-            except ValueError:
-                pass
+            for number in (int, float):
+                try:
+                    r[k] = number(v)
+                    break
+                except ValueError:
+                    pass
     return rows
 
 
