@@ -4,7 +4,7 @@ small pyramid is recorded, then a coordinator started with --no-images on the sa
 options is served by 3 workers with --kernel replay (no image read anywhere). The replayed run
 must insert exactly the recorded batches: final.ply byte-identical, the same points per
 iteration. A sweeping worker handed a job without images refuses it by name. This is what the
-capacity benchmark (bench/scalability/capacity.sh) rests on.
+capacity benchmark (bench/scalability/capacity.py) rests on.
 
   replay_test.py --manisweep BIN --workdir DIR
 """
