@@ -9,12 +9,17 @@ import socket
 import subprocess
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from accuracy_variants import provenance  # noqa: E402
+
 
 def argument_parser(doc):
     """The parser every scalability bench starts from: its docstring, --manisweep and --out."""
     parser = argparse.ArgumentParser(description=doc,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--manisweep", required=True)
+    parser.add_argument("--manisweep", default=os.path.join(
+        os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+        "build", "app", "manisweep"))
     parser.add_argument("--out", required=True)
     return parser
 
@@ -31,9 +36,10 @@ def free_port():
 
 
 def write_figures(out, stem, setup, rows):
-    """OUT/STEM.json: `setup` (a dict) and "rows"; OUT/STEM.csv: the rows."""
+    """OUT/STEM.json: where and how it was taken (bench, machine, commit, date, command), `setup`
+    (a dict) and "rows"; OUT/STEM.csv: the rows."""
     with open(os.path.join(out, f"{stem}.json"), "w") as f:
-        json.dump({**setup, "rows": rows}, f, indent=1)
+        json.dump({**provenance(f"scalability/{stem}"), **setup, "rows": rows}, f, indent=1)
     with open(os.path.join(out, f"{stem}.csv"), "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
         writer.writeheader()

@@ -107,6 +107,26 @@ def plot(per_n, line, path, title):
     fig.savefig(path, dpi=110)
 
 
+def table(saved):
+    """The markdown table of a cameras.json: mean seconds per iteration and step, per size."""
+    lines = ["| cameras | iteration | per camera | sweep | jobs | insert | extract | checkpoint | "
+             "vertices | coordinator peak RSS |", "|---" * 10 + "|"]
+    for p in saved["per_cameras"]:
+        lines.append(f"| {p['cameras']} | {p['seconds_iteration']:.2f} | "
+                     f"{p['seconds_iteration'] / p['cameras']:.3f} | {p['seconds_sweep']:.2f} | "
+                     f"{p['seconds_jobs']:.3f} | {p['seconds_insert']:.3f} | "
+                     f"{p['seconds_extract']:.3f} | {p['seconds_checkpoint']:.3f} | "
+                     f"{p['vertices']:,} | {p['coordinator_peak_rss_mib']:.0f} MiB |")
+    line = saved["fit_total_vs_cameras"]
+    lines += ["", f"Fit {line['intercept_s']:.2f} + {line['slope_s_per_camera']:.3f} × cameras "
+              f"seconds per iteration, R² = {line['r2']:.3f}, seconds per camera within "
+              f"±{100 * saved['per_camera_spread']:.0f}% of their mean."]
+    if "machine" in saved:
+        lines += [f"{saved['machine']['cpu']}, {saved['machine']['cores']} cores, commit "
+                  f"{saved['commit']}: `{saved['command']}`"]
+    return "\n".join(lines)
+
+
 def main():
     parser = argument_parser(__doc__)
     parser.add_argument("--scene", choices=["city", "castle"], default="city")
@@ -118,6 +138,8 @@ def main():
     parser.add_argument("--image-noise", type=float, default=0, help="city, grey levels")
     parser.add_argument("--texture-photos", help="city: photographs mixed into the texture")
     parser.add_argument("--data", default="../shared/data", help="castle: the datasets folder")
+    parser.add_argument("--table", action="store_true",
+                        help="print the table of OUT/cameras.json and exit")
     parser.add_argument("--plot-only", action="store_true",
                         help="redraw OUT/cameras.png from OUT/cameras.json")
     parser.add_argument("--sweep", nargs=argparse.REMAINDER, default=[],
@@ -125,6 +147,10 @@ def main():
     args = parser.parse_args()
     cameras = args.cameras or ([16, 32, 64, 128, 256] if args.scene == "city"
                                else [5, 10, 15, 20, 25, 30])
+    if args.table:
+        with open(os.path.join(args.out, "cameras.json")) as f:
+            print(table(json.load(f)))
+        return
     if args.plot_only:
         with open(os.path.join(args.out, "cameras.json")) as f:
             saved = json.load(f)
