@@ -77,7 +77,9 @@ def table(result):
     def figure(r):
         if r is None:
             return "—"
-        return f"{r['mae_all']:.3f} m" if "mae_all" in r else f"{r['consistency']:.1f}%"
+        if "mae_all" not in r:
+            return f"{r['consistency']:.1f}%"
+        return f"{r['mae_all']:.{3 if r['mae_all'] >= 0.1 else 4}f} m"
 
     lines = [f"{result['machine']['cpu']}, commit {result['commit']}; synthetic scenes: closed "
              f"MAE from views {', '.join(map(str, result['views']))} (camera z, Σ = "
