@@ -55,6 +55,11 @@ def rng(values, fmt):
     return lo if lo == hi else f"{lo}–{hi}"
 
 
+def shown_path(path):
+    """An input as the docs show it: relative to the repository, or the embedded default."""
+    return os.path.relpath(path, ROOT) if path else "(embedded default)"
+
+
 def table(result):
     lines = [f"{result['machine']['cpu']}, {result['machine']['cores']} cores, commit "
              f"{result['commit']}", "",
@@ -67,7 +72,7 @@ def table(result):
                          if any(i["iteration"] > 0 for i in r["iterations"])]
         vertices = [r["iterations"][-1]["vertices"] for r in rows]
         lines.append(
-            f"| {spec['label']} | {spec['input'] or '(embedded default)'} | `{spec['options']}` | "
+            f"| {spec['label']} | {shown_path(spec['input'])} | `{spec['options']}` | "
             f"{len(rows)} | {rng(per_iteration, '{:.1f} s') if per_iteration else '—'} | "
             f"{rng(vertices, '{:,}')} | {rng([r['seconds'] for r in rows], '{:.0f} s')} | "
             f"{rng([r['peak_rss_bytes'] / 2**30 for r in rows], '{:.2f} GB')} |")
