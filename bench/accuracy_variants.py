@@ -166,6 +166,21 @@ def provenance(bench):
     }
 
 
+def parse_bench_args(parser, table):
+    """Adds --out and --table to a bench's parser and parses. With --table it prints that JSON
+    as TABLE renders it and exits; otherwise --out is required."""
+    parser.add_argument("--out", help="JSON to write")
+    parser.add_argument("--table", help="print the table of this JSON and exit")
+    args = parser.parse_args()
+    if args.table:
+        with open(args.table) as f:
+            print(table(json.load(f)))
+        sys.exit(0)
+    if not args.out:
+        parser.error("--out or --table is required")
+    return args
+
+
 def write_result(path, result, table):
     """Writes a bench's RESULT as JSON to PATH and prints it as TABLE renders it."""
     with open(path, "w") as f:

@@ -22,7 +22,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from accuracy_variants import ROOT, provenance, run, write_result  # noqa: E402
+from accuracy_variants import ROOT, parse_bench_args, provenance, run, write_result  # noqa: E402,E501
 from real_sets import consistency  # noqa: E402
 
 
@@ -103,14 +103,9 @@ def main():
     a.add_argument("--views", type=int, nargs="+", default=[10, 40, 80])
     a.add_argument("--sigma", type=float, default=0.47)
     a.add_argument("--work", default="bench_results/initial_manifolds")
-    a.add_argument("--out")
-    a.add_argument("--table")
-    args = a.parse_args()
-    if args.table:
-        print(table(json.load(open(args.table))))
-        return
-    if not (args.out and args.scene and args.variant):
-        a.error("--out, --scene and --variant are required")
+    args = parse_bench_args(a, table)
+    if not (args.scene and args.variant):
+        a.error("--scene and --variant are required")
     os.makedirs(args.work, exist_ok=True)
     log = os.path.join(args.work, "log.txt")
     scenes = []

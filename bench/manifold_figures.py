@@ -27,7 +27,7 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from accuracy_variants import provenance, write_result  # noqa: E402
+from accuracy_variants import parse_bench_args, provenance, write_result  # noqa: E402
 
 SPEED_COLUMNS = [
     ("DT", "seconds_triangulation", "{:.2f} s"),
@@ -158,14 +158,7 @@ def main():
                    help="manifold options of the speed runs, repeatable (default: the defaults)")
     a.add_argument("--poisson", nargs="*", type=int, default=[10000, 100000, 1000000])
     a.add_argument("--work", help="folder for the meshes (default: a temporary one)")
-    a.add_argument("--out", help="JSON to write")
-    a.add_argument("--table", help="print the tables of this JSON and exit")
-    args = a.parse_args()
-    if args.table:
-        print(table(json.load(open(args.table))))
-        return
-    if not args.out:
-        a.error("--out or --table is required")
+    args = parse_bench_args(a, table)
     bench = os.path.join(args.build, "bench/manifold_bench")
     manisweep = os.path.join(args.build, "app/manisweep")
     for tool in (bench, manisweep):

@@ -32,7 +32,7 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from accuracy_variants import provenance, write_result  # noqa: E402
+from accuracy_variants import parse_bench_args, provenance, write_result  # noqa: E402
 
 
 def output_of(cmd):
@@ -147,14 +147,7 @@ def main():
                    help="sweep_kernels_bench --kernels")
     a.add_argument("--sizes", default="640x480,1536x1024,3072x2048")
     a.add_argument("--rounds", type=int, default=3)
-    a.add_argument("--out")
-    a.add_argument("--table")
-    args = a.parse_args()
-    if args.table:
-        print(table(json.load(open(args.table))))
-        return
-    if not args.out:
-        a.error("--out or --table is required")
+    args = parse_bench_args(a, table)
     if args.bin_dir:
         manisweep = os.path.join(args.bin_dir, "manisweep")
         bench_dir = args.bin_dir

@@ -21,7 +21,7 @@ import statistics
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from accuracy_variants import ROOT, provenance, write_result  # noqa: E402
+from accuracy_variants import ROOT, parse_bench_args, provenance, write_result  # noqa: E402
 from peer_compare import timed  # noqa: E402
 
 
@@ -85,14 +85,9 @@ def main():
     a.add_argument("--run", action="append", default=[], metavar="LABEL|INPUT|OPTIONS")
     a.add_argument("--repeats", type=int, default=1)
     a.add_argument("--work", default="bench_results/whole_runs")
-    a.add_argument("--out")
-    a.add_argument("--table")
-    args = a.parse_args()
-    if args.table:
-        print(table(json.load(open(args.table))))
-        return
-    if not (args.out and args.run):
-        a.error("--out and --run are required")
+    args = parse_bench_args(a, table)
+    if not args.run:
+        a.error("--run is required")
     specs = [parse_run(r) for r in args.run]
     os.makedirs(args.work, exist_ok=True)
     result = provenance("whole_runs")
