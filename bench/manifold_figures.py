@@ -28,6 +28,7 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 from accuracy_variants import parse_bench_args, provenance, write_result  # noqa: E402
+from peer_compare import timed  # noqa: E402
 
 SPEED_COLUMNS = [
     ("DT", "seconds_triangulation", "{:.2f} s"),
@@ -41,17 +42,6 @@ SPEED_COLUMNS = [
 ]
 
 
-def timed(cmd, stdout):
-    """Runs cmd under /usr/bin/time; returns (seconds, peak RSS in bytes)."""
-    with tempfile.NamedTemporaryFile("r", suffix=".time") as timing:
-        r = subprocess.run(["/usr/bin/time", "-f", "%e %M", "-o", timing.name] + cmd,
-                           stdout=stdout, stderr=subprocess.PIPE, text=True)
-        if r.returncode != 0:
-            raise SystemExit(f"{cmd[0]} failed (exit {r.returncode}): {r.stderr.strip()[-400:]}")
-        seconds, rss_kb = timing.read().split()[-2:]
-    return float(seconds), int(rss_kb) * 1024
-
-
 def run_speed(bench, points, repeats, variant, work):
     """`repeats` runs of one size with the variant's manifold options; manifold_bench's rows."""
     label, options = variant
@@ -61,7 +51,7 @@ def run_speed(bench, points, repeats, variant, work):
         print(f"manifold_figures: manifold_bench {points} {options}, run {i + 1} of {repeats}",
               flush=True)
         timed([bench, str(points), "--insert", "10000", "--threads", "2", "--json", path] +
-              shlex.split(options), subprocess.DEVNULL)
+              shlex.split(options), os.path.join(work, "manifold_bench.log"))
         rows += [{**r, "variant": label, "options": options} for r in json.load(open(path))]
     return rows
 
@@ -87,11 +77,10 @@ def run_poisson(bench, manisweep, points, work):
     """The manifold and Poisson from the same blob of `points` points."""
     print(f"manifold_figures: {points} points, manifold and Poisson", flush=True)
     seconds_m, rss_m = timed([bench, str(points), "--insert", "0", "--export", work],
-                             subprocess.DEVNULL)
+                             os.path.join(work, "manifold_bench.log"))
     stem = os.path.join(work, f"blob_{points}")
-    with open(stem + "_poisson.json", "w") as out:
-        seconds_p, rss_p = timed(["/usr/bin/python3", os.path.join(ROOT, "bench/poisson_baseline.py"),
-                                  stem + "_points.ply", stem + "_poisson.ply"], out)
+    seconds_p, rss_p = timed(["/usr/bin/python3", os.path.join(ROOT, "bench/poisson_baseline.py"),
+                              stem + "_points.ply", stem + "_poisson.ply"], stem + "_poisson.log")
     return {"points": points,
             "manifold": {"seconds": seconds_m, "peak_rss_bytes": rss_m,
                          **verdict(check_mesh(manisweep, stem + "_manifold.ply", work))},

@@ -32,7 +32,7 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from accuracy_variants import parse_bench_args, provenance, write_result  # noqa: E402
+from accuracy_variants import parse_bench_args, provenance, run, write_result  # noqa: E402
 
 
 def output_of(cmd):
@@ -43,13 +43,6 @@ def output_of(cmd):
         return None
 
 
-def checked(cmd, log):
-    with open(log, "w") as f:
-        r = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT)
-    if r.returncode != 0:
-        raise SystemExit(f"{' '.join(cmd[:2])} failed (exit {r.returncode}); see {log}")
-
-
 def machine(manisweep):
     return {"nvidia_smi": output_of(["nvidia-smi", "--query-gpu=name,driver_version,memory.total",
                                      "--format=csv,noheader"]),
@@ -58,7 +51,7 @@ def machine(manisweep):
 
 def kernels(bench, args, work):
     tsv = os.path.join(work, "kernels.tsv")
-    checked([bench, "--sizes", args.sizes, "--kernels", args.kernels, "--rounds",
+    run([bench, "--sizes", args.sizes, "--kernels", args.kernels, "--rounds",
              str(args.rounds), "--output", tsv], os.path.join(work, "kernels.log"))
     rows = list(csv.DictReader(open(tsv), delimiter="\t"))
     for r in rows:
@@ -84,7 +77,7 @@ def fountain_runs(manisweep, fountain, args, work):
             out = os.path.join(work, f"run_{size}_{workers}")
             print(f"sweep_machine: fountain-P11, max-image-dimension {size}, {workers} workers",
                   flush=True)
-            checked([manisweep, "reconstruct", "--input", fountain, "--output", out, "--workers",
+            run([manisweep, "reconstruct", "--input", fountain, "--output", out, "--workers",
                      str(workers), "--kernel", args.kernel, "--max-iterations",
                      str(args.iterations), "--sweep.max-image-dimension", str(size),
                      "--no-refine", "--no-report"], out + ".log")
@@ -102,7 +95,7 @@ def refinements(manisweep, fountain, mesh, work):
     for kernel in ("auto", "cpu"):
         print(f"sweep_machine: refine, --refine.kernel {kernel}", flush=True)
         start = time.perf_counter()
-        checked([manisweep, "refine", "--input", fountain, "--mesh", mesh, "--output",
+        run([manisweep, "refine", "--input", fountain, "--mesh", mesh, "--output",
                  os.path.join(work, f"refined_{kernel}.ply"), "--refine.iterations", "3",
                  "--refine.levels", "1", "--refine.kernel", kernel],
                 os.path.join(work, f"refine_{kernel}.log"))
