@@ -148,7 +148,7 @@ void MarkCheckerProblems(const Mesh& mesh, const std::vector<uint8_t>& moving, d
 }  // namespace
 
 MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& displacement,
-                             const MoveOptions& options) {
+                             const MoveOptions& options, std::vector<uint8_t>* refused) {
   const size_t n = mesh->vertices.size();
   const std::vector<Eigen::Vector3d> before = mesh->vertices;
   std::vector<double> scale(n, 1.0);
@@ -189,9 +189,11 @@ MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& dis
     }
     if (!any) break;
   }
+  if (refused) refused->assign(n, 0);
   for (size_t v = 0; v < n; ++v) {
     if (displacement[v] == Eigen::Vector3d::Zero()) continue;
     if (scale[v] == 0) {
+      if (refused) (*refused)[v] = 1;
       ++stats.refused;
       continue;
     }

@@ -69,7 +69,8 @@ struct MoveStats {
 // faces that a check (the checker's, the face turn, the clearance) finds in trouble after the move,
 // and checking again until no trouble involves a moved vertex. Trouble the mesh had before (between
 // vertices that do not move) is left alone.
+// `refused` (optional) gets 1 for every vertex asked to move that did not.
 MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& displacement,
-                             const MoveOptions& options);
+                             const MoveOptions& options, std::vector<uint8_t>* refused = nullptr);
 
 }  // namespace ms

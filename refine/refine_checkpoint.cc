@@ -39,7 +39,8 @@ void WriteRefineCheckpoint(const std::string& output, const Mesh& mesh, const Re
                             {"accepted_energy", state.accepted_energy},
                             {"has_accepted", !state.accepted.empty()},
                             {"tolerance", state.tolerance},
-                            {"camera_clearance", state.camera_clearance}};
+                            {"camera_clearance", state.camera_clearance},
+                            {"stuck", state.stuck}};
   WriteFileAtomically(
       JsonPath(output), [&](std::ostream& os) { os << j.dump(2) << "\n"; }, false);
 }
@@ -67,7 +68,14 @@ std::optional<RefineCheckpoint> ReadRefineCheckpoint(const std::string& output,
     c.state.accepted_energy = j.at("accepted_energy").get<double>();
     c.state.tolerance = j.at("tolerance").get<double>();
     c.state.camera_clearance = j.value("camera_clearance", 0.0);
+    c.state.stuck = j.value("stuck", std::vector<int32_t>());
     c.mesh = ReadMesh(MeshPath(output));
+    for (int32_t v : c.state.stuck) {
+      if (v < 0 || static_cast<size_t>(v) >= c.mesh.vertices.size()) {
+        throw InputError(json_path + ": stuck vertex " + std::to_string(v) + " out of range (" +
+                         std::to_string(c.mesh.vertices.size()) + " vertices)");
+      }
+    }
     if (j.at("has_accepted").get<bool>()) {
       Mesh accepted = ReadMesh(AcceptedPath(output));
       if (accepted.vertices.size() != c.mesh.vertices.size()) {

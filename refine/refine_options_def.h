@@ -5,11 +5,12 @@
 // Coarse to fine: `levels` image scales, each half the size of the next, the finest being the
 // images halved until they fit max_image_dimension (0: full size; 1600 as the sweep's default,
 // a quarter of the pixels of a 3072×2048 set at a quarter of the time). Iterations are split
-// evenly over the levels, the finest taking what is left over.
-// 30: on fountain-P11 most of 100 iterations' gain at 30% of the time (docs/design/refine.md).
-MS_OPTION(int, iterations, 30, "iterations", "gradient steps in all, over all levels",
+// evenly over the levels, the finest taking what is left over. 10 per level: the coarse levels
+// cost little and move the surface furthest; a fourth level (a 192-px fountain-P11) beats three
+// on fountain-P11 and the pyramids (docs/design/refine.md "Coarse to fine").
+MS_OPTION(int, iterations, 40, "iterations", "gradient steps in all, over all levels",
           InRange(0, 100000))
-MS_OPTION(int, levels, 3, "levels", "image scales, coarse to fine (each half the next)",
+MS_OPTION(int, levels, 4, "levels", "image scales, coarse to fine (each half the next)",
           InRange(1, 8))
 MS_OPTION(int, max_image_dimension, 1600, "max-image-dimension",
           "finest scale: images halved until their longest side fits this (0: full size)",
@@ -36,6 +37,12 @@ MS_OPTION(double, max_step_px, 0.5, "max-step-px",
 MS_OPTION(double, smoothness, 0.002, "smoothness",
           "thin-plate weight: vertices move by this x the bi-Laplacian per iteration",
           InRange(0, 0.125))
+// A vertex whose move was refused (it sits in a fold the images push it into) moves, in the next
+// iteration, this fraction of the way to its neighbours' mean instead, at most max_step_px
+// (0: it keeps trying; docs/design/refine.md "Unfolding").
+MS_OPTION(double, unfold, 0.5, "unfold",
+          "vertices refused a move move this fraction towards their neighbours' mean next",
+          InRange(0, 1))
 // Pixels where the ray meets the face at a grazing angle give unstable depth derivatives.
 MS_OPTION(double, min_cos_incidence, 0.1, "min-cos-incidence",
           "pixels whose ray meets its face with |cos| below this are left out", InRange(0, 1))

@@ -62,6 +62,7 @@ PairGradient SumPairs(const Mesh& mesh, const std::vector<RefineView>& views, in
 // cameras, and once remeshing has cut that into small faces it swept them onto the cameras.
 std::vector<Eigen::Vector3d> Displacements(const Mesh& mesh, const PairGradient& data,
                                            const std::vector<std::vector<int32_t>>& neighbours,
+                                           const std::vector<uint8_t>& stuck,
                                            const RefineOptions& options, double scale) {
   std::vector<Eigen::Vector3d> move(mesh.vertices.size(), Eigen::Vector3d::Zero());
   const double sigma2 = options.gaussian_sigma_px * options.gaussian_sigma_px;
@@ -79,6 +80,21 @@ std::vector<Eigen::Vector3d> Displacements(const Mesh& mesh, const PairGradient&
     const std::vector<Eigen::Vector3d> thin_plate = ThinPlateGradient(mesh, neighbours);
     for (size_t v = 0; v < move.size(); ++v) {
       if (data.parallax_rate2[v] > 0) move[v] -= scale * options.smoothness * thin_plate[v];
+    }
+  }
+  // A vertex whose last move was refused sits in a fold the images keep pushing it into: it
+  // moves towards its neighbours' mean instead, which opens the fold.
+  if (options.unfold > 0) {
+    for (size_t v = 0; v < move.size(); ++v) {
+      if (stuck.empty() || !stuck[v] || neighbours[v].empty()) continue;
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (int32_t u : neighbours[v]) mean += mesh.vertices[u];
+      Eigen::Vector3d d =
+          options.unfold * (mean / static_cast<double>(neighbours[v].size()) - mesh.vertices[v]);
+      const double h = data.parallax_rate2[v];
+      const double limit = h > 0 ? scale * options.max_step_px * std::sqrt(data.weight[v] / h) : 0;
+      if (d.norm() > limit) d *= limit / d.norm();
+      move[v] = d;
     }
   }
   return move;
@@ -278,6 +294,11 @@ void RefineLevel(Refinement& r, int li, int l, int level, int count, const Refin
   std::vector<Eigen::Vector3d> accepted =
       resumed ? resumed->accepted : std::vector<Eigen::Vector3d>();
   double accepted_energy = resumed ? resumed->accepted_energy : 0;
+  std::vector<uint8_t> stuck;  // vertices whose last move was refused
+  if (resumed) {
+    stuck.assign(mesh->vertices.size(), 0);
+    for (int32_t v : resumed->stuck) stuck[v] = 1;
+  }
   PairGradient accepted_data;
   if (!accepted.empty()) {  // the gradient there, as the interrupted run had it
     Mesh at_accepted = *mesh;
@@ -311,8 +332,9 @@ void RefineLevel(Refinement& r, int li, int l, int level, int count, const Refin
     }
     it.step_scale = scale;
     Timer check_timer;
-    const MoveStats moved = MoveVerticesSafely(
-        mesh, Displacements(*mesh, data, neighbours, r.options, scale), r.move_options);
+    const MoveStats moved =
+        MoveVerticesSafely(mesh, Displacements(*mesh, data, neighbours, stuck, r.options, scale),
+                           r.move_options, &stuck);
     it.checks = moved.rounds;
     it.check_seconds = check_timer.Seconds();
     it.moved = moved.moved;
@@ -332,6 +354,9 @@ void RefineLevel(Refinement& r, int li, int l, int level, int count, const Refin
       state.accepted = accepted;
       state.tolerance = r.move_options.tolerance;
       state.camera_clearance = r.move_options.clearance;
+      for (size_t v = 0; v < stuck.size(); ++v) {
+        if (stuck[v]) state.stuck.push_back(static_cast<int32_t>(v));
+      }
       r.hooks.checkpoint(*mesh, state);
     }
   }

@@ -66,6 +66,7 @@ struct RefineState {
   std::vector<Eigen::Vector3d> accepted;  // the last accepted vertices; empty before the first
   double tolerance = 0;                   // of the checks, fixed at the start
   double camera_clearance = 0;            // the same (0 from checkpoints older than it: none)
+  std::vector<int32_t> stuck;             // vertices whose last move was refused (--refine.unfold)
 };
 
 // Every camera with each of its neighbours (scene/view_selection.h), in camera order.
