@@ -41,7 +41,8 @@ MS_OPTION(double, smoothness, 0.002, "smoothness",
 // iteration, this fraction of the way to its neighbours' mean instead, at most max_step_px
 // (0: it keeps trying; docs/design/refine.md "Unfolding").
 MS_OPTION(double, unfold, 0.5, "unfold",
-          "vertices refused a move move this fraction towards their neighbours' mean next",
+          "a vertex whose move was refused moves this fraction towards its neighbours' mean "
+          "at the next iteration (0: off)",
           InRange(0, 1))
 // Pixels where the ray meets the face at a grazing angle give unstable depth derivatives.
 MS_OPTION(double, min_cos_incidence, 0.1, "min-cos-incidence",

@@ -288,6 +288,30 @@ TEST(MeshMoves, AMoveThroughAnotherFaceIsRefused) {
   EXPECT_TRUE(ValidWithBoundary(mesh));
 }
 
+// Without halvings, the move through the upper sheet is refused, and the refused vertices (what
+// --refine.unfold moves towards its neighbours next) are that vertex alone.
+TEST(MeshMoves, RefusedVerticesAreReported) {
+  Mesh mesh = MakeFlatSquare(0, 1, 4);
+  const Mesh upper = MakeFlatSquare(0.1, 1, 4);
+  const int32_t offset = static_cast<int32_t>(mesh.vertices.size());
+  for (const auto& v : upper.vertices) mesh.vertices.push_back(v);
+  for (const auto& f : upper.faces)
+    mesh.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  std::vector<Eigen::Vector3d> move(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  move[12] = {0, 0, 0.3};
+  move[0] = {0, 0, 0.02};
+  MoveOptions options;
+  options.tolerance = 1e-6;
+  options.max_halvings = 0;
+  std::vector<uint8_t> refused;
+  const MoveStats stats = MoveVerticesSafely(&mesh, move, options, &refused);
+  ASSERT_EQ(refused.size(), mesh.vertices.size());
+  EXPECT_EQ(stats.refused, 1);
+  EXPECT_EQ(refused[12], 1);
+  EXPECT_EQ(std::count(refused.begin(), refused.end(), 1), 1);
+  EXPECT_EQ(mesh.vertices[0].z(), 0.02);
+}
+
 // The pyramid scene with its apex pulled down to two thirds of its height: refinement from the
 // images alone (no smoothing) brings it back, and the mesh stays free of self-intersections.
 TEST(RefineMesh, PullsAFlattenedApexBackToTheTruth) {
