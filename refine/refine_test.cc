@@ -267,13 +267,19 @@ TEST(MeshMoves, TheSurfaceKeepsClearOfTheCameras) {
 }
 
 // A move that would push a vertex through the opposite sheet is refused; the others are made.
-TEST(MeshMoves, AMoveThroughAnotherFaceIsRefused) {
+// Two parallel 4x4 sheets, 0.1 apart: vertex 12 is the lower one's centre.
+Mesh TwoSheets() {
   Mesh mesh = MakeFlatSquare(0, 1, 4);
   const Mesh upper = MakeFlatSquare(0.1, 1, 4);
   const int32_t offset = static_cast<int32_t>(mesh.vertices.size());
   for (const auto& v : upper.vertices) mesh.vertices.push_back(v);
   for (const auto& f : upper.faces)
     mesh.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  return mesh;
+}
+
+TEST(MeshMoves, AMoveThroughAnotherFaceIsRefused) {
+  Mesh mesh = TwoSheets();
   std::vector<Eigen::Vector3d> move(mesh.vertices.size(), Eigen::Vector3d::Zero());
   move[12] = {0, 0, 0.3};  // centre of the lower sheet, through the upper one
   move[0] = {0, 0, 0.02};  // a free move far from it
@@ -291,12 +297,7 @@ TEST(MeshMoves, AMoveThroughAnotherFaceIsRefused) {
 // Without halvings, the move through the upper sheet is refused, and the refused vertices (what
 // --refine.unfold moves towards its neighbours next) are that vertex alone.
 TEST(MeshMoves, RefusedVerticesAreReported) {
-  Mesh mesh = MakeFlatSquare(0, 1, 4);
-  const Mesh upper = MakeFlatSquare(0.1, 1, 4);
-  const int32_t offset = static_cast<int32_t>(mesh.vertices.size());
-  for (const auto& v : upper.vertices) mesh.vertices.push_back(v);
-  for (const auto& f : upper.faces)
-    mesh.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  Mesh mesh = TwoSheets();
   std::vector<Eigen::Vector3d> move(mesh.vertices.size(), Eigen::Vector3d::Zero());
   move[12] = {0, 0, 0.3};
   move[0] = {0, 0, 0.02};
