@@ -283,10 +283,57 @@ bool SegmentCrossesTriangle(const Vector3d& a, const Vector3d& b, const Triangle
   return (s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0);
 }
 
+bool TrianglesSurelyApart(const Triangle& p, const Triangle& q, double distance) {
+  Vector3d lo = p[0], hi = p[0];
+  for (const Triangle* t : {&p, &q}) {
+    for (const Vector3d& x : *t) {
+      lo = lo.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
+  }
+  const double margin =
+      1e-9 * (hi - lo).norm() + 1e-12 * hi.cwiseAbs().cwiseMax(lo.cwiseAbs()).sum();
+  const auto apart_along = [&](Vector3d axis) {
+    const double length = axis.norm();
+    if (!(length > 0)) return false;
+    axis /= length;
+    const double p0 = axis.dot(p[0]), p1 = axis.dot(p[1]), p2 = axis.dot(p[2]);
+    const double q0 = axis.dot(q[0]), q1 = axis.dot(q[1]), q2 = axis.dot(q[2]);
+    const double gap = std::max(std::min({q0, q1, q2}) - std::max({p0, p1, p2}),
+                                std::min({p0, p1, p2}) - std::max({q0, q1, q2}));
+    return gap > distance + margin;
+  };
+  const Vector3d np = (p[1] - p[0]).cross(p[2] - p[0]), nq = (q[1] - q[0]).cross(q[2] - q[0]);
+  if (apart_along(np) || apart_along(nq)) return true;
+  for (int i = 0; i < 3; ++i) {
+    if (apart_along(np.cross(p[(i + 1) % 3] - p[i])) ||
+        apart_along(nq.cross(q[(i + 1) % 3] - q[i]))) {
+      return true;
+    }
+  }
+  return false;
+}
+
+namespace {
+
+// SegmentCrossesTriangle, confirmed: the point where ab meets t's plane lies on t (within a
+// rounding's reach). Nearly in t's plane, the orientations that test finds crossing are rounding
+// noise; an edge that does not meet t there is left to the distances.
+bool SegmentMeetsTriangle(const Vector3d& a, const Vector3d& b, const Triangle& t) {
+  if (!SegmentCrossesTriangle(a, b, t)) return false;
+  const double sa = Orient(t[0], t[1], t[2], a), sb = Orient(t[0], t[1], t[2], b);
+  const Vector3d x = sa == sb ? a : Vector3d(a + sa / (sa - sb) * (b - a));
+  const double size = (b - a).norm() + (t[1] - t[0]).norm() + (t[2] - t[1]).norm();
+  const double reach = 1e-9 * size;
+  return PointTriangleDistance2(x, t) <= reach * reach;
+}
+
+}  // namespace
+
 double TriangleDistance(const Triangle& p, const Triangle& q) {
   for (int i = 0; i < 3; ++i) {
-    if (SegmentCrossesTriangle(p[i], p[(i + 1) % 3], q)) return 0;
-    if (SegmentCrossesTriangle(q[i], q[(i + 1) % 3], p)) return 0;
+    if (SegmentMeetsTriangle(p[i], p[(i + 1) % 3], q)) return 0;
+    if (SegmentMeetsTriangle(q[i], q[(i + 1) % 3], p)) return 0;
   }
   double d2 = std::numeric_limits<double>::infinity();
   for (int i = 0; i < 3; ++i) {
@@ -605,7 +652,9 @@ void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
         box_of(c.g, &lo_g, &hi_g);
         c.crosses = (hi_f.array() >= lo_g.array()).all() && (hi_g.array() >= lo_f.array()).all() &&
                     float_robustness_internal::TrianglesIntersectLikeOpen3d(p, q);
-        c.distance = float_robustness_internal::TriangleDistance(p, q);
+        c.distance = float_robustness_internal::TrianglesSurelyApart(p, q, tol)
+                         ? std::numeric_limits<double>::infinity()
+                         : float_robustness_internal::TriangleDistance(p, q);
       }
     });
     for (const Candidate& c : batch) {

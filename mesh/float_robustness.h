@@ -122,9 +122,19 @@ bool TrianglesIntersectLikeOpen3d(const Triangle& p, const Triangle& q);
 // when ab lies in the triangle's plane (left to the distance computation).
 bool SegmentCrossesTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Triangle& t);
 
-// Distance between two triangles in double precision: 0 when an edge of one crosses the other,
-// else the minimum of the 6 point-triangle and 9 segment-segment distances.
+// Distance between two triangles in double precision: 0 when an edge of one crosses the other
+// (and meets it there: nearly coplanar edges that only seem to cross are measured), else the
+// minimum of the 6 point-triangle and 9 segment-segment distances.
 double TriangleDistance(const Triangle& p, const Triangle& q);
+
+// True when triangles p and q are certainly more than `distance` apart: their projections onto
+// one of eight axes (the two normals and each edge's normal within its triangle's plane) leave a
+// gap wider than that, with a margin for rounding. A gap along any unit axis bounds the distance
+// from below, so TriangleDistance, and the exact test where `distance` is 0, need not look at the
+// pair; most pairs a box search hands over are a face or more apart like this. (Möller's test as
+// Open3D runs it snaps relative to per-axis scales and can see such a pair touch: it is not
+// spared.)
+bool TrianglesSurelyApart(const Triangle& p, const Triangle& q, double distance);
 
 // A point of p and a point of q at their smallest distance (the 6 point-triangle and 9
 // segment-segment candidates; meaningless when they cross): the direction that parts them.

@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "base/error.h"
 #include "mesh/mesh_checker.h"
@@ -20,6 +21,7 @@ using float_robustness_internal::SegmentCrossesTriangle;
 using float_robustness_internal::TriangleClosestPoints;
 using float_robustness_internal::TriangleDistance;
 using float_robustness_internal::TrianglesIntersectLikeOpen3d;
+using float_robustness_internal::TrianglesSurelyApart;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 using Triangle = float_robustness_internal::Triangle;
@@ -345,8 +347,51 @@ TEST(FloatRobustnessKernels, TriangleDistance) {
   EXPECT_NEAR(TriangleDistance(t, {V(0.25, 0.25, 0.1), V(0.25, 0.25, 5), V(0.5, 0.5, 5)}), 0.1,
               1e-15);
   EXPECT_EQ(TriangleDistance(t, {V(0.2, 0.2, -1), V(0.3, 0.2, 1), V(0.2, 0.3, 1)}), 0.0);
+  // Coplanar up to rounding and 0.083 apart: an edge that seems to cross the other triangle
+  // (the orientations are rounding noise there) but does not meet it is measured.
+  const Triangle p = {V(0.86246482234279265, 0.39513222262418379, -0.45767676201338936),
+                      V(0.62829662265936914, -0.33111240537558384, -0.24659929040345996),
+                      V(-0.28941908192973931, -0.58955085508104843, -0.27440284102342993)};
+  const Triangle q = {V(0.31023998964440208, 0.32677762434707047, -0.50320529793519475),
+                      V(0.54080833303053377, 1.4062755398011144, -0.83144632927011708),
+                      V(1.6137559259402794, 0.67975285061385571, -0.45905167675938108)};
+  EXPECT_NEAR(TriangleDistance(p, q), 0.0830449, 1e-6);
+  EXPECT_FALSE(TrianglesIntersectLikeOpen3d(p, q));
   // A degenerate (zero-area) triangle is measured through its edges.
   EXPECT_NEAR(TriangleDistance(t, {V(2, 0, 0), V(3, 0, 0), V(4, 0, 0)}), 1.0, 1e-15);
+}
+
+// The cheap pre-test never spares a pair the distance would flag: over random pairs of triangles
+// (coplanar ones and near misses included), "surely apart by d" means farther than d; and it
+// does spare pairs a face apart in a flat mesh.
+TEST(FloatRobustnessKernels, SurelyApartNeverHidesAClosePair) {
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  const auto point = [&](double spread) -> V {
+    const double x = unit(random), y = unit(random), z = unit(random);
+    return spread * V(x, y, z);
+  };
+  int apart = 0;
+  for (int i = 0; i < 20000; ++i) {
+    Triangle p = {point(1), point(1), point(1)}, q;
+    const V shift = point(1.5);
+    for (int k = 0; k < 3; ++k) q[k] = shift + point(1);
+    if (i % 3 == 0) {  // in p's plane
+      const V n = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
+      for (V& x : q) x -= n * n.dot(x - p[0]);
+    }
+    const double d = i % 2 == 0 ? 0 : 0.05;
+    if (!TrianglesSurelyApart(p, q, d)) continue;
+    ++apart;
+    ASSERT_GT(TriangleDistance(p, q), d) << i;
+  }
+  EXPECT_GT(apart, 2000);
+  // Two faces of a flat grid with one face between them: apart, though their boxes meet.
+  const Triangle a = {V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)};
+  const Triangle b = {V(1, 1, 0), V(2, 1, 0), V(1, 2, 0)};
+  EXPECT_TRUE(TrianglesSurelyApart(a, b, 0.1));
+  EXPECT_FALSE(TrianglesSurelyApart(a, b, 1));
+  EXPECT_FALSE(TrianglesSurelyApart(a, {V(0.2, 0.2, -1), V(0.3, 0.2, 1), V(0.2, 0.3, 1)}, 0));
 }
 
 TEST(FloatRobustnessKernels, TriangleClosestPoints) {

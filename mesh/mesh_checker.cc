@@ -230,7 +230,17 @@ class SharedSelfIntersectionSearch {
       truncated_ = true;
       return;
     }
-    if (FacesIntersect(mesh_.faces[f], mesh_.faces[g], points_)) found_.push_back({f, g});
+    const auto &a = mesh_.faces[f], &b = mesh_.faces[g];
+    const bool adjacent = std::any_of(
+        a.begin(), a.end(), [&b](int32_t v) { return v == b[0] || v == b[1] || v == b[2]; });
+    if (!adjacent && float_robustness_internal::TrianglesSurelyApart(Corners(a), Corners(b), 0)) {
+      return;
+    }
+    if (FacesIntersect(a, b, points_)) found_.push_back({f, g});
+  }
+
+  float_robustness_internal::Triangle Corners(const std::array<int32_t, 3>& face) const {
+    return {mesh_.vertices[face[0]], mesh_.vertices[face[1]], mesh_.vertices[face[2]]};
   }
 
   void Report(int max_examples, MeshReport* report) {

@@ -25,6 +25,19 @@ std::vector<std::vector<int32_t>> VertexNeighbours(const Mesh& mesh) {
   return neighbours;
 }
 
+std::vector<Eigen::Vector3d> UnfoldingMoves(const Mesh& mesh,
+                                            const std::vector<std::vector<int32_t>>& neighbours,
+                                            const std::vector<uint8_t>& stuck, double fraction) {
+  std::vector<Eigen::Vector3d> move(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  for (size_t v = 0; v < stuck.size() && v < move.size(); ++v) {
+    if (!stuck[v] || neighbours[v].empty()) continue;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (int32_t u : neighbours[v]) mean += mesh.vertices[u];
+    move[v] = fraction * (mean / static_cast<double>(neighbours[v].size()) - mesh.vertices[v]);
+  }
+  return move;
+}
+
 std::vector<Eigen::Vector3d> ThinPlateGradient(
     const Mesh& mesh, const std::vector<std::vector<int32_t>>& neighbours) {
   const size_t n = mesh.vertices.size();

@@ -31,6 +31,12 @@ std::vector<std::vector<int32_t>> VertexNeighbours(const Mesh& mesh);
 std::vector<Eigen::Vector3d> ThinPlateGradient(const Mesh& mesh,
                                                const std::vector<std::vector<int32_t>>& neighbours);
 
+// Moves that open a fold (--refine.unfold): every vertex flagged in `stuck` moves `fraction` of
+// the way to its neighbours' mean, which flattens its ring; the others stay.
+std::vector<Eigen::Vector3d> UnfoldingMoves(const Mesh& mesh,
+                                            const std::vector<std::vector<int32_t>>& neighbours,
+                                            const std::vector<uint8_t>& stuck, double fraction);
+
 // What the checker (mesh/mesh_checker.h) objects to, looking at pairs with a face flagged in
 // `focus` (empty: all; MeshCheckOptions::focus_faces) with `tolerance` as its absolute float
 // tolerance: face pairs that intersect exactly (adjacent ones included: a fold), come within the

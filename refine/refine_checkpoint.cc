@@ -29,18 +29,18 @@ void WriteRefineCheckpoint(const std::string& output, const Mesh& mesh, const Re
     accepted.faces = mesh.faces;
     WriteMesh(accepted, AcceptedPath(output));
   }
-  const nlohmann::json j = {{"format", "manisweep refine checkpoint"},
-                            {"version", 1},
-                            {"fingerprint", fingerprint},
-                            {"level_index", state.level_index},
-                            {"iteration_in_level", state.iteration_in_level},
-                            {"iterations_done", state.iterations_done},
-                            {"scale", state.scale},
-                            {"accepted_energy", state.accepted_energy},
-                            {"has_accepted", !state.accepted.empty()},
-                            {"tolerance", state.tolerance},
-                            {"camera_clearance", state.camera_clearance},
-                            {"stuck", state.stuck}};
+  nlohmann::json j = {{"format", "manisweep refine checkpoint"},
+                      {"version", 1},
+                      {"fingerprint", fingerprint},
+                      {"level_index", state.level_index},
+                      {"iteration_in_level", state.iteration_in_level},
+                      {"iterations_done", state.iterations_done},
+                      {"scale", state.scale},
+                      {"accepted_energy", state.accepted_energy},
+                      {"has_accepted", !state.accepted.empty()},
+                      {"tolerance", state.tolerance},
+                      {"camera_clearance", state.camera_clearance}};
+  if (!state.stuck.empty()) j["stuck"] = state.stuck;  // only with --refine.unfold
   WriteFileAtomically(
       JsonPath(output), [&](std::ostream& os) { os << j.dump(2) << "\n"; }, false);
 }

@@ -313,6 +313,37 @@ TEST(MeshMoves, RefusedVerticesAreReported) {
   EXPECT_EQ(mesh.vertices[0].z(), 0.02);
 }
 
+// A fold the checks refuse to close is opened by unfolding, and then the same move is made:
+// vertex 12, the centre of a flat 4 x 4 sheet (cells 0.5 wide), leans over towards its neighbour
+// 13 at (0.5, 0). Pushed past it, its faces would turn over (refused); moved half way to its
+// neighbours' mean (the origin), the push that was refused fits.
+TEST(MeshMoves, UnfoldingOpensAFoldTheChecksRefuse) {
+  Mesh mesh = MakeFlatSquare(0, 1, 4);
+  ASSERT_EQ(mesh.vertices[13], Eigen::Vector3d(0.5, 0, 0));
+  mesh.vertices[12] = {0.4, 0, 0.03};
+  ASSERT_TRUE(ValidWithBoundary(mesh));
+  MoveOptions options;
+  options.tolerance = 1e-6;
+  options.max_halvings = 0;
+  std::vector<Eigen::Vector3d> push(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  push[12] = {0.2, 0, 0};
+  std::vector<uint8_t> stuck;
+  EXPECT_EQ(MoveVerticesSafely(&mesh, push, options, &stuck).refused, 1);
+  ASSERT_EQ(stuck[12], 1);
+  EXPECT_EQ(mesh.vertices[12], Eigen::Vector3d(0.4, 0, 0.03));
+
+  const std::vector<Eigen::Vector3d> unfold =
+      UnfoldingMoves(mesh, VertexNeighbours(mesh), stuck, 0.5);
+  EXPECT_TRUE(unfold[12].isApprox(Eigen::Vector3d(-0.2, 0, -0.015), 1e-12)) << unfold[12];
+  EXPECT_EQ(unfold[13], Eigen::Vector3d::Zero());  // not stuck: stays
+  EXPECT_EQ(MoveVerticesSafely(&mesh, unfold, options, &stuck).moved, 1);
+  EXPECT_EQ(MoveVerticesSafely(&mesh, push, options, &stuck).moved, 1);
+  EXPECT_TRUE(mesh.vertices[12].isApprox(Eigen::Vector3d(0.4, 0, 0.015), 1e-12))
+      << mesh.vertices[12];
+  EXPECT_EQ(std::count(stuck.begin(), stuck.end(), 1), 0);
+  EXPECT_TRUE(ValidWithBoundary(mesh));
+}
+
 // The pyramid scene with its apex pulled down to two thirds of its height: refinement from the
 // images alone (no smoothing) brings it back, and the mesh stays free of self-intersections.
 TEST(RefineMesh, PullsAFlattenedApexBackToTheTruth) {
@@ -337,37 +368,74 @@ TEST(RefineMesh, PullsAFlattenedApexBackToTheTruth) {
   EXPECT_TRUE(ValidWithBoundary(mesh));
 }
 
-// What no camera sees stays where it is: a second surface behind the cameras, which the thin
-// plate alone would shrink, keeps every vertex bit for bit while the seen pyramid moves.
-TEST(RefineMesh, ThinPlateLeavesUnseenVerticesInPlace) {
-  const PyramidScene scene = MakePyramidScene();
+// The lowered pyramid and, behind the cameras (they look down), a small uneven icosahedron no
+// camera sees; `seen` gets the pyramid's vertex count (the icosahedron's come after).
+Mesh PyramidAndUnseenIcosahedron(const PyramidScene& scene, size_t* seen) {
   Mesh mesh = LoweredApex(scene, 0.8);
-  const size_t seen = mesh.vertices.size();
+  *seen = mesh.vertices.size();
   Eigen::Vector3d behind = Eigen::Vector3d::Zero();
   for (const SweepCamera& camera : scene.cameras) behind += camera.view.Center();
   behind /= static_cast<double>(scene.cameras.size());
-  behind.z() += 2 * scene.pyramid_height;  // the cameras look down
+  behind.z() += 2 * scene.pyramid_height;
   Mesh unseen = test_meshes::Icosahedron();
   for (size_t v = 0; v < unseen.vertices.size(); ++v) {
     // Uneven, so that its thin-plate gradient is not zero.
     unseen.vertices[v] = behind + 0.1 * (1.0 + 0.05 * static_cast<double>(v)) * unseen.vertices[v];
   }
+  const auto offset = static_cast<int32_t>(*seen);
   for (const Eigen::Vector3d& x : unseen.vertices) mesh.vertices.push_back(x);
   for (const auto& f : unseen.faces) {
-    mesh.faces.push_back({f[0] + static_cast<int32_t>(seen), f[1] + static_cast<int32_t>(seen),
-                          f[2] + static_cast<int32_t>(seen)});
+    mesh.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
   }
+  return mesh;
+}
+
+// What no camera sees stays where it is: a second surface behind the cameras, which the thin
+// plate alone would shrink, keeps every vertex bit for bit while the seen pyramid moves.
+TEST(RefineMesh, ThinPlateLeavesUnseenVerticesInPlace) {
+  const PyramidScene scene = MakePyramidScene();
+  size_t seen = 0;
+  Mesh mesh = PyramidAndUnseenIcosahedron(scene, &seen);
   const Mesh start = mesh;
   RefineOptions options;
   options.iterations = 4;
   options.levels = 1;
   options.smoothness = 0.03;
-  options.max_edge_px = 0;  // vertex for vertex: no remeshing (it would split the unseen faces)
+  options.max_edge_px = 0;  // vertex for vertex: no remeshing
   RefineMesh(&mesh, scene.cameras, kPyramidPairs, options);
   EXPECT_NE(mesh.vertices[0], start.vertices[0]);
   for (size_t v = seen; v < mesh.vertices.size(); ++v) {
     EXPECT_EQ(mesh.vertices[v], start.vertices[v]) << "unseen vertex " << v;
   }
+  EXPECT_TRUE(ValidWithBoundary(mesh));
+}
+
+// Remeshing leaves what no camera sees alone too: no edge there is split (none is too long for
+// an image) or collapsed (none is too short for one), so the icosahedron behind the cameras
+// keeps its 12 vertices and 20 faces, while the seen pyramid is remeshed.
+TEST(RefineMesh, RemeshingLeavesUnseenFacesAlone) {
+  const PyramidScene scene = MakePyramidScene();
+  size_t seen = 0;
+  Mesh mesh = PyramidAndUnseenIcosahedron(scene, &seen);
+  const std::vector<Eigen::Vector3d> unseen(mesh.vertices.begin() + static_cast<long>(seen),
+                                            mesh.vertices.end());
+  RefineOptions options;
+  options.iterations = 1;
+  options.levels = 1;
+  options.max_edge_px = 100;
+  options.min_edge_px = 40;  // collapse boldly wherever an image measures an edge
+  const RefineStats stats = RefineMesh(&mesh, scene.cameras, kPyramidPairs, options);
+  EXPECT_GT(stats.splits + stats.collapses, 0);
+  std::vector<uint8_t> is_unseen(mesh.vertices.size(), 0);
+  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    is_unseen[v] = std::find(unseen.begin(), unseen.end(), mesh.vertices[v]) != unseen.end();
+  }
+  EXPECT_EQ(std::count(is_unseen.begin(), is_unseen.end(), 1), 12);
+  EXPECT_EQ(std::count_if(mesh.faces.begin(), mesh.faces.end(),
+                          [&](const auto& f) {
+                            return is_unseen[f[0]] && is_unseen[f[1]] && is_unseen[f[2]];
+                          }),
+            20);
   EXPECT_TRUE(ValidWithBoundary(mesh));
 }
 
@@ -489,7 +557,8 @@ TEST(Remesh, SplittingStopsAtTheVertexBudget) {
 }
 
 // A refinement resumed from a checkpoint ends with the mesh of an uninterrupted one, bit for bit,
-// remeshing and backtracking included (the checkpoint is taken inside the second level).
+// remeshing, backtracking and unfolding included (the checkpoint is taken inside the second
+// level, with refused vertices waiting to unfold).
 TEST(RefineMesh, ResumingFromACheckpointGivesTheSameMesh) {
   const PyramidScene scene = MakePyramidScene();
   const Mesh start = LoweredApex(scene, 0.7);
@@ -497,6 +566,8 @@ TEST(RefineMesh, ResumingFromACheckpointGivesTheSameMesh) {
   options.iterations = 8;
   options.levels = 2;
   options.max_edge_px = 40;
+  options.max_face_turn_deg = 1;  // so that some moves are refused and unfold at the next step
+  options.max_halvings = 0;
   Mesh whole = start;
   Mesh saved_mesh;
   RefineState saved;
@@ -511,6 +582,7 @@ TEST(RefineMesh, ResumingFromACheckpointGivesTheSameMesh) {
   ASSERT_GT(stats.splits, 0);
   ASSERT_EQ(saved.level_index, 1);
   ASSERT_EQ(saved.iteration_in_level, 2);
+  ASSERT_FALSE(saved.stuck.empty()) << "no refused vertex at the checkpoint: unfolding untested";
   Mesh resumed = saved_mesh;
   RefineHooks resume;
   resume.resume = &saved;

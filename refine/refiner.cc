@@ -55,6 +55,19 @@ PairGradient SumPairs(const Mesh& mesh, const std::vector<RefineView>& views, in
   return total;
 }
 
+// The longest move a vertex may make in one step: max_step_px pixels of reprojection shift at
+// this vertex, as a depth change (sqrt(W / H) per pixel), times `scale`; none where no image
+// moves it (H = 0).
+double StepLimit(const PairGradient& data, size_t v, const RefineOptions& options, double scale) {
+  const double h = data.parallax_rate2[v];
+  return h > 0 ? scale * options.max_step_px * std::sqrt(data.weight[v] / h) : 0;
+}
+
+Eigen::Vector3d CappedAt(const Eigen::Vector3d& d, double limit) {
+  const double length = d.norm();
+  return length > limit ? Eigen::Vector3d(d * (limit / length)) : d;
+}
+
 // The step of docs/design/refine.md: -step x g / H per vertex (a Gauss-Newton scale), at most
 // max_step_px pixels of reprojection shift, plus the thin plate's -smoothness x dE_s/dv; all
 // times `scale` (backtracking, in (0, 1]). The thin plate moves only vertices the images move
@@ -69,12 +82,8 @@ std::vector<Eigen::Vector3d> Displacements(const Mesh& mesh, const PairGradient&
   for (size_t v = 0; v < move.size(); ++v) {
     const double h = data.parallax_rate2[v];
     if (!(h > 0)) continue;
-    Eigen::Vector3d d = -scale * options.step * sigma2 * data.gradient[v] / h;
-    // One pixel of reprojection shift at this vertex, as a depth change: sqrt(W / H).
-    const double limit = scale * options.max_step_px * std::sqrt(data.weight[v] / h);
-    const double length = d.norm();
-    if (length > limit) d *= limit / length;
-    move[v] = d;
+    const Eigen::Vector3d d = -scale * options.step * sigma2 * data.gradient[v] / h;
+    move[v] = CappedAt(d, StepLimit(data, v, options, scale));
   }
   if (options.smoothness > 0) {
     const std::vector<Eigen::Vector3d> thin_plate = ThinPlateGradient(mesh, neighbours);
@@ -85,16 +94,12 @@ std::vector<Eigen::Vector3d> Displacements(const Mesh& mesh, const PairGradient&
   // A vertex whose last move was refused sits in a fold the images keep pushing it into: it
   // moves towards its neighbours' mean instead, which opens the fold.
   if (options.unfold > 0) {
-    for (size_t v = 0; v < move.size(); ++v) {
-      if (stuck.empty() || !stuck[v] || neighbours[v].empty()) continue;
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (int32_t u : neighbours[v]) mean += mesh.vertices[u];
-      Eigen::Vector3d d =
-          options.unfold * (mean / static_cast<double>(neighbours[v].size()) - mesh.vertices[v]);
-      const double h = data.parallax_rate2[v];
-      const double limit = h > 0 ? scale * options.max_step_px * std::sqrt(data.weight[v] / h) : 0;
-      if (d.norm() > limit) d *= limit / d.norm();
-      move[v] = d;
+    const std::vector<Eigen::Vector3d> unfold =
+        UnfoldingMoves(mesh, neighbours, stuck, options.unfold);
+    for (size_t v = 0; v < stuck.size(); ++v) {
+      if (stuck[v] && !neighbours[v].empty()) {
+        move[v] = CappedAt(unfold[v], StepLimit(data, v, options, scale));
+      }
     }
   }
   return move;
@@ -157,7 +162,13 @@ void Remesh(Mesh* mesh, const std::vector<RefineView>& views, const RefineOption
             double tolerance, RefineStats* stats) {
   if (options.min_edge_px > 0) {
     const CollapseStats collapse = CollapseShortEdges(
-        mesh, [&](const Eigen::Vector3d& x) { return options.min_edge_px * Footprint(views, x); },
+        mesh,
+        [&](const Eigen::Vector3d& x) {
+          // Where no camera sees the surface (its footprint is infinite), nothing is collapsed:
+          // collapses there would reshape matter no image supports, up to crossing a camera.
+          const double footprint = Footprint(views, x);
+          return std::isfinite(footprint) ? options.min_edge_px * footprint : 0.0;
+        },
         options.max_face_turn_deg, tolerance);
     stats->collapses += collapse.collapses;
     stats->collapses_refused += collapse.refused;
@@ -334,7 +345,7 @@ void RefineLevel(Refinement& r, int li, int l, int level, int count, const Refin
     Timer check_timer;
     const MoveStats moved =
         MoveVerticesSafely(mesh, Displacements(*mesh, data, neighbours, stuck, r.options, scale),
-                           r.move_options, &stuck);
+                           r.move_options, r.options.unfold > 0 ? &stuck : nullptr);
     it.checks = moved.rounds;
     it.check_seconds = check_timer.Seconds();
     it.moved = moved.moved;
