@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "base/check.h"
 #include "base/error.h"
 #include "refine/mesh_moves.h"
 
@@ -21,22 +22,63 @@ using Edge = std::pair<int32_t, int32_t>;  // (smaller, larger) vertex index
 
 Edge Key(int32_t a, int32_t b) { return a < b ? Edge{a, b} : Edge{b, a}; }
 
-// Every edge with the faces that have it (one on a boundary, two inside), in edge order.
-// An edge in more than two faces is an InternalError naming `who`.
-std::map<Edge, std::vector<int32_t>> EdgeFaces(const Mesh& mesh, const char* who) {
-  std::map<Edge, std::vector<int32_t>> faces_of;
-  for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    const auto& t = mesh.faces[f];
-    for (int k = 0; k < 3; ++k) {
-      std::vector<int32_t>& faces = faces_of[Key(t[k], t[(k + 1) % 3])];
-      faces.push_back(static_cast<int32_t>(f));
-      if (faces.size() > 2) {
-        throw InternalError(std::string(who) + ": an edge is in more than two faces");
+// Every edge with the faces that have it (one on a boundary, two inside, in face order), sorted
+// by edge: a flat table built by one sort (a map of vectors cost two allocations an edge). An
+// edge in more than two faces is an InternalError naming `who`.
+class EdgeFaceTable {
+ public:
+  struct Faces {
+    int32_t face[2] = {-1, -1};
+    int32_t count = 0;
+    size_t size() const { return static_cast<size_t>(count); }
+    int32_t operator[](size_t i) const { return face[i]; }
+    const int32_t* begin() const { return face; }
+    const int32_t* end() const { return face + count; }
+  };
+  struct Entry {
+    Edge edge;
+    Faces faces;
+  };
+
+  EdgeFaceTable(const Mesh& mesh, const char* who) {
+    std::vector<std::pair<Edge, int32_t>> sides;
+    sides.reserve(3 * mesh.faces.size());
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      const auto& t = mesh.faces[f];
+      for (int k = 0; k < 3; ++k) {
+        sides.push_back({Key(t[k], t[(k + 1) % 3]), static_cast<int32_t>(f)});
       }
     }
+    std::sort(sides.begin(), sides.end());
+    for (const auto& [edge, f] : sides) {
+      if (entries_.empty() || entries_.back().edge != edge) entries_.push_back({edge, {}});
+      Faces& faces = entries_.back().faces;
+      if (faces.count == 2) {
+        throw InternalError(std::string(who) + ": an edge is in more than two faces");
+      }
+      faces.face[faces.count++] = f;
+    }
   }
-  return faces_of;
-}
+
+  std::vector<Entry>::const_iterator begin() const { return entries_.begin(); }
+  std::vector<Entry>::const_iterator end() const { return entries_.end(); }
+  bool Has(const Edge& edge) const { return Find(edge) != entries_.end(); }
+  // The faces of an edge of the mesh.
+  const Faces& At(const Edge& edge) const {
+    const auto it = Find(edge);
+    MS_CHECK(it != entries_.end()) << "edge " << edge.first << "-" << edge.second;
+    return it->faces;
+  }
+
+ private:
+  std::vector<Entry>::const_iterator Find(const Edge& edge) const {
+    const auto it = std::lower_bound(entries_.begin(), entries_.end(), edge,
+                                     [](const Entry& e, const Edge& x) { return e.edge < x; });
+    return it != entries_.end() && it->edge == edge ? it : entries_.end();
+  }
+
+  std::vector<Entry> entries_;
+};
 
 // The faces the checker objects to: both faces of each pair, and the degenerate ones.
 std::vector<int64_t> TroubledFaces(const CheckerProblems& problems) {
@@ -61,7 +103,7 @@ struct Split {
 // The split point: the edge's midpoint, moved off the edge along the mean of its faces'
 // normals by `offset`. Exactly on the edge, a chain of splits along a crease leaves collinear
 // vertices whose faces double-precision tests (Open3D's among them) find touching.
-Eigen::Vector3d SplitPoint(const Mesh& mesh, const Edge& edge, const std::vector<int32_t>& faces,
+Eigen::Vector3d SplitPoint(const Mesh& mesh, const Edge& edge, const EdgeFaceTable::Faces& faces,
                            double offset) {
   const Eigen::Vector3d mid = 0.5 * (mesh.vertices[edge.first] + mesh.vertices[edge.second]);
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
@@ -74,7 +116,7 @@ Eigen::Vector3d SplitPoint(const Mesh& mesh, const Edge& edge, const std::vector
 std::vector<Split> SplitPass(Mesh* mesh,
                              const std::function<double(const Eigen::Vector3d&)>& max_length,
                              int64_t max_vertices, const std::set<Edge>& refused, double offset) {
-  std::map<Edge, std::vector<int32_t>> faces_of = EdgeFaces(*mesh, "SplitLongEdges");
+  const EdgeFaceTable faces_of(*mesh, "SplitLongEdges");
   std::vector<std::pair<double, Edge>> long_edges;
   for (const auto& [edge, faces] : faces_of) {
     if (refused.count(edge)) continue;
@@ -90,7 +132,7 @@ std::vector<Split> SplitPass(Mesh* mesh,
   std::vector<Split> splits;
   for (const auto& [length, edge] : long_edges) {
     if (static_cast<int64_t>(mesh->vertices.size()) >= max_vertices) break;
-    const std::vector<int32_t>& faces = faces_of[edge];
+    const EdgeFaceTable::Faces& faces = faces_of.At(edge);
     if (touched[faces[0]] || (faces.size() == 2 && touched[faces[1]])) continue;
     Split s;
     s.edge = edge;
@@ -226,11 +268,11 @@ double Angle(const Eigen::Vector3d& at, const Eigen::Vector3d& p, const Eigen::V
 
 // One pass over the edges in index order; a face flips at most once per pass.
 std::vector<Flip> FlipPass(Mesh* mesh, double min_cos_dihedral, const std::set<Edge>& refused) {
-  const std::map<Edge, std::vector<int32_t>> faces_of = EdgeFaces(*mesh, "FlipEdges");
+  const EdgeFaceTable faces_of(*mesh, "FlipEdges");
   std::vector<int32_t> degree(mesh->vertices.size(), 0);
   for (const auto& entry : faces_of) {
-    ++degree[entry.first.first];
-    ++degree[entry.first.second];
+    ++degree[entry.edge.first];
+    ++degree[entry.edge.second];
   }
   std::vector<uint8_t> touched(mesh->faces.size(), 0);
   std::set<Edge> created;  // by this pass's flips
@@ -245,7 +287,7 @@ std::vector<Flip> FlipPass(Mesh* mesh, double min_cos_dihedral, const std::set<E
     while (Key(t1[0], t1[1]) != edge) std::rotate(t1.begin(), t1.begin() + 1, t1.end());
     const int32_t a = t0[0], b = t0[1], c = t0[2], d = t1[2];
     if (t1[0] != b || t1[1] != a || c == d) continue;  // not consistently oriented: leave it
-    if (degree[a] <= 3 || degree[b] <= 3 || faces_of.count(Key(c, d)) || created.count(Key(c, d))) {
+    if (degree[a] <= 3 || degree[b] <= 3 || faces_of.Has(Key(c, d)) || created.count(Key(c, d))) {
       continue;
     }
     const Eigen::Vector3d &pa = mesh->vertices[a], &pb = mesh->vertices[b];
@@ -341,7 +383,7 @@ struct Collapse {
 std::vector<Collapse> PlanCollapses(const Mesh& mesh,
                                     const std::function<double(const Eigen::Vector3d&)>& min_length,
                                     double cos_turn, const std::set<Edge>& refused) {
-  const std::map<Edge, std::vector<int32_t>> faces_of = EdgeFaces(mesh, "CollapseShortEdges");
+  const EdgeFaceTable faces_of(mesh, "CollapseShortEdges");
   std::vector<std::vector<int32_t>> faces_at(mesh.vertices.size());
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     for (int32_t v : mesh.faces[f]) faces_at[v].push_back(static_cast<int32_t>(f));
