@@ -553,6 +553,23 @@ void ForIntersectingBoxes(int64_t count, MakeBox&& make_box, const std::vector<u
   }
 }
 
+// The pairs of `candidates` that ForIntersectingBoxes would hand `callback` (with a flagged box
+// when `focus` is set, boxes that meet as CGAL's closed boxes do), in list order.
+template <typename MakeBox, typename Callback>
+void ForCandidatePairs(const std::vector<std::array<int32_t, 2>>& candidates, MakeBox&& make_box,
+                       const std::vector<uint8_t>& focus, Callback&& callback) {
+  SearchBox x, y;
+  for (const auto& [a, b] : candidates) {
+    if (!focus.empty() && !focus[a] && !focus[b]) continue;
+    if (!make_box(a, &x) || !make_box(b, &y)) continue;
+    bool meet = true;
+    for (int d = 0; d < 3 && meet; ++d) {
+      meet = x.min_coord(d) <= y.max_coord(d) && y.min_coord(d) <= x.max_coord(d);
+    }
+    if (meet) callback(x, y);
+  }
+}
+
 void FindNearVertices(const Mesh& mesh, const std::vector<uint8_t>& referenced,
                       const FloatRobustnessOptions& options, FloatRobustnessReport* r) {
   using Box = SearchBox;
@@ -586,8 +603,12 @@ void FindNearVertices(const Mesh& mesh, const std::vector<uint8_t>& referenced,
     }
   }
   try {
-    ForIntersectingBoxes(static_cast<int64_t>(mesh.vertices.size()), make_box, focus,
-                         options.boxes_per_slab, callback);
+    if (options.candidates) {
+      ForCandidatePairs(options.candidates->vertices, make_box, focus, callback);
+    } else {
+      ForIntersectingBoxes(static_cast<int64_t>(mesh.vertices.size()), make_box, focus,
+                           options.boxes_per_slab, callback);
+    }
   } catch (const StopSearch&) {
     r->near_vertex_pairs_truncated = true;
   }
@@ -682,7 +703,11 @@ void FindCloseFacePairs(const Mesh& mesh, const std::vector<uint8_t>& usable,
     if (batch.size() == kBatch) test_batch();
   };
   try {
-    ForIntersectingBoxes(nf, make_box, options.focus_faces, options.boxes_per_slab, callback);
+    if (options.candidates) {
+      ForCandidatePairs(options.candidates->faces, make_box, options.focus_faces, callback);
+    } else {
+      ForIntersectingBoxes(nf, make_box, options.focus_faces, options.boxes_per_slab, callback);
+    }
     test_batch();
   } catch (const StopSearch&) {
   }
@@ -756,6 +781,69 @@ void SetTolerance(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
 }
 
 }  // namespace
+
+PairCandidates FindPairCandidates(const Mesh& mesh, const std::vector<Eigen::Vector3d>& to,
+                                  double tolerance, const std::vector<uint8_t>& focus) {
+  MS_CHECK(to.size() == mesh.vertices.size() &&
+           (focus.empty() || focus.size() == mesh.faces.size()))
+      << "pair candidates: " << to.size() << " places for " << mesh.vertices.size() << " vertices, "
+      << focus.size() << " flags for " << mesh.faces.size() << " faces";
+  const Eigen::Vector3d slack = Eigen::Vector3d::Constant(tolerance);
+  const auto grown = [&](int32_t v, Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
+    const Eigen::Vector3d &a = mesh.vertices[v], &b = to[v];
+    *lo = lo->cwiseMin(a.cwiseMin(b));
+    *hi = hi->cwiseMax(a.cwiseMax(b));
+  };
+  const auto finite = [](const Eigen::Vector3d& x) { return x.allFinite(); };
+  PairCandidates c;
+  const auto make_face_box = [&](int64_t f, SearchBox* box) {
+    const auto& t = mesh.faces[f];
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector3d hi = -lo;
+    for (int32_t v : t) {
+      if (v < 0 || static_cast<size_t>(v) >= mesh.vertices.size()) return false;
+      grown(v, &lo, &hi);
+    }
+    if (!finite(lo) || !finite(hi)) return false;
+    *box = SearchBox(lo - slack, hi + slack, f);
+    return true;
+  };
+  const auto nf = static_cast<int64_t>(mesh.faces.size());
+  const int64_t per_slab = FloatRobustnessOptions().boxes_per_slab;
+  ForIntersectingBoxes(
+      nf, make_face_box, focus, per_slab, [&](const SearchBox& x, const SearchBox& y) {
+        const auto f = static_cast<int32_t>(x.info()), g = static_cast<int32_t>(y.info());
+        c.faces.push_back({std::min(f, g), std::max(f, g)});
+      });
+  std::vector<uint8_t> vertex_focus;
+  if (!focus.empty()) {
+    vertex_focus.assign(mesh.vertices.size(), 0);
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      if (!focus[f]) continue;
+      for (int32_t v : mesh.faces[f]) {
+        if (v >= 0 && static_cast<size_t>(v) < vertex_focus.size()) vertex_focus[v] = 1;
+      }
+    }
+  }
+  const auto make_vertex_box = [&](int64_t v, SearchBox* box) {
+    Eigen::Vector3d lo = mesh.vertices[v].cwiseMin(to[v]), hi = mesh.vertices[v].cwiseMax(to[v]);
+    if (!finite(lo) || !finite(hi)) return false;
+    *box = SearchBox(lo - slack, hi + slack, v);
+    return true;
+  };
+  ForIntersectingBoxes(static_cast<int64_t>(mesh.vertices.size()), make_vertex_box, vertex_focus,
+                       per_slab, [&](const SearchBox& x, const SearchBox& y) {
+                         const auto u = static_cast<int32_t>(x.info()),
+                                    v = static_cast<int32_t>(y.info());
+                         c.vertices.push_back({std::min(u, v), std::max(u, v)});
+                       });
+  for (auto* pairs : {&c.faces, &c.vertices}) {
+    std::sort(pairs->begin(), pairs->end());
+    pairs->erase(std::unique(pairs->begin(), pairs->end()), pairs->end());
+    pairs->shrink_to_fit();
+  }
+  return c;
+}
 
 double FloatCheckTolerance(const Mesh& mesh, const std::vector<uint8_t>& usable,
                            const FloatRobustnessOptions& options) {

@@ -20,6 +20,13 @@
 
 namespace ms {
 
+// Pairs that the checks of a mesh whose vertices move within known bounds can only ever find
+// among (FindPairCandidates), sorted.
+struct PairCandidates {
+  std::vector<std::array<int32_t, 2>> faces;     // f < g, those sharing a vertex included
+  std::vector<std::array<int32_t, 2>> vertices;  // u < v
+};
+
 struct FloatRobustnessOptions {
   // The distance below which two vertices, or two faces that share no vertex, count as
   // touching: relative_tolerance times the bounding-box diagonal of the referenced vertices,
@@ -43,6 +50,10 @@ struct FloatRobustnessOptions {
   // self-intersection test (mesh_checker.cc) shares the search this way. Not called for what
   // a search stopped at max_pairs did not reach (both *_truncated flags then set).
   std::function<void(int64_t f, int64_t g)> on_box_pair;
+  // Set: no box search; the pairs of this list (with a flagged face, or a vertex of one) whose
+  // boxes meet are the pairs a search would find, in list order. For callers that check one
+  // mesh many times while its vertices move within known bounds (refine/mesh_moves.h).
+  const PairCandidates* candidates = nullptr;
   void Check() const;  // throws InputError naming the field
 };
 
@@ -86,6 +97,14 @@ struct FloatRobustnessReport {
     return num_near_vertex_pairs == 0 && num_close_face_pairs == 0 && num_float_intersections == 0;
   }
 };
+
+// The face pairs and vertex pairs whose boxes, grown by `tolerance` (absolute) and holding each
+// vertex both where it is in `mesh` and at `to`, meet, with a face flagged in `focus` (empty: all)
+// or a vertex of one. While every vertex stays between the two places (as before + s x (to -
+// before) with s in [0, 1] does, rounding included), a check of the mesh with that tolerance
+// and focus finds its pairs among these (FloatRobustnessOptions::candidates).
+PairCandidates FindPairCandidates(const Mesh& mesh, const std::vector<Eigen::Vector3d>& to,
+                                  double tolerance, const std::vector<uint8_t>& focus);
 
 // The absolute tolerance a check would use (CheckFloatRobustness's report.tolerance), without
 // the check: one pass over the usable faces' vertices.

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <set>
 
 #include "base/error.h"
 #include "mesh/mesh_checker.h"
@@ -298,6 +299,71 @@ TEST(FloatRobustness, OptionsAreChecked) {
         }
       },
       InputError);
+}
+
+// A cells x cells grid over [0, 1]^2 at height z, two faces a cell.
+Mesh Grid(int cells, double z) {
+  Mesh m;
+  for (int j = 0; j <= cells; ++j) {
+    for (int i = 0; i <= cells; ++i) m.vertices.push_back(V(i, j, 0) / cells + V(0, 0, z));
+  }
+  const auto at = [&](int i, int j) { return j * (cells + 1) + i; };
+  for (int j = 0; j < cells; ++j) {
+    for (int i = 0; i < cells; ++i) {
+      m.faces.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      m.faces.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  }
+  return m;
+}
+
+// While the vertices move along the segments from one place to another, a check that takes its
+// pairs from FindPairCandidates finds what a check that searches finds: two sheets 0.01 apart,
+// their vertices moved at random by up to 0.02 (some pairs come close or cross), checked at
+// fractions of the move as the halving rounds of refine/mesh_moves.h do, with and without focus.
+TEST(FloatRobustness, PairCandidatesFindWhatASearchFinds) {
+  const Mesh start = Append(Grid(12, 0), Grid(12, 0.01));
+  std::mt19937_64 random(3);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  std::vector<V> to = start.vertices;
+  for (size_t v = 0; v < to.size(); v += 2) {
+    const double x = unit(random), y = unit(random), z = unit(random);
+    to[v] += V(0.01 * x, 0.01 * y, 0.02 * z);
+  }
+  const double tolerance = 0.003;
+  for (bool focused : {false, true}) {
+    std::vector<uint8_t> focus;
+    if (focused) {
+      focus.assign(start.faces.size(), 0);
+      for (size_t f = 0; f < start.faces.size(); f += 3) focus[f] = 1;
+    }
+    const PairCandidates candidates = FindPairCandidates(start, to, tolerance, focus);
+    for (double s : {1.0, 0.5, 0.25, 0.125, 0.0}) {
+      Mesh m = start;
+      for (size_t v = 0; v < m.vertices.size(); ++v) {
+        m.vertices[v] = start.vertices[v] + s * (to[v] - start.vertices[v]);
+      }
+      FloatRobustnessOptions options;
+      options.absolute_tolerance = tolerance;
+      options.max_examples = 1 << 20;
+      options.focus_faces = focus;
+      std::set<std::array<int64_t, 2>> searched_pairs, listed_pairs;
+      options.on_box_pair = [&](int64_t f, int64_t g) { searched_pairs.insert({f, g}); };
+      const std::vector<uint8_t> usable(m.faces.size(), 1);
+      const FloatRobustnessReport searched = CheckFloatRobustness(m, usable, options);
+      options.candidates = &candidates;
+      options.on_box_pair = [&](int64_t f, int64_t g) { listed_pairs.insert({f, g}); };
+      const FloatRobustnessReport listed = CheckFloatRobustness(m, usable, options);
+      SCOPED_TRACE(testing::Message() << "focus " << focused << ", s = " << s);
+      EXPECT_EQ(listed.near_vertex_examples, searched.near_vertex_examples);
+      EXPECT_EQ(listed.close_face_pair_examples, searched.close_face_pair_examples);
+      EXPECT_EQ(listed.float_intersection_examples, searched.float_intersection_examples);
+      EXPECT_EQ(listed_pairs, searched_pairs);
+      if (s == 1.0) {
+        EXPECT_GT(searched.num_close_face_pairs, 0);
+      }
+    }
+  }
 }
 
 // ----- The kernels. ----------------------------------------------------------------------------

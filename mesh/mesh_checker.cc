@@ -288,6 +288,7 @@ FloatRobustnessOptions FloatOptions(const MeshCheckOptions& options) {
   f.max_examples = options.max_examples;
   f.max_pairs = options.max_self_intersections;
   f.focus_faces = options.focus_faces;
+  f.candidates = options.candidates;
   return f;
 }
 

@@ -35,6 +35,8 @@ struct MeshCheckOptions {
   // test only pairs with a flagged face (FloatRobustnessOptions::focus_faces); the counts are
   // then those of the flagged faces only, not a verdict on the mesh.
   std::vector<uint8_t> focus_faces;
+  // Set: the pair searches take their pairs from this list (FloatRobustnessOptions::candidates).
+  const PairCandidates* candidates = nullptr;
   // False: only the geometry (invalid and degenerate faces, self-intersections, floating-point
   // robustness); edges, vertex links and components are not looked at, and the report's
   // verdicts say nothing. For callers that change vertices only, whose topology is known.

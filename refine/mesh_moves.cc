@@ -61,9 +61,11 @@ std::vector<Eigen::Vector3d> ThinPlateGradient(
 }
 
 CheckerProblems FindCheckerProblems(const Mesh& mesh, double tolerance,
-                                    const std::vector<uint8_t>& focus) {
+                                    const std::vector<uint8_t>& focus,
+                                    const PairCandidates* candidates) {
   MeshCheckOptions check;
   check.focus_faces = focus;
+  check.candidates = candidates;
   check.allow_boundary = true;
   check.float_tolerance_abs = tolerance;
   check.max_examples = INT_MAX;
@@ -140,8 +142,9 @@ void MarkFacesNearPoints(const Mesh& mesh, const std::vector<Eigen::Vector3d>& b
 
 // Vertices of the checker's problems that involve a moving vertex.
 void MarkCheckerProblems(const Mesh& mesh, const std::vector<uint8_t>& moving, double tolerance,
-                         const std::vector<uint8_t>& focus, std::vector<uint8_t>* trouble) {
-  const CheckerProblems problems = FindCheckerProblems(mesh, tolerance, focus);
+                         const std::vector<uint8_t>& focus, const PairCandidates* candidates,
+                         std::vector<uint8_t>* trouble) {
+  const CheckerProblems problems = FindCheckerProblems(mesh, tolerance, focus, candidates);
   const auto mark = [&](std::initializer_list<int32_t> vertices) {
     bool involved = false;
     for (int32_t v : vertices) involved = involved || moving[v];
@@ -173,6 +176,23 @@ MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& dis
   // was just halved or dropped (against all faces).
   std::vector<uint8_t> changed(n, 0);
   for (size_t v = 0; v < n; ++v) changed[v] = displacement[v] != Eigen::Vector3d::Zero();
+  // Every round's vertices lie between `before` and the full move (before + s x d, s in [0, 1],
+  // is monotone in rounding too): one search over boxes that hold both gives every pair a
+  // round's check can find, and each round tests those pairs instead of searching again.
+  std::vector<Eigen::Vector3d> full_move(n);
+  for (size_t v = 0; v < n; ++v) full_move[v] = before[v] + displacement[v];
+  std::vector<uint8_t> moving_faces(mesh->faces.size(), 0);
+  for (size_t f = 0; f < mesh->faces.size(); ++f) {
+    const auto& t = mesh->faces[f];
+    moving_faces[f] = changed[t[0]] || changed[t[1]] || changed[t[2]];
+  }
+  // (A tolerance of 0 leaves the checker its relative one, which the mesh's extent sets anew in
+  // every round: no list then.)
+  const bool listed = options.tolerance > 0;
+  const PairCandidates candidates =
+      listed ? FindPairCandidates(*mesh, full_move, options.tolerance, moving_faces)
+             : PairCandidates();
+  moving_faces = {};
   std::vector<Eigen::Vector3d> keep_clear_by_x = options.keep_clear;
   std::sort(keep_clear_by_x.begin(), keep_clear_by_x.end(),
             [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return a.x() < b.x(); });
@@ -190,7 +210,8 @@ MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& dis
     std::vector<uint8_t> trouble(n, 0);
     MarkTurnedFaces(*mesh, before, moving, cos_limit, &trouble);
     MarkFacesNearPoints(*mesh, before, moving, focus, keep_clear_by_x, options.clearance, &trouble);
-    MarkCheckerProblems(*mesh, moving, options.tolerance, focus, &trouble);
+    MarkCheckerProblems(*mesh, moving, options.tolerance, focus, listed ? &candidates : nullptr,
+                        &trouble);
     ++stats.rounds;
     bool any = false;
     std::fill(changed.begin(), changed.end(), 0);

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "mesh/float_robustness.h"
 #include "mesh/mesh.h"
 
 namespace ms {
@@ -50,8 +51,11 @@ struct CheckerProblems {
     return face_pairs.empty() && degenerate_faces.empty() && vertex_pairs.empty();
   }
 };
+// `candidates` (optional): the pairs to look among instead of a search (mesh/float_robustness.h
+// FindPairCandidates).
 CheckerProblems FindCheckerProblems(const Mesh& mesh, double tolerance,
-                                    const std::vector<uint8_t>& focus);
+                                    const std::vector<uint8_t>& focus,
+                                    const PairCandidates* candidates = nullptr);
 
 struct MoveOptions {
   double tolerance = 0;           // absolute: faces sharing no vertex stay farther apart than this
