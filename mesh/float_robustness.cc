@@ -553,6 +553,22 @@ void ForIntersectingBoxes(int64_t count, MakeBox&& make_box, const std::vector<u
   }
 }
 
+// One flag per vertex: set for the vertices of the faces flagged in `focus_faces` (empty when
+// that is empty: no focus).
+std::vector<uint8_t> VerticesOfFlaggedFaces(const Mesh& mesh,
+                                            const std::vector<uint8_t>& focus_faces) {
+  std::vector<uint8_t> flagged;
+  if (focus_faces.empty()) return flagged;
+  flagged.assign(mesh.vertices.size(), 0);
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    if (!focus_faces[f]) continue;
+    for (int32_t v : mesh.faces[f]) {
+      if (v >= 0 && static_cast<size_t>(v) < flagged.size()) flagged[v] = 1;
+    }
+  }
+  return flagged;
+}
+
 // The pairs of `candidates` that ForIntersectingBoxes would hand `callback` (with a flagged box
 // when `focus` is set, boxes that meet as CGAL's closed boxes do), in list order.
 template <typename MakeBox, typename Callback>
@@ -592,16 +608,7 @@ void FindNearVertices(const Mesh& mesh, const std::vector<uint8_t>& referenced,
     found.push_back({{a, b}, d});
     if (static_cast<int64_t>(found.size()) >= options.max_pairs) throw StopSearch{};
   };
-  std::vector<uint8_t> focus;  // the vertices of flagged faces
-  if (!options.focus_faces.empty()) {
-    focus.assign(mesh.vertices.size(), 0);
-    for (size_t f = 0; f < mesh.faces.size(); ++f) {
-      if (!options.focus_faces[f]) continue;
-      for (int32_t v : mesh.faces[f]) {
-        if (v >= 0 && static_cast<size_t>(v) < focus.size()) focus[v] = 1;
-      }
-    }
-  }
+  const std::vector<uint8_t> focus = VerticesOfFlaggedFaces(mesh, options.focus_faces);
   try {
     if (options.candidates) {
       ForCandidatePairs(options.candidates->vertices, make_box, focus, callback);
@@ -788,55 +795,46 @@ PairCandidates FindPairCandidates(const Mesh& mesh, const std::vector<Eigen::Vec
            (focus.empty() || focus.size() == mesh.faces.size()))
       << "pair candidates: " << to.size() << " places for " << mesh.vertices.size() << " vertices, "
       << focus.size() << " flags for " << mesh.faces.size() << " faces";
+  // The box of vertex v's two places, added to [lo, hi].
+  const auto add_places = [&](int32_t v, Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
+    *lo = lo->cwiseMin(mesh.vertices[v].cwiseMin(to[v]));
+    *hi = hi->cwiseMax(mesh.vertices[v].cwiseMax(to[v]));
+  };
   const Eigen::Vector3d slack = Eigen::Vector3d::Constant(tolerance);
-  const auto grown = [&](int32_t v, Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
-    const Eigen::Vector3d &a = mesh.vertices[v], &b = to[v];
-    *lo = lo->cwiseMin(a.cwiseMin(b));
-    *hi = hi->cwiseMax(a.cwiseMax(b));
+  const auto grown_box = [&](const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int64_t id,
+                             SearchBox* box) {
+    if (!lo.allFinite() || !hi.allFinite()) return false;
+    *box = SearchBox(lo - slack, hi + slack, id);
+    return true;
   };
-  const auto finite = [](const Eigen::Vector3d& x) { return x.allFinite(); };
-  PairCandidates c;
+  const Eigen::Vector3d empty_lo =
+      Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   const auto make_face_box = [&](int64_t f, SearchBox* box) {
-    const auto& t = mesh.faces[f];
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-    Eigen::Vector3d hi = -lo;
-    for (int32_t v : t) {
+    Eigen::Vector3d lo = empty_lo, hi = -empty_lo;
+    for (int32_t v : mesh.faces[f]) {
       if (v < 0 || static_cast<size_t>(v) >= mesh.vertices.size()) return false;
-      grown(v, &lo, &hi);
+      add_places(v, &lo, &hi);
     }
-    if (!finite(lo) || !finite(hi)) return false;
-    *box = SearchBox(lo - slack, hi + slack, f);
-    return true;
+    return grown_box(lo, hi, f, box);
   };
-  const auto nf = static_cast<int64_t>(mesh.faces.size());
-  const int64_t per_slab = FloatRobustnessOptions().boxes_per_slab;
-  ForIntersectingBoxes(
-      nf, make_face_box, focus, per_slab, [&](const SearchBox& x, const SearchBox& y) {
-        const auto f = static_cast<int32_t>(x.info()), g = static_cast<int32_t>(y.info());
-        c.faces.push_back({std::min(f, g), std::max(f, g)});
-      });
-  std::vector<uint8_t> vertex_focus;
-  if (!focus.empty()) {
-    vertex_focus.assign(mesh.vertices.size(), 0);
-    for (size_t f = 0; f < mesh.faces.size(); ++f) {
-      if (!focus[f]) continue;
-      for (int32_t v : mesh.faces[f]) {
-        if (v >= 0 && static_cast<size_t>(v) < vertex_focus.size()) vertex_focus[v] = 1;
-      }
-    }
-  }
   const auto make_vertex_box = [&](int64_t v, SearchBox* box) {
-    Eigen::Vector3d lo = mesh.vertices[v].cwiseMin(to[v]), hi = mesh.vertices[v].cwiseMax(to[v]);
-    if (!finite(lo) || !finite(hi)) return false;
-    *box = SearchBox(lo - slack, hi + slack, v);
-    return true;
+    Eigen::Vector3d lo = empty_lo, hi = -empty_lo;
+    add_places(static_cast<int32_t>(v), &lo, &hi);
+    return grown_box(lo, hi, v, box);
   };
-  ForIntersectingBoxes(static_cast<int64_t>(mesh.vertices.size()), make_vertex_box, vertex_focus,
-                       per_slab, [&](const SearchBox& x, const SearchBox& y) {
-                         const auto u = static_cast<int32_t>(x.info()),
-                                    v = static_cast<int32_t>(y.info());
-                         c.vertices.push_back({std::min(u, v), std::max(u, v)});
-                       });
+  // Each pair once, smaller index first.
+  const auto collect = [](std::vector<std::array<int32_t, 2>>* pairs) {
+    return [pairs](const SearchBox& x, const SearchBox& y) {
+      const auto a = static_cast<int32_t>(x.info()), b = static_cast<int32_t>(y.info());
+      pairs->push_back({std::min(a, b), std::max(a, b)});
+    };
+  };
+  const int64_t per_slab = FloatRobustnessOptions().boxes_per_slab;
+  PairCandidates c;
+  ForIntersectingBoxes(static_cast<int64_t>(mesh.faces.size()), make_face_box, focus, per_slab,
+                       collect(&c.faces));
+  ForIntersectingBoxes(static_cast<int64_t>(mesh.vertices.size()), make_vertex_box,
+                       VerticesOfFlaggedFaces(mesh, focus), per_slab, collect(&c.vertices));
   for (auto* pairs : {&c.faces, &c.vertices}) {
     std::sort(pairs->begin(), pairs->end());
     pairs->erase(std::unique(pairs->begin(), pairs->end()), pairs->end());

@@ -140,6 +140,16 @@ void MarkFacesNearPoints(const Mesh& mesh, const std::vector<Eigen::Vector3d>& b
   }
 }
 
+// One flag per face: set where a corner is flagged in `vertices`.
+std::vector<uint8_t> FacesOf(const Mesh& mesh, const std::vector<uint8_t>& vertices) {
+  std::vector<uint8_t> faces(mesh.faces.size(), 0);
+  for (size_t f = 0; f < faces.size(); ++f) {
+    const auto& t = mesh.faces[f];
+    faces[f] = vertices[t[0]] || vertices[t[1]] || vertices[t[2]];
+  }
+  return faces;
+}
+
 // Vertices of the checker's problems that involve a moving vertex.
 void MarkCheckerProblems(const Mesh& mesh, const std::vector<uint8_t>& moving, double tolerance,
                          const std::vector<uint8_t>& focus, const PairCandidates* candidates,
@@ -181,18 +191,12 @@ MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& dis
   // round's check can find, and each round tests those pairs instead of searching again.
   std::vector<Eigen::Vector3d> full_move(n);
   for (size_t v = 0; v < n; ++v) full_move[v] = before[v] + displacement[v];
-  std::vector<uint8_t> moving_faces(mesh->faces.size(), 0);
-  for (size_t f = 0; f < mesh->faces.size(); ++f) {
-    const auto& t = mesh->faces[f];
-    moving_faces[f] = changed[t[0]] || changed[t[1]] || changed[t[2]];
-  }
   // (A tolerance of 0 leaves the checker its relative one, which the mesh's extent sets anew in
   // every round: no list then.)
   const bool listed = options.tolerance > 0;
   const PairCandidates candidates =
-      listed ? FindPairCandidates(*mesh, full_move, options.tolerance, moving_faces)
+      listed ? FindPairCandidates(*mesh, full_move, options.tolerance, FacesOf(*mesh, changed))
              : PairCandidates();
-  moving_faces = {};
   std::vector<Eigen::Vector3d> keep_clear_by_x = options.keep_clear;
   std::sort(keep_clear_by_x.begin(), keep_clear_by_x.end(),
             [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return a.x() < b.x(); });
@@ -202,11 +206,7 @@ MoveStats MoveVerticesSafely(Mesh* mesh, const std::vector<Eigen::Vector3d>& dis
       moving[v] = scale[v] > 0 && displacement[v] != Eigen::Vector3d::Zero();
       mesh->vertices[v] = before[v] + scale[v] * displacement[v];
     }
-    std::vector<uint8_t> focus(mesh->faces.size(), 0);
-    for (size_t f = 0; f < mesh->faces.size(); ++f) {
-      const auto& t = mesh->faces[f];
-      focus[f] = changed[t[0]] || changed[t[1]] || changed[t[2]];
-    }
+    const std::vector<uint8_t> focus = FacesOf(*mesh, changed);
     std::vector<uint8_t> trouble(n, 0);
     MarkTurnedFaces(*mesh, before, moving, cos_limit, &trouble);
     MarkFacesNearPoints(*mesh, before, moving, focus, keep_clear_by_x, options.clearance, &trouble);

@@ -97,9 +97,7 @@ std::vector<Eigen::Vector3d> Displacements(const Mesh& mesh, const PairGradient&
     const std::vector<Eigen::Vector3d> unfold =
         UnfoldingMoves(mesh, neighbours, stuck, options.unfold);
     for (size_t v = 0; v < stuck.size(); ++v) {
-      if (stuck[v] && !neighbours[v].empty()) {
-        move[v] = CappedAt(unfold[v], StepLimit(data, v, options, scale));
-      }
+      if (stuck[v]) move[v] = CappedAt(unfold[v], StepLimit(data, v, options, scale));
     }
   }
   return move;
