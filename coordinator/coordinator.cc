@@ -114,25 +114,15 @@ class Coordinator::Impl : public WorkerMessageHandler {
         interrupted = true;
         break;
       }
-      PeerMessage message;
-      if (transport_->Receive(0.02, &message)) {
-        Handle(message);
-        // Drain what is queued before the periodic work, without starving it.
-        for (int i = 0; i < 100 && transport_->Receive(0, &message); ++i) Handle(message);
-      }
-      const double now = Now();
-      const JobScheduler::Expiry expiry = scheduler_.Expire(now);
-      for (const std::string& name : expiry.dead_workers) {
+      const NetworkTurn turn = TurnNetwork(transport_, &scheduler_, &stamper_,
+                                           [this](const PeerMessage& m) { Handle(m); });
+      const double now = turn.now;
+      for (const std::string& name : turn.expiry.dead_workers) {
         spdlog::warn("worker {} went silent for {:.1f} s: presumed dead", name,
                      options_.scheduler.liveness * options_.scheduler.heartbeat_interval_s);
       }
-      for (uint64_t job : expiry.requeued) {
+      for (uint64_t job : turn.expiry.requeued) {
         spdlog::warn("job {} (camera {}) goes back to the queue", JobName(job), JobIdCamera(job));
-      }
-      for (const std::string& peer : scheduler_.DueHeartbeats(now)) {
-        wire::Envelope envelope = stamper_.New();
-        envelope.mutable_heartbeat();
-        transport_->Send(peer, Serialize(envelope));
       }
       if (phase_ == Phase::kPreparing &&
           step_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {

@@ -121,4 +121,23 @@ void RouteWorkerMessage(const PeerMessage& message, double now, const ImageCatal
   }
 }
 
+NetworkTurn TurnNetwork(ServerTransport* transport, JobScheduler* scheduler,
+                        EnvelopeStamper* stamper,
+                        const std::function<void(const PeerMessage&)>& handle) {
+  PeerMessage message;
+  if (transport->Receive(0.02, &message)) {
+    handle(message);
+    for (int i = 0; i < 100 && transport->Receive(0, &message); ++i) handle(message);
+  }
+  NetworkTurn turn;
+  turn.now = MonotonicSeconds();
+  turn.expiry = scheduler->Expire(turn.now);
+  for (const std::string& peer : scheduler->DueHeartbeats(turn.now)) {
+    wire::Envelope envelope = stamper->New();
+    envelope.mutable_heartbeat();
+    transport->Send(peer, Serialize(envelope));
+  }
+  return turn;
+}
+
 }  // namespace ms

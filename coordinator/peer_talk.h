@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <map>
 #include <random>
@@ -144,5 +145,17 @@ struct WorkerMessageContext {
 };
 void RouteWorkerMessage(const PeerMessage& message, double now, const ImageCatalog* catalog,
                         const WorkerMessageContext& context, WorkerMessageHandler* handler);
+
+// One turn of a coordinator's network loop, the same for the sweep run and refinement: waits
+// up to 20 ms for a message, hands it and up to 100 queued ones to `handle` (draining without
+// starving the periodic work), then expires leases and silent workers and sends the heartbeats
+// due. Returns the time of the periodic work and what expired, for the caller's logs.
+struct NetworkTurn {
+  double now = 0;
+  JobScheduler::Expiry expiry;
+};
+NetworkTurn TurnNetwork(ServerTransport* transport, JobScheduler* scheduler,
+                        EnvelopeStamper* stamper,
+                        const std::function<void(const PeerMessage&)>& handle);
 
 }  // namespace ms

@@ -137,25 +137,16 @@ class RefineDispatcher::Impl : public WorkerMessageHandler {
         std::lock_guard<std::mutex> lock(mutex_);
         if (quit_) return;
       }
-      PeerMessage message;
-      if (transport_->Receive(0.02, &message)) {
-        Handle(message);
-        for (int i = 0; i < 100 && transport_->Receive(0, &message); ++i) Handle(message);
-      }
-      const double now = MonotonicSeconds();
-      const JobScheduler::Expiry expiry = scheduler_.Expire(now);
-      for (const std::string& name : expiry.dead_workers) {
+      const NetworkTurn turn = TurnNetwork(transport_, &scheduler_, &stamper_,
+                                           [this](const PeerMessage& m) { Handle(m); });
+      const double now = turn.now;
+      for (const std::string& name : turn.expiry.dead_workers) {
         spdlog::warn("worker {} went silent: presumed dead", name);
       }
-      for (uint64_t job : expiry.requeued) {
+      for (uint64_t job : turn.expiry.requeued) {
         spdlog::warn("refinement job {} goes back to the queue", PairName(job));
         std::lock_guard<std::mutex> lock(mutex_);
         ++stats_.requeued;
-      }
-      for (const std::string& peer : scheduler_.DueHeartbeats(now)) {
-        wire::Envelope envelope = stamper_.New();
-        envelope.mutable_heartbeat();
-        transport_->Send(peer, Serialize(envelope));
       }
       if (stop_requested_ && stop_requested_()) {
         std::lock_guard<std::mutex> lock(mutex_);

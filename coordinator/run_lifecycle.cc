@@ -117,8 +117,9 @@ void RunLifecycle::BuildOrReplay(bool resuming, const std::string& run_file) {
   // them go before it grows the initial manifold.
   std::vector<RayPoint> rays = RayPointsFromScene(scene);
   if (!resuming) {
-    // The first checkpoint copies the scene from the stash (at 10^6 points 190 MB less while the
-    // manifold is built and its meshes extracted, the coordinator's peak of memory).
+    // The first checkpoint copies the scene from the stash, so that the scene's points are not
+    // held while the manifold is built and its meshes extracted, the coordinator's peak of
+    // memory (docs/design/performance.md).
     StashScenePoints(Path(kSceneStash), &record_);
     ReleaseFreeMemory();
   }

@@ -99,6 +99,11 @@ void MemoryBarrier();
 // glFinish: wait for the GPU (timing).
 void Finish();
 
+// How many work groups (or batches) of `per` items cover `count` items: ceil(count / per).
+inline int DivideRoundingUp(int64_t count, int64_t per) {
+  return static_cast<int>((count + per - 1) / per);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Buffers
 

@@ -121,8 +121,8 @@ BuildStats DelaunayManifold::Impl::Build(std::vector<RayPoint> points) {
   timer.Restart();
   TraceRays(points, &stats);
   stats.seconds_ray_tracing = timer.Seconds();
-  // What the manifold needs of the points is in it now; growing is the build's peak of memory
-  // (at 10^6 points the points with their cameras held about 100 MB more).
+  // What the manifold needs of the points is in it now; growing is the build's peak of memory,
+  // so the points with their cameras go before it.
   std::vector<RayPoint>().swap(points);
   ReleaseFreeMemory();
   spdlog::info("manifold: traced {} rays ({} cell steps) in {:.2f} s ({:.0f} rays/s)", stats.rays,

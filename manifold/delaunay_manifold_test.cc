@@ -268,6 +268,19 @@ RandomScene SphereScene(int num_points, int num_cameras, uint32_t seed, double r
   return scene;
 }
 
+// `count` points anywhere in the sphere's box, each seen by two cameras of the ring of 10:
+// outliers, as sweeping finds some.
+void AddOutliers(int count, std::mt19937* rng, RandomScene* scene) {
+  std::uniform_real_distribution<double> u(-1.2, 1.2);
+  for (int k = 0; k < count; ++k) {
+    RayPoint p;
+    p.position = Eigen::Vector3d(u(*rng), u(*rng), u(*rng));
+    p.cameras.push_back(k % 10);
+    p.cameras.push_back((k + 3) % 10);
+    scene->points.push_back(p);
+  }
+}
+
 TEST(DelaunayManifold, SphereIsReconstructedAsAClosedManifold) {
   const RandomScene scene = SphereScene(400, 12, 1);
   ManifoldOptions options;
@@ -595,18 +608,11 @@ TEST_P(RandomInsertions, KeepTheSurfaceManifold) {
     manifold.Build(scene.points);
     ASSERT_EQ(manifold.Validate(true), "") << "seed " << seed;
     std::mt19937 rng(seed * 101);
-    std::uniform_real_distribution<double> u(-1.2, 1.2);
     int64_t inserted = 0, discarded = 0;
     for (int batch = 0; batch < 3; ++batch) {
       // New points near the sphere (like sweeping finds) plus a few random ones.
       RandomScene more = SphereScene(60, 10, seed * 1000 + batch, 1.0 + 0.02 * (batch - 1));
-      for (int k = 0; k < 10; ++k) {
-        RayPoint p;
-        p.position = Eigen::Vector3d(u(rng), u(rng), u(rng));
-        p.cameras.push_back(k % 10);
-        p.cameras.push_back((k + 3) % 10);
-        more.points.push_back(p);
-      }
+      AddOutliers(10, &rng, &more);
       const InsertionStats stats = manifold.Insert(more.points);
       inserted += stats.inserted;
       discarded += stats.discarded_conflict + stats.discarded_duplicate + stats.discarded_outside;
@@ -654,18 +660,26 @@ void ExpectPartsEqualWhole(DelaunayManifold* whole, DelaunayManifold* parts,
   ASSERT_EQ(whole->Validate(true), "") << "batch " << batch;
 }
 
+// Two manifolds built alike from `scene`: one takes batches whole, the other in parts.
+struct WholeAndParts {
+  explicit WholeAndParts(const RandomScene& scene)
+      : whole(scene.cameras, ManifoldOptions{}), parts(scene.cameras, ManifoldOptions{}) {
+    whole.Build(scene.points);
+    parts.Build(scene.points);
+  }
+  DelaunayManifold whole;
+  DelaunayManifold parts;
+};
+
 // The coordinator inserts a batch in pieces while the sweep is still running: Begin, parts in
 // order, Finish must be exactly Insert of the whole batch.
 TEST(DelaunayManifold, InsertingABatchInPartsEqualsInsertingItWhole) {
-  RandomScene scene = SphereScene(150, 10, 5, 1.0);
-  DelaunayManifold whole(scene.cameras, ManifoldOptions{});
-  DelaunayManifold parts(scene.cameras, ManifoldOptions{});
-  whole.Build(scene.points);
-  parts.Build(scene.points);
+  WholeAndParts m(SphereScene(150, 10, 5, 1.0));
   for (int batch = 0; batch < 3; ++batch) {
     const RandomScene more = SphereScene(90, 10, 77 + batch, 1.0 + 0.02 * (batch - 1));
     // An empty part too.
-    ExpectPartsEqualWhole(&whole, &parts, more.points, {0, 1, 40, 40, more.points.size()}, batch);
+    ExpectPartsEqualWhole(&m.whole, &m.parts, more.points, {0, 1, 40, 40, more.points.size()},
+                          batch);
   }
 }
 
@@ -673,17 +687,13 @@ TEST(DelaunayManifold, InsertingABatchInPartsEqualsInsertingItWhole) {
 // waits until kRecountLag parts have not marked it, then counts it on every cell born since its
 // last walk.
 TEST(DelaunayManifold, ManySmallPartsEqualInsertingTheBatchWhole) {
-  RandomScene scene = SphereScene(200, 12, 8, 1.0);
-  DelaunayManifold whole(scene.cameras, ManifoldOptions{});
-  DelaunayManifold parts(scene.cameras, ManifoldOptions{});
-  whole.Build(scene.points);
-  parts.Build(scene.points);
+  WholeAndParts m(SphereScene(200, 12, 8, 1.0));
   for (int batch = 0; batch < 2; ++batch) {
     const RandomScene more = SphereScene(120, 12, 300 + batch, 1.0 + 0.02 * (batch - 1));
     std::vector<size_t> cuts;  // 40 parts of 3 points
     for (size_t k = 0; k < more.points.size(); k += 3) cuts.push_back(k);
     cuts.push_back(more.points.size());
-    ExpectPartsEqualWhole(&whole, &parts, more.points, cuts, batch);
+    ExpectPartsEqualWhole(&m.whole, &m.parts, more.points, cuts, batch);
   }
 }
 
@@ -757,16 +767,9 @@ TEST(DelaunayManifold, RebuildInsertionKeepsTheSurfaceManifold) {
     DelaunayManifold manifold(scene.cameras, rebuild);
     manifold.Build(scene.points);
     std::mt19937 rng(seed * 31);
-    std::uniform_real_distribution<double> u(-1.2, 1.2);
     for (int batch = 0; batch < 3; ++batch) {
       RandomScene more = SphereScene(60, 10, seed * 2000 + batch, 1.0 + 0.02 * (batch - 1));
-      for (int k = 0; k < 10; ++k) {  // outliers, as sweeping finds some
-        RayPoint p;
-        p.position = Eigen::Vector3d(u(rng), u(rng), u(rng));
-        p.cameras.push_back(k % 10);
-        p.cameras.push_back((k + 3) % 10);
-        more.points.push_back(p);
-      }
+      AddOutliers(10, &rng, &more);
       const InsertionStats stats = manifold.Insert(more.points);
       EXPECT_EQ(stats.inserted + stats.discarded_duplicate, 70) << "seed " << seed;
       ASSERT_EQ(manifold.Validate(true), "") << "seed " << seed << " batch " << batch;

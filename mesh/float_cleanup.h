@@ -67,8 +67,8 @@ struct FloatCleanupStats {
 // scaffold one; a split vertex is scaffold when either end of its edge is. The mesh is
 // compacted (unreferenced vertices removed) and `scaffold` renumbered with it. `original`,
 // when given, makes *mesh again as it was (a run extracts it from its manifold again): a
-// cleanup that fails restores the mesh from it instead of from a copy of its own (48 MB at
-// 10^6 vertices, at the coordinator's peak of memory).
+// cleanup that fails restores the mesh from it instead of from a copy of its own, which would
+// come at the coordinator's peak of memory.
 FloatCleanupStats CleanForFloatingPoint(Mesh* mesh, std::vector<uint8_t>* scaffold = nullptr,
                                         const FloatCleanupOptions& options = {},
                                         const std::function<Mesh()>& original = nullptr);

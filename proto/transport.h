@@ -1,15 +1,9 @@
 // Message transport between the coordinator and its workers, behind small interfaces so that
 // the scheduling and protocol logic runs unchanged over ZeroMQ (proto/zmq_transport.h) or over
-// an in-memory channel in tests (InMemoryNetwork below). Payloads are opaque bytes here
+// an in-memory channel in tests (testing/in_memory_network.h). Payloads are opaque bytes here
 // (serialized envelopes, proto/wire.h).
 #pragma once
 
-#include <condition_variable>
-#include <cstdint>
-#include <deque>
-#include <map>
-#include <memory>
-#include <mutex>
 #include <string>
 
 namespace ms {
@@ -43,33 +37,6 @@ class ClientTransport {
   // Non-empty once the transport knows the server refused this client's credentials (CURVE);
   // retrying will not help.
   virtual std::string AuthFailure() const { return ""; }
-};
-
-// In-memory transport for tests: one server, any number of clients, unbounded queues,
-// thread-safe. Destroying a client drops messages addressed to it, like a dead TCP peer.
-class InMemoryNetwork : public std::enable_shared_from_this<InMemoryNetwork> {
- public:
-  static std::shared_ptr<InMemoryNetwork> Create();
-  // The server end (one per network; a second call fails an MS_CHECK).
-  std::unique_ptr<ServerTransport> Bind();
-  // A new client with a fresh peer identity ("peer-1", "peer-2", ...).
-  std::unique_ptr<ClientTransport> Connect();
-
- private:
-  friend class InMemoryServer;
-  friend class InMemoryClient;
-  struct Queue {
-    std::deque<PeerMessage> messages;
-  };
-  InMemoryNetwork() = default;
-  bool Pop(std::deque<PeerMessage>* queue, double timeout_s, PeerMessage* message);
-
-  std::mutex mutex_;
-  std::condition_variable changed_;
-  bool bound_ = false;
-  int next_peer_ = 1;
-  std::deque<PeerMessage> to_server_;
-  std::map<std::string, std::deque<PeerMessage>> to_client_;  // by peer; erased when gone
 };
 
 }  // namespace ms

@@ -15,8 +15,6 @@ namespace {
 
 constexpr int kGroupX = 16, kGroupY = 8;  // the local size of every refine_*.comp
 
-int DivUp(int a, int b) { return (a + b - 1) / b; }
-
 // One face as refine_faces.glsl reads it (std430: five vec4).
 struct GpuFace {
   std::array<float, 4> unit_offset, p1, p2, g0, g1;
@@ -101,7 +99,8 @@ struct GlslPairGradient::Impl {
       blur->Set("u_axis", axis);
       from[axis]->BindImage(0, gl::ImageAccess::kReadOnly);
       to[axis]->BindImage(1, gl::ImageAccess::kWriteOnly);
-      blur->Dispatch(DivUp(size.x(), kGroupX), DivUp(size.y(), kGroupY));
+      blur->Dispatch(gl::DivideRoundingUp(size.x(), kGroupX),
+                     gl::DivideRoundingUp(size.y(), kGroupY));
       gl::MemoryBarrier();
     }
   }
@@ -180,7 +179,7 @@ void GlslPairGradient::Impl::SampleNeighbour(const RefineView& reference,
   shadow->color(0).BindImage(4, gl::ImageAccess::kReadOnly);
   texture_i.BindImage(5, gl::ImageAccess::kReadOnly);
   texture_j.BindImage(6, gl::ImageAccess::kReadOnly);
-  sample->Dispatch(DivUp(w, kGroupX), DivUp(h, kGroupY));
+  sample->Dispatch(gl::DivideRoundingUp(w, kGroupX), gl::DivideRoundingUp(h, kGroupY));
   gl::MemoryBarrier();
 }
 
@@ -204,7 +203,8 @@ void GlslPairGradient::Impl::ZnccCoefficients(const Eigen::Vector2i& size,
   maps->sums1.BindImage(2, gl::ImageAccess::kReadOnly);
   maps->coefficients.BindImage(3, gl::ImageAccess::kWriteOnly);
   maps->energy.BindImage(4, gl::ImageAccess::kWriteOnly);
-  coefficients->Dispatch(DivUp(size.x(), kGroupX), DivUp(size.y(), kGroupY));
+  coefficients->Dispatch(gl::DivideRoundingUp(size.x(), kGroupX),
+                         gl::DivideRoundingUp(size.y(), kGroupY));
   gl::MemoryBarrier();
   Blur(maps->coefficients, maps->filtered, radius);
 }
@@ -220,7 +220,7 @@ void GlslPairGradient::Impl::ChainRule(const View& vi, const Eigen::Vector2i& si
   maps->filtered.BindImage(2, gl::ImageAccess::kReadOnly);
   maps->face.BindImage(3, gl::ImageAccess::kReadOnly);
   maps->chain.BindImage(4, gl::ImageAccess::kWriteOnly);
-  chain->Dispatch(DivUp(size.x(), kGroupX), DivUp(size.y(), kGroupY));
+  chain->Dispatch(gl::DivideRoundingUp(size.x(), kGroupX), gl::DivideRoundingUp(size.y(), kGroupY));
   gl::MemoryBarrier();
 }
 

@@ -54,8 +54,8 @@ struct Workspace {
 };
 
 // Workspaces outlive the threads that use them (a worker computes every job on a fresh
-// thread): fresh buffers cost a page fault per 4 KiB, which made a worker's job 4x slower than
-// the same pair in `manisweep refine`. At most one per thread computing at once.
+// thread): fresh buffers cost a page fault per 4 KiB, which made a worker's job several times
+// slower than the same pair in `manisweep refine`. At most one per thread computing at once.
 class WorkspacePool {
  public:
   class Lease {

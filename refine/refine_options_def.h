@@ -3,11 +3,10 @@
 // Expanded by base/option_group_members.h in refine/refine_options.h (no include guard).
 
 // Coarse to fine: `levels` image scales, each half the size of the next, the finest being the
-// images halved until they fit max_image_dimension (0: full size; 1600 as the sweep's default,
-// a quarter of the pixels of a 3072×2048 set at a quarter of the time). Iterations are split
-// evenly over the levels, the finest taking what is left over. 10 per level: the coarse levels
-// cost little and move the surface furthest; a fourth level (a 192-px fountain-P11) beats three
-// on fountain-P11 and the pyramids (docs/design/refine.md "Coarse to fine").
+// images halved until they fit max_image_dimension (0: full size; 1600 as the sweep's default).
+// Iterations are split evenly over the levels, the finest taking what is left over. The coarse
+// levels cost little and move the surface furthest (docs/design/refine.md "Coarse to fine"
+// measures the level count).
 MS_OPTION(int, iterations, 40, "iterations", "gradient steps in all, over all levels",
           InRange(0, 100000))
 MS_OPTION(int, levels, 4, "levels", "image scales, coarse to fine (each half the next)",

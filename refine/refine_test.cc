@@ -168,16 +168,16 @@ void ExpectAgreesWithTheReference(PairGradientKernel& kernel, const KernelBounds
   }
 }
 
-// Measured: equal pixel counts, energies within 1.1e-5, gradients 1.8e-5,
-// parallax rates 1.2e-9 (float storage), weights 2e-15.
+// The fast kernel stores in float what the reference computes in double; the bounds below
+// leave room above that rounding.
 TEST(PhotometricGradient, FastKernelAgreesWithTheReference) {
   const std::unique_ptr<PairGradientKernel> fast = MakePairGradientKernel("cpu");
   ExpectAgreesWithTheReference(*fast, {10, 5e-5, 1e-4, 1e-7, 1e-12});
 }
 
 // The GLSL kernel on this machine's GL (llvmpipe without a GPU): GL's own rasteriser, rays,
-// projections and barycentric weights in float. Measured on llvmpipe: equal pixel
-// counts, energies within 2.7e-5, gradients 4.0e-5, parallax rates 9.0e-6, weights 1.9e-7.
+// projections and barycentric weights in float, so its bounds are looser than the fast
+// kernel's.
 TEST(PhotometricGradient, GlslKernelAgreesWithTheReference) {
   const std::unique_ptr<PairGradientKernel> glsl = MakePairGradientKernel("glsl");
   ASSERT_EQ(glsl->Name(), "refine-glsl");

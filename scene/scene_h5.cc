@@ -54,8 +54,8 @@ void WriteSceneH5(const Scene& scene, H5File& file, const std::string& group) {
   file.Write(at("views/R"), rotations, {n, 3, 3});
   file.Write(at("views/t"), translations, {n, 3});
 
-  // One array at a time, each freed before the next is built: at 10^7 observations the six
-  // together were 155 MB on top of the scene, the coordinator's peak at its first checkpoint.
+  // One array at a time, each freed before the next is built: the six together on top of the
+  // scene would set the coordinator's peak of memory at its first checkpoint.
   const size_t m = scene.points.size();
   {
     std::vector<double> positions(3 * m);

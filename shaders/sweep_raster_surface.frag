@@ -3,7 +3,7 @@
 // the nearest surface, 8 bytes a fragment. World positions and reprojections are computed
 // afterwards, once per pixel, by sweep_reproject.comp: GPUs built for compute (H100) have few
 // raster output units, and writing them here (48 bytes a fragment, overdrawn ones included)
-// took 60% of the kernel there. The target is cleared to (0, -1): no surface.
+// made the raster stage most of the kernel there. The target is cleared to (0, -1): no surface.
 in float gs_depth;
 
 layout(location = 0) out vec2 o_surface;

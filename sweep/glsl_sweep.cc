@@ -69,14 +69,6 @@ gl::ShaderProgram Program(const std::string& name, const std::vector<std::string
   return gl::ShaderProgram(name, sources);
 }
 
-// ---- GL helpers ----
-
-// After every compute pass: its image and buffer stores become visible to every later access
-// (the next pass's image loads, the next batch's rendering into the same arrays, read-backs).
-void Barrier() { glMemoryBarrier(GL_ALL_BARRIER_BITS); }
-
-int DivUp(int64_t a, int64_t b) { return static_cast<int>((a + b - 1) / b); }
-
 // The farthest camera z any swept vertex can reach (sweeping moves a vertex by at most
 // |alpha k_max| along a ray), padded; 0 if the mesh lies behind the camera.
 double FarPlane(const View& view, const Mesh& mesh, double max_shift) {
@@ -407,8 +399,8 @@ GlslSweepKernel::MemoryPlan GlslSweepKernel::PlanMemory(const PreparedSweep& pre
     fit = std::min<int64_t>(fit, std::max<int64_t>(1, impl_->max_array_layers / neighbours));
   }
   // Even batches: as many batches as needed, as small as possible.
-  const int batches = DivUp(num_offsets, fit);
-  plan.offsets_per_batch = DivUp(num_offsets, batches);
+  const int batches = gl::DivideRoundingUp(num_offsets, fit);
+  plan.offsets_per_batch = gl::DivideRoundingUp(num_offsets, batches);
   return plan;
 }
 
@@ -598,7 +590,7 @@ GlslSweepKernel::Impl::GpuJob::GpuJob(const SweepJob& job, const PreparedSweep& 
       height(prep.camera.view.intrinsics.height),
       num_neighbours(static_cast<int>(prep.neighbours.size())),
       radius((prep.window.rows - 1) / 2),
-      match_words(DivUp(num_neighbours, 32)),
+      match_words(gl::DivideRoundingUp(num_neighbours, 32)),
       batches(Batch::Split(prep, rule, batch_size)),
       mesh(job.mesh),
       origin(mesh.origin()),
@@ -840,14 +832,16 @@ std::unique_ptr<GlslSweepKernel::Impl::GpuJob> GlslSweepKernel::Impl::UploadJob(
   tile_best.Set("u_must_move", rule.must_move ? 1 : 0);
   gl::CheckGlError("sweep setup");
   const bool transposed = variant == GlslBlurVariant::kUnrolled;
-  gpu->rows_groups_x = DivUp(DivUp(width, block), local_x);
-  gpu->rows_groups_y = DivUp(height, local_y);
-  gpu->ncc_groups_x = DivUp(transposed ? DivUp(height, block) : width, local_x);
-  gpu->ncc_groups_y = DivUp(transposed ? width : DivUp(height, block), local_y);
+  gpu->rows_groups_x = gl::DivideRoundingUp(gl::DivideRoundingUp(width, block), local_x);
+  gpu->rows_groups_y = gl::DivideRoundingUp(height, local_y);
+  gpu->ncc_groups_x =
+      gl::DivideRoundingUp(transposed ? gl::DivideRoundingUp(height, block) : width, local_x);
+  gpu->ncc_groups_y =
+      gl::DivideRoundingUp(transposed ? width : gl::DivideRoundingUp(height, block), local_y);
   if (Tiled(radius)) {
     const Eigen::Vector2i tile = NccTile(radius);
-    gpu->ncc_groups_x = DivUp(width, tile.x());
-    gpu->ncc_groups_y = DivUp(height, tile.y());
+    gpu->ncc_groups_x = gl::DivideRoundingUp(width, tile.x());
+    gpu->ncc_groups_y = gl::DivideRoundingUp(height, tile.y());
   }
   return gpu;
 }
@@ -912,7 +906,7 @@ void GlslSweepKernel::Impl::RenderCameraView(const GpuJob& gpu, const Batch& bat
     glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, batch.layers);
   }
   EndSweepRaster(gpu.clip_control, "sweep rasterization");
-  Barrier();
+  gl::MemoryBarrier();
 
   const int padded = PaddedWidth(gpu.width, gpu.radius);
   gpu.image.Bind(0);
@@ -927,9 +921,10 @@ void GlslSweepKernel::Impl::RenderCameraView(const GpuJob& gpu, const Batch& bat
     gpu.SetGroup(group);
     group.program->Set("u_size", Eigen::Vector2i(padded, gpu.height));
     group.program->Set("u_layers", batch.layers);
-    group.program->Dispatch(DivUp(padded, 8), DivUp(gpu.height, 8), batch.layers);
+    group.program->Dispatch(gl::DivideRoundingUp(padded, 8), gl::DivideRoundingUp(gpu.height, 8),
+                            batch.layers);
   }
-  Barrier();
+  gl::MemoryBarrier();
   gl::CheckGlError("sweep world + reprojection");
 }
 
@@ -943,7 +938,7 @@ void GlslSweepKernel::Impl::NccBatch(const GpuJob& gpu, const Batch& batch) {
       resources.sums1->BindImage(1, gl::ImageAccess::kWriteOnly);
       programs.rows.Set("u_layer", b);
       programs.rows.Dispatch(gpu.rows_groups_x, gpu.rows_groups_y);
-      Barrier();
+      gl::MemoryBarrier();
 
       resources.sums0->BindImage(1, gl::ImageAccess::kReadOnly);
       resources.sums1->BindImage(2, gl::ImageAccess::kReadOnly);
@@ -952,7 +947,7 @@ void GlslSweepKernel::Impl::NccBatch(const GpuJob& gpu, const Batch& batch) {
       programs.ncc.Set("u_layer", b);
       programs.ncc.Set("u_ncc_layer", b * gpu.num_neighbours + j);
       programs.ncc.Dispatch(gpu.ncc_groups_x, gpu.ncc_groups_y);
-      Barrier();
+      gl::MemoryBarrier();
     }
   }
   gl::CheckGlError("sweep NCC");
@@ -963,7 +958,7 @@ void GlslSweepKernel::Impl::KeepUnsweptNcc(const GpuJob& gpu) {
   glCopyImageSubData(resources.ncc->id(), GL_TEXTURE_2D_ARRAY, 0, 0, 0, 0,
                      resources.unswept_ncc->id(), GL_TEXTURE_2D_ARRAY, 0, 0, 0, 0, gpu.width,
                      gpu.height, gpu.num_neighbours);
-  Barrier();
+  gl::MemoryBarrier();
   gl::CheckGlError("sweep NCC at k = 0");
 }
 
@@ -989,7 +984,7 @@ void GlslSweepKernel::Impl::ReduceBatch(const GpuJob& gpu, const Batch& batch) {
   tile_best.Set("u_batch", batch.index);
   tile_best.Set("u_compete", batch.unswept ? 0 : 1);
   tile_best.Dispatch(gpu.prep.tiles.tiles_x, gpu.prep.tiles.tiles_y);
-  Barrier();
+  gl::MemoryBarrier();
   gl::CheckGlError("sweep tile-best");
 }
 

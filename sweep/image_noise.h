@@ -22,9 +22,9 @@ inline constexpr double kSmoothingStepPx = 0.05;
 // Immerkaer's estimator (J. Immerkaer, "Fast noise variance estimation", CVIU 64(2), 1996):
 // sqrt(pi/2) / 6 times the mean absolute response to the Laplacian difference mask
 // [1 -2 1; -2 4 -2; 1 -2 1], here over each block of kNoiseBlockPx^2 interior pixels, and the
-// kNoiseQuantile quantile of the blocks' figures (5-10% under the truth on pure noise). Flat
-// (clipped, synthetic) regions read as 0. Well-exposed photographs give 0.3-0.4 grey levels
-// (docs/design/sweep.md). 0 for images smaller than 3 x 3.
+// kNoiseQuantile quantile of the blocks' figures (a little under the truth on pure noise:
+// textured blocks are left out). Flat (clipped, synthetic) regions read as 0; docs/design/sweep.md
+// gives the figures of real photographs. 0 for images smaller than 3 x 3.
 double EstimateNoiseSigma(const cv::Mat& gray);
 
 // The Gaussian's sigma (pixels) that brings white noise of `noise_sigma` down to about

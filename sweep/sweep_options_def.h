@@ -19,9 +19,9 @@ MS_OPTION(double, alpha_parallax_px, 1.0, "alpha-parallax-px",
 // t_NCC: a tile's best pixel becomes a point only if its NCC is strictly above this.
 MS_OPTION(double, ncc_threshold, 0.98, "ncc-threshold", "t_NCC: keep tile winners above this",
           InRange(-1, 1))
-// A pixel matched by one neighbour alone is an outlier 5-50 times as often as one matched by
-// two (docs/design/sweep.md "Matching neighbours"). 0 and 1 both mean any one neighbour (the
-// paper); jobs with fewer neighbours, or pixels fewer neighbours see, need all of theirs.
+// A pixel matched by one neighbour alone is an outlier far more often than one matched by
+// two (docs/design/sweep.md "Matching neighbours" measures it). 0 and 1 both mean any one neighbour
+// (the paper); jobs with fewer neighbours, or pixels fewer neighbours see, need all of theirs.
 MS_OPTION(int, min_matching_neighbours, 2, "min-matching-neighbours",
           "a tile's winning pixel needs this many neighbours to support it at its offset: its own "
           "above t_NCC, the others above --sweep.support-ncc (fewer where fewer see the pixel, "

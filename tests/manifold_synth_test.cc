@@ -78,7 +78,7 @@ TEST(InitialManifold, BlobIsCloseToTheGroundTruth) { ExpectBlobCloseToTheGroundT
 
 // All graded Steiner points (--manifold.graded-steiner on) on the same blob: cells of Steiner
 // points only count as free, otherwise the free space is narrow cones that growing cannot
-// carve and views see the closure from behind (MAE 0.71 before that rule).
+// carve and views see the closure from behind.
 TEST(InitialManifold, BlobWithGradedSteinerPointsIsCloseToTheGroundTruth) {
   ManifoldOptions options;
   options.steiner_graded = GradedSteiner::kOn;

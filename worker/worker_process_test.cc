@@ -18,6 +18,7 @@
 #include "proto/wire.h"
 #include "refine/refine_options.h"
 #include "sweep/sweep_kernel_factory.h"
+#include "testing/in_memory_network.h"
 #include "worker/image_cache.h"
 #include "worker/job_codec.h"
 

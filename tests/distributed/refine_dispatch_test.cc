@@ -11,13 +11,13 @@
 
 #include "coordinator/refine_dispatcher.h"
 #include "mesh/mesh_io.h"
-#include "proto/transport.h"
 #include "proto/wire.h"
 #include "refine/gradient_kernel.h"
 #include "refine/refiner.h"
 #include "scene/scene_io.h"
 #include "sweep/sweep_images.h"
 #include "sweep/sweep_kernel_factory.h"
+#include "testing/in_memory_network.h"
 #include "tests/distributed/pyramid_scene_files.h"
 #include "worker/worker_process.h"
 

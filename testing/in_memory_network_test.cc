@@ -1,4 +1,4 @@
-#include "proto/transport.h"
+#include "testing/in_memory_network.h"
 
 #include <gtest/gtest.h>
 
