@@ -149,8 +149,10 @@ def main():
                 saved = json.load(f)
             if merged is None:
                 merged = saved
+                merged["commands"] = [saved["command"]]
             else:
                 merged["rows"] += saved["rows"]
+                merged["commands"] += saved.get("commands", [saved["command"]])
         merged["rows"].sort(key=lambda r: (r["workers"], r["iteration"]))
         os.makedirs(args.out, exist_ok=True)
         with open(os.path.join(args.out, "capacity.json"), "w") as f:
