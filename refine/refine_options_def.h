@@ -14,8 +14,10 @@ MS_OPTION(int, levels, 4, "levels", "image scales, coarse to fine (each half the
 MS_OPTION(int, max_image_dimension, 1600, "max-image-dimension",
           "finest scale: images halved until their longest side fits this (0: full size)",
           AtLeast(0))
-// The similarity: ZNCC over a Gaussian window, per pixel of the reference camera.
-MS_OPTION(double, gaussian_sigma_px, 2.0, "gaussian-sigma-px",
+// The similarity: ZNCC over a Gaussian window, per pixel of the reference camera. A wide window
+// averages the photographs' noise and reaches across the swept mesh's facets; the sweep's 8 px
+// is about as good (docs/design/refine.md "The window").
+MS_OPTION(double, gaussian_sigma_px, 6.0, "gaussian-sigma-px",
           "sigma of the ZNCC's Gaussian window (pixels of the level)", InRange(0.5, 50))
 // Images are gray in [0, 1]; 1e-4 is a standard deviation of 2.55/255 (as the sweep).
 MS_OPTION(double, min_texture_variance, 1e-4, "min-texture-variance",
