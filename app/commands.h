@@ -30,6 +30,7 @@ void RegisterEvaluateCommand(CLI::App& app);
 void RegisterConsistencyCommand(CLI::App& app);
 void RegisterConvertCommand(CLI::App& app);
 void RegisterReconstructCommand(CLI::App& app);
+void RegisterExtendCommand(CLI::App& app);
 void RegisterCoordinatorCommand(CLI::App& app);
 void RegisterWorkerCommand(CLI::App& app);
 void RegisterKeygenCommand(CLI::App& app);

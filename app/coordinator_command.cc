@@ -106,7 +106,11 @@ void RegisterCoordinatorCommand(CLI::App& app) {
   cmd->add_flag("--refine", options->refine,
                 "then refine final.ply photometrically into refined.ply on the same workers, "
                 "keeping it a closed 2-manifold (docs/design/refine.md)");
+  cmd->add_option("--extend-run", options->run.extend_run,
+                  "extend this finished run with the new cameras of --input, as `manisweep "
+                  "extend` (docs/design/extend.md)");
   AddRunOptions(cmd, &options->run);
+  AddOptionGroup(cmd, &options->run.extend);
   AddOptionGroup(cmd, &options->refine_options);
   AddRunReportOptions(cmd, &options->report);
   cmd->callback([options] { RunCoordinator(*options); });

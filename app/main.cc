@@ -74,6 +74,7 @@ int main(int argc, char** argv) {
   ms::app::RegisterRenderCommand(app);
   ms::app::RegisterConvertCommand(app);
   ms::app::RegisterReconstructCommand(app);
+  ms::app::RegisterExtendCommand(app);
   ms::app::RegisterCoordinatorCommand(app);
   ms::app::RegisterWorkerCommand(app);
   ms::app::RegisterKeygenCommand(app);

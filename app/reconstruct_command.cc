@@ -281,21 +281,9 @@ void RunReconstruct(ReconstructCommandOptions& options) {
   WriteRunReportAfterRun(setup.output_dir, options.report);
 }
 
-}  // namespace
-
-void RegisterReconstructCommand(CLI::App& app) {
-  auto options = std::make_shared<ReconstructCommandOptions>();
-  options->coordinator.output_dir = "manisweep_output";
-  options->coordinator.run.progress_interval_s = 2;
-  CLI::App* cmd = app.add_subcommand(
-      "reconstruct",
-      "All-in-one local run: a coordinator and N sweep workers on this machine (no --input: "
-      "the embedded default scene)");
-  cmd->add_option("-i,--input", options->coordinator.input,
-                  "scene (any supported format); omitted: a synthetic pyramid made on the fly");
-  cmd->add_option("-o,--output", options->coordinator.output_dir,
-                  "output directory: initial.ply, final.ply, run.h5, summary.json")
-      ->capture_default_str();
+// What reconstruct and extend share: workers, kernel, refinement, the run's option groups, the
+// report.
+void AddLocalRunOptions(CLI::App* cmd, ReconstructCommandOptions* options) {
   cmd->add_option("-w,--workers", options->workers, "worker processes (0 = one per core)")
       ->capture_default_str();
   cmd->add_option("--worker-threads", options->worker_threads,
@@ -312,6 +300,46 @@ void RegisterReconstructCommand(CLI::App& app) {
   AddRunOptions(cmd, &options->coordinator);
   AddOptionGroup(cmd, &options->refine_options);
   AddRunReportOptions(cmd, &options->report);
+}
+
+}  // namespace
+
+void RegisterReconstructCommand(CLI::App& app) {
+  auto options = std::make_shared<ReconstructCommandOptions>();
+  options->coordinator.output_dir = "manisweep_output";
+  options->coordinator.run.progress_interval_s = 2;
+  CLI::App* cmd = app.add_subcommand(
+      "reconstruct",
+      "All-in-one local run: a coordinator and N sweep workers on this machine (no --input: "
+      "the embedded default scene)");
+  cmd->add_option("-i,--input", options->coordinator.input,
+                  "scene (any supported format); omitted: a synthetic pyramid made on the fly");
+  cmd->add_option("-o,--output", options->coordinator.output_dir,
+                  "output directory: initial.ply, final.ply, run.h5, summary.json")
+      ->capture_default_str();
+  AddLocalRunOptions(cmd, options.get());
+  cmd->callback([options] { RunReconstruct(*options); });
+}
+
+void RegisterExtendCommand(CLI::App& app) {
+  auto options = std::make_shared<ReconstructCommandOptions>();
+  options->coordinator.run.progress_interval_s = 2;
+  CLI::App* cmd = app.add_subcommand(
+      "extend",
+      "Add images to a finished run: their points and rays go into the run's manifold, then "
+      "the new cameras and their neighbours are swept (docs/design/extend.md)");
+  cmd->add_option("--run", options->coordinator.extend_run,
+                  "the finished run's output folder (read, never changed)")
+      ->required();
+  cmd->add_option("-i,--input", options->coordinator.input,
+                  "SfM model (any supported format) with the run's cameras and the new ones, in "
+                  "the run's frame")
+      ->required();
+  cmd->add_option("-o,--output", options->coordinator.output_dir,
+                  "output directory of the extended run (as reconstruct's)")
+      ->required();
+  AddLocalRunOptions(cmd, options.get());
+  AddOptionGroup(cmd, &options->coordinator.extend);
   cmd->callback([options] { RunReconstruct(*options); });
 }
 

@@ -36,6 +36,7 @@ const CoordinatorOptions& Checked(const CoordinatorOptions& options) {
 void CoordinatorOptions::Check() const {
   if (output_dir.empty()) throw InputError("--output is required");
   if (input.empty() && !run.resume) throw InputError("--input is required unless --resume");
+  if (!extend_run.empty() && input.empty()) throw InputError("--input: the new model is required");
   CheckGroups();
 }
 
@@ -46,6 +47,7 @@ void CoordinatorOptions::CheckGroups() const {
   visible.Check();
   sweep.Check();
   scheduler.Check();
+  extend.Check();
   Limits().Check();
 }
 
@@ -60,7 +62,8 @@ OptionValues CoordinatorOptionValues(const CoordinatorOptions& o) {
   OptionValues values;
   for (OptionValues group :
        {OptionGroupValues(o.run), OptionGroupValues(o.manifold), OptionGroupValues(o.neighbours),
-        OptionGroupValues(o.visible), OptionGroupValues(o.sweep), OptionGroupValues(o.scheduler)}) {
+        OptionGroupValues(o.visible), OptionGroupValues(o.sweep), OptionGroupValues(o.scheduler),
+        OptionGroupValues(o.extend)}) {
     values.insert(values.end(), group.begin(), group.end());
   }
   return values;

@@ -16,6 +16,7 @@
 
 #include "base/options.h"
 #include "coordinator/job_scheduler.h"
+#include "coordinator/run_extension.h"
 #include "manifold/manifold_options.h"
 #include "mesh/visible_mesh.h"
 #include "proto/transport.h"
@@ -43,6 +44,10 @@ struct CoordinatorOptions {
   VisibleMeshOptions visible;
   SweepOptions sweep;  // sent with every job
   SchedulerOptions scheduler;
+  // `manisweep extend`: the finished run whose output folder this run extends with the new
+  // cameras of `input` (coordinator/run_extension.h); empty for a plain run.
+  std::string extend_run;
+  ExtendOptions extend;
   // The workers stay after a finished run (no Shutdown): refinement follows on them
   // (coordinator/refine_dispatcher.h). Set by the commands, not a flag.
   bool keep_workers = false;

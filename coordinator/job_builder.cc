@@ -31,7 +31,9 @@ IterationJobSource::IterationJobSource(const Scene& scene,
       index_(*mesh_),
       counted_(scene.views.size(), false) {
   MS_CHECK(neighbours.size() == scene.views.size()) << "one neighbour list per camera";
+  MS_CHECK(options.swept.empty() || options.swept.size() == scene.views.size());
   for (size_t c = 0; c < scene.views.size(); ++c) {
+    if (!options.swept.empty() && !options.swept[c]) continue;
     if (neighbours[c].empty()) {
       stats_.skipped.push_back(fmt::format("camera {}: no neighbour", c));
     } else {
@@ -88,7 +90,8 @@ std::vector<std::optional<BuiltJob>> IterationJobSource::Build(const std::vector
   for (uint64_t id : ids) {
     const int c = static_cast<int>(JobIdCamera(id));
     MS_CHECK(JobIdIteration(id) == iteration_ && c >= 0 &&
-             c < static_cast<int>(scene_.views.size()) && !neighbours_[c].empty())
+             c < static_cast<int>(scene_.views.size()) && !neighbours_[c].empty() &&
+             (options_.swept.empty() || options_.swept[c]))
         << "job " << id << " is not one of this iteration's";
     cameras.push_back(c);
   }

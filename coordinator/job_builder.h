@@ -33,6 +33,9 @@ struct JobBuildOptions {
   SweepOptions sweep;
   double lease_s = 600;
   WireLimits limits;
+  // The cameras that get jobs (1 each); empty: every camera (an extension sweeps only its new
+  // cameras and their neighbours).
+  std::vector<uint8_t> swept;
 };
 
 // A job as it goes out, with what its result must fit and its serialized size.
@@ -61,8 +64,8 @@ class IterationJobSource {
                      std::shared_ptr<const Mesh> mesh, const ImageCatalog& images,
                      uint32_t iteration, uint64_t session_id, const JobBuildOptions& options);
 
-  // The iteration's job ids, by camera: every camera with a neighbour. Whether a camera sees a
-  // face is known only when its job is built.
+  // The iteration's job ids, by camera: every swept camera with a neighbour. Whether a camera sees
+  // a face is known only when its job is built.
   const std::vector<uint64_t>& job_ids() const { return job_ids_; }
   // The jobs of `ids` (ids of this source), built in parallel, each with the bounds its result
   // must fit (from the visible mesh at hand, not unpacked again): std::nullopt for a camera that

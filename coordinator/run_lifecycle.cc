@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <utility>
 
+#include "base/check.h"
 #include "base/error.h"
 #include "base/memory.h"
 #include "manifold/scene_rays.h"
@@ -45,6 +46,12 @@ std::string RunLifecycle::Path(const std::string& name) const {
 }
 
 StepOutcome RunLifecycle::Prepare() {
+  std::error_code same_error;
+  if (!options_.extend_run.empty() &&
+      fs::equivalent(options_.extend_run, options_.output_dir, same_error)) {
+    throw InputError("--output " + options_.output_dir +
+                     ": the extension goes to another folder than --run (the run stays as it is)");
+  }
   fs::create_directories(options_.output_dir);
   const std::string run_file = Path("run.h5");
   const std::string fingerprint = OptionsFingerprint(options_);
@@ -66,6 +73,9 @@ StepOutcome RunLifecycle::Prepare() {
     input = ReadScene(options_.input);
     input.Validate();
   }
+  const Start start = resuming                       ? Start::kResume
+                      : !options_.extend_run.empty() ? Start::kExtend
+                                                     : Start::kNew;
   if (resuming) {
     record_ = ReadCheckpoint(run_file);
     if (record_.options_fingerprint != fingerprint) {
@@ -73,10 +83,14 @@ StepOutcome RunLifecycle::Prepare() {
                        ": the run was made with other options (manifold, sweep, "
                        "neighbour or visible-mesh options differ); resume with the same ones");
     }
-    if (!options_.input.empty() && SceneFingerprint(input) != record_.scene_fingerprint) {
+    // An extended run's scene is the run's and the model's together.
+    if (!options_.input.empty() && record_.extensions.empty() &&
+        SceneFingerprint(input) != record_.scene_fingerprint) {
       throw InputError(options_.input + ": not the scene of the run in " + run_file);
     }
     spdlog::info("resuming {}: {} iterations done", run_file, record_.completed_iterations());
+  } else if (start == Start::kExtend) {
+    record_ = ExtendedRecord(std::move(input));
   } else {
     record_ = RunRecord();
     record_.scene = std::move(input);
@@ -103,20 +117,133 @@ StepOutcome RunLifecycle::Prepare() {
     neighbours_.push_back(SelectNeighbours(scene, static_cast<int>(c), options_.neighbours));
   }
   if (options_.manifold.witness_tolerance > 0) witness_candidates_ = WitnessCandidates(scene);
-  BuildOrReplay(resuming, run_file);
+  BuildOrReplay(start, run_file);
   return NextOrStop();
+}
+
+RunRecord RunLifecycle::ExtendedRecord(Scene model) {
+  const fs::path run_dir(options_.extend_run);
+  std::error_code ec;
+  const std::string run_file = (run_dir / "run.h5").string();
+  if (!fs::exists(run_file)) {
+    throw InputError("--run " + options_.extend_run + ": no run.h5 there (not a run folder)");
+  }
+  RunRecord record = ReadRunFile(run_file);
+  if (record.stop_reason.empty()) {
+    throw InputError(run_file +
+                     ": the run has not finished; finish it first (the same command "
+                     "with --resume), then extend it");
+  }
+  if (record.options_fingerprint != OptionsFingerprint(options_)) {
+    throw InputError(run_file +
+                     ": the run was made with other options (manifold, sweep, neighbour or "
+                     "visible-mesh options differ); extend it with the same ones");
+  }
+  ExtendedScene extended = ExtendScene(record.scene, model, options_.input, options_.extend);
+  const RunExtension& e = extended.extension;
+  spdlog::info(
+      "extending {} ({} cameras, {} iterations) with {}: {} new cameras, {} of its {} points "
+      "seen by them; old cameras moved by at most {:.3g} and turned by at most {:.3g} degrees",
+      run_file, e.views_before, record.completed_iterations(), options_.input,
+      e.views_after - e.views_before, e.points_after - e.points_before, extended.model_points,
+      extended.worst_shift, extended.worst_turn_deg);
+  record.scene = std::move(extended.scene);
+  record.scene_points = static_cast<int64_t>(record.scene.points.size());
+  record.scene_copy_from.clear();
+  record.scene_fingerprint = SceneFingerprint(record.scene);
+  record.extensions.push_back(e);
+  record.extensions.back().iteration = record.completed_iterations() + 1;
+  record.stop_reason.clear();
+  // The initial manifold is the run's: its meshes come along for the report.
+  for (const char* name : {"initial.ply", "initial_surface.ply"}) {
+    if (fs::exists(run_dir / name)) {
+      fs::create_directories(options_.output_dir);
+      fs::copy_file(run_dir / name, Path(name), fs::copy_options::overwrite_existing, ec);
+    }
+  }
+  return record;
+}
+
+void RunLifecycle::AddExtensionCameras(int iteration) {
+  for (const RunExtension& e : record_.extensions) {
+    if (e.iteration != iteration) continue;
+    const std::vector<ManifoldCamera> all = ManifoldCamerasFromScene(record_.scene);
+    manifold_->AddCameras(
+        std::vector<ManifoldCamera>(all.begin() + e.views_before, all.begin() + e.views_after));
+  }
+}
+
+IterationStats RunLifecycle::InsertionRow(int iteration, size_t found,
+                                          const InsertionStats& s) const {
+  IterationStats row;
+  row.iteration = static_cast<int32_t>(iteration);
+  row.points_found = static_cast<int64_t>(found);
+  row.points_inserted = s.inserted;
+  row.discarded_conflict = s.discarded_conflict;
+  row.discarded_duplicate = s.discarded_duplicate;
+  row.discarded_outside = s.discarded_outside;
+  row.vertices = static_cast<int64_t>(mesh_.NumVertices());
+  row.faces = static_cast<int64_t>(mesh_.NumFaces());
+  row.outside_cells = s.outside_cells;
+  return row;
+}
+
+void RunLifecycle::InsertExtension() {
+  const RunExtension& e = record_.extensions.back();
+  MS_CHECK(e.iteration == record_.completed_iterations() + 1) << "no extension to insert";
+  Timer insert;
+  AddExtensionCameras(e.iteration);
+  std::vector<RayPoint> batch = ExtensionBatch(record_.scene, e);
+  const InsertionStats s = manifold_->Insert(batch);
+  const double insert_s = insert.Seconds();
+  Timer extract;
+  Extract();
+  IterationStats row = InsertionRow(e.iteration, batch.size(), s);
+  row.cameras_in_matter = CountCamerasInMatter(e.iteration);
+  row.seconds_insert = insert_s;
+  row.seconds_extract = extract.Seconds();
+  row.seconds_total = insert_s + row.seconds_extract;
+  record_.batches.push_back(std::move(batch));
+  record_.iterations.push_back(row);
+  spdlog::info(
+      "extension (iteration {}): {} new cameras; of their {} points {} inserted, {} duplicates "
+      "(their vertices gained {} rays), {} conflicts, {} outside; mesh {} vertices, {} faces; "
+      "{:.2f} s",
+      e.iteration, e.views_after - e.views_before, row.points_found, s.inserted,
+      s.discarded_duplicate, s.gained_rays, s.discarded_conflict, s.discarded_outside, row.vertices,
+      row.faces, insert_s);
+  Checkpoint();
+}
+
+std::vector<uint8_t> RunLifecycle::SweptCameras() const {
+  if (record_.extensions.empty()) return {};
+  const RunExtension& e = record_.extensions.back();
+  std::vector<uint8_t> swept(record_.scene.views.size(), 0);
+  for (int32_t c = e.views_before; c < e.views_after; ++c) {
+    swept[c] = 1;
+    for (int n : neighbours_[c]) swept[n] = 1;
+  }
+  return swept;
+}
+
+int RunLifecycle::SweepIterationsDone() const {
+  const int first = record_.extensions.empty() ? 0 : record_.extensions.back().iteration;
+  return record_.completed_iterations() - first;
 }
 
 // The initial manifold; on resume, the checkpointed batches inserted again, each of which must
 // insert exactly what it did in the run.
-void RunLifecycle::BuildOrReplay(bool resuming, const std::string& run_file) {
+void RunLifecycle::BuildOrReplay(Start start, const std::string& run_file) {
   const Scene& scene = record_.scene;
-  manifold_ =
-      std::make_unique<DelaunayManifold>(ManifoldCamerasFromScene(scene), options_.manifold);
+  // An extended run's manifold is built from the views and points before its extensions.
+  std::vector<ManifoldCamera> cameras = ManifoldCamerasFromScene(scene);
+  cameras.resize(record_.build_views());
+  manifold_ = std::make_unique<DelaunayManifold>(std::move(cameras), options_.manifold);
   // The points' rays only while the manifold is built: it keeps what it needs of them and lets
   // them go before it grows the initial manifold.
   std::vector<RayPoint> rays = RayPointsFromScene(scene);
-  if (!resuming) {
+  rays.resize(record_.build_points());
+  if (start == Start::kNew) {
     // The first checkpoint copies the scene from the stash, so that the scene's points are not
     // held while the manifold is built and its meshes extracted, the coordinator's peak of
     // memory (docs/design/performance.md).
@@ -131,12 +258,13 @@ void RunLifecycle::BuildOrReplay(bool resuming, const std::string& run_file) {
                stats.points, stats.steiner_points, stats.cells, stats.outside_cells, build_s);
   spdlog::info("memory after the initial manifold: {} (manifold about {:.0f} MiB)", MemoryReport(),
                manifold_->MemoryBytes() / 1048576.0);
-  if (!resuming) {
+  if (start == Start::kNew) {
     WriteInitial(stats, build_s);
     return;
   }
   for (int i = 0; i < record_.completed_iterations(); ++i) {
     Timer replay;
+    AddExtensionCameras(i + 1);
     const InsertionStats s = manifold_->Insert(record_.batches[i]);
     spdlog::info("replayed iteration {}: {} of {} points inserted, {:.2f} s", i + 1, s.inserted,
                  s.requested, replay.Seconds());
@@ -147,6 +275,7 @@ void RunLifecycle::BuildOrReplay(bool resuming, const std::string& run_file) {
           run_file, i + 1, s.inserted, record_.iterations[i + 1].points_inserted));
     }
   }
+  if (start == Start::kExtend) return InsertExtension();
   Extract();
   if (!fs::exists(Path("initial.ply"))) {
     spdlog::warn("initial.ply is missing; it is not rewritten on resume");
@@ -220,23 +349,14 @@ StepOutcome RunLifecycle::Integrate(std::vector<RayPoint> rest, const SweepRound
   early_seconds_ = 0;
   Timer extract;
   Extract();
-  IterationStats row;
-  row.iteration = static_cast<int32_t>(iteration);
+  IterationStats row = InsertionRow(iteration, batch.size(), s);
   row.jobs = round.jobs;
   row.jobs_bad = round.jobs_bad;
   row.jobs_requeued = round.jobs_requeued;
   row.cameras_skipped = round.cameras_skipped;
-  row.points_found = static_cast<int64_t>(batch.size());
-  row.points_inserted = s.inserted;
-  row.discarded_conflict = s.discarded_conflict;
-  row.discarded_duplicate = s.discarded_duplicate;
-  row.discarded_outside = s.discarded_outside;
-  row.vertices = static_cast<int64_t>(mesh_.NumVertices());
-  row.faces = static_cast<int64_t>(mesh_.NumFaces());
   if (options_.run.save_iteration_meshes) {
     WriteOutputMeshes(fmt::format("iteration_{:02d}", iteration), false, &row);
   }
-  row.outside_cells = s.outside_cells;
   row.cameras_in_matter = CountCamerasInMatter(iteration);
   row.seconds_jobs = round.seconds_jobs;
   row.job_bytes = round.job_bytes;
@@ -452,13 +572,16 @@ void RunLifecycle::WriteInterruptedSummary() {
 StepOutcome RunLifecycle::NextOrStop() {
   StepOutcome outcome;
   const int done = record_.completed_iterations();
+  // An extension sweeps its own --max-iterations; the insertion of its points is no sweep.
+  const int swept = SweepIterationsDone();
   std::string reason;
-  if (done >= 1 && record_.iterations.back().points_inserted == 0) {
+  if (swept >= 1 && record_.iterations.back().points_inserted == 0) {
     reason = "converged: no new point was inserted";
-  } else if (done >= options_.run.max_iterations) {
+  } else if (swept >= options_.run.max_iterations) {
     reason = fmt::format("reached --max-iterations {}", options_.run.max_iterations);
   } else {
     if (!surface_) MakeSweepSurface();
+    job_options_.swept = SweptCameras();
     outcome.jobs = std::make_unique<IterationJobSource>(record_.scene, neighbours_, surface_,
                                                         *catalog_, static_cast<uint32_t>(done + 1),
                                                         session_id_, job_options_);

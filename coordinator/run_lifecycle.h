@@ -94,7 +94,22 @@ class RunLifecycle {
 
  private:
   std::string Path(const std::string& name) const;
-  void BuildOrReplay(bool resuming, const std::string& run_file);
+  // How Prepare starts: a new run, a resumed one, or the extension of a finished one.
+  enum class Start { kNew, kResume, kExtend };
+  void BuildOrReplay(Start start, const std::string& run_file);
+  // The finished run --extend-run, its scene extended by `model` and the extension recorded
+  // (its batch not yet inserted).
+  RunRecord ExtendedRecord(Scene model);
+  // Adds the cameras of the extension inserted at `iteration`, if one is.
+  void AddExtensionCameras(int iteration);
+  // An iteration's row as far as its insertion and the extracted mesh tell it.
+  IterationStats InsertionRow(int iteration, size_t found, const InsertionStats& s) const;
+  // Inserts the last extension's batch: its iteration's statistics, then a checkpoint.
+  void InsertExtension();
+  // The cameras swept from now on: every camera, or the last extension's and their neighbours.
+  std::vector<uint8_t> SweptCameras() const;
+  // Sweep iterations since the start or the last extension.
+  int SweepIterationsDone() const;
   void WriteInitial(const BuildStats& stats, double build_s);
   // Cameras inside the matter after an iteration, warned about by number (should be none).
   int64_t CountCamerasInMatter(int iteration);

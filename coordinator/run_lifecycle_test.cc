@@ -3,12 +3,16 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <iterator>
 
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
+#include "proto/wire.h"
 #include "scene/scene_io.h"
 #include "testing/scene_testing.h"
 
@@ -285,6 +289,125 @@ TEST(RunLifecycle, ARunStoppedBeforeItsFirstIterationWritesTheInitialMeshAsFinal
   EXPECT_GT(initial.NumFaces(), 0u);
   EXPECT_EQ(final_mesh.vertices, initial.vertices);
   EXPECT_EQ(final_mesh.faces, initial.faces);
+}
+
+// The sphere scene without its third camera: the run an extension starts from.
+std::string WriteFirstTwoViews(const TempDir& dir, const std::string& full) {
+  Scene scene = ReadScene(full);
+  scene.views.pop_back();
+  std::vector<ScenePoint> kept;
+  for (ScenePoint p : scene.points) {
+    p.observations.erase(std::remove_if(p.observations.begin(), p.observations.end(),
+                                        [](const Observation& o) { return o.view >= 2; }),
+                         p.observations.end());
+    if (p.observations.size() >= 2) kept.push_back(p);
+  }
+  scene.points = kept;
+  const std::string path = dir / "first.h5";
+  WriteScene(scene, path, SceneFormat::kAuto);
+  return path;
+}
+
+// A finished run of the first two cameras (no sweep point: it converges after the build).
+CoordinatorOptions FinishedFirstRun(const TempDir& dir, const std::string& full) {
+  CoordinatorOptions options = Options(WriteFirstTwoViews(dir, full), dir / "run");
+  RunLifecycle run(options, 1);
+  EXPECT_FALSE(run.Prepare().stop);
+  EXPECT_TRUE(run.Integrate({}, SweepRound()).stop);
+  return options;
+}
+
+std::string FileBytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST(RunLifecycle, AnExtensionInsertsTheNewCamerasPointsThenSweepsThem) {
+  const TempDir dir("lifecycle");
+  const std::string full = WriteSphereScene(dir);
+  FinishedFirstRun(dir, full);
+  const std::string run_bytes = FileBytes(dir / "run/run.h5");
+
+  CoordinatorOptions extend = Options(full, dir / "extended");
+  extend.extend_run = dir / "run";
+  extend.run.max_iterations = 1;
+  RunLifecycle extended(extend, 2);
+  const StepOutcome next = extended.Prepare();
+  ASSERT_FALSE(next.stop);
+  // The run's iteration, then the extension's insertion.
+  EXPECT_EQ(extended.completed_iterations(), 2);
+  EXPECT_EQ(extended.num_views(), 3);
+  const RunRecord record = ReadRunFile(dir / "extended/run.h5");
+  ASSERT_EQ(record.extensions.size(), 1u);
+  const RunExtension& e = record.extensions[0];
+  EXPECT_EQ(e.iteration, 2);
+  EXPECT_EQ(e.views_before, 2);
+  EXPECT_EQ(e.views_after, 3);
+  EXPECT_GT(e.points_after, e.points_before);
+  const IterationStats& row = record.iterations[2];
+  EXPECT_EQ(row.points_found, e.points_after - e.points_before);
+  EXPECT_GT(row.points_inserted, 0);      // the points only the new camera shares
+  EXPECT_GT(row.discarded_duplicate, 0);  // the old points it sees too
+  EXPECT_EQ(row.cameras_in_matter, 0);
+  // The new camera is swept (with its neighbours).
+  const std::vector<uint64_t>& ids = next.jobs->job_ids();
+  EXPECT_NE(std::find(ids.begin(), ids.end(), MakeJobId(3, 2)), ids.end());
+
+  // Resumed after the extension: the same manifold, replayed with the camera added in place.
+  CoordinatorOptions resume = extend;
+  resume.run.resume = true;
+  RunLifecycle resumed(resume, 3);
+  ASSERT_FALSE(resumed.Prepare().stop);
+  EXPECT_EQ(resumed.surface().vertices, extended.surface().vertices);
+  EXPECT_EQ(resumed.surface().faces, extended.surface().faces);
+  // One sweep iteration, as --max-iterations says for the extension, then a closed manifold.
+  const StepOutcome last = resumed.Integrate(Batch(full, 0.0).Sorted(), SweepRound());
+  EXPECT_TRUE(last.stop);
+  EXPECT_EQ(resumed.final_result().stop_reason, "reached --max-iterations 1");
+  EXPECT_TRUE(CheckMesh(ReadMesh(dir / "extended/final.ply")).is_closed_manifold);
+  EXPECT_EQ(FileBytes(dir / "run/run.h5"), run_bytes) << "the extended run was modified";
+}
+
+TEST(RunLifecycle, AnExtensionIsRefusedWithOneLineAndTheRunKept) {
+  const TempDir dir("lifecycle");
+  const std::string full = WriteSphereScene(dir);
+  const CoordinatorOptions first = FinishedFirstRun(dir, full);
+  const std::string run_bytes = FileBytes(dir / "run/run.h5");
+  const auto model = [&](const std::function<void(Scene*)>& change) {
+    Scene scene = ReadScene(full);
+    change(&scene);
+    const std::string path = dir / "model.h5";
+    WriteScene(scene, path, SceneFormat::kAuto);
+    return path;
+  };
+  const auto extend = [&](const std::string& input, const std::string& output) {
+    CoordinatorOptions options = Options(input, output);
+    options.extend_run = dir / "run";
+    RunLifecycle(options, 9).Prepare();
+  };
+  const std::string moved = model(
+      [](Scene* s) { s->views[1].SetCenter(s->views[1].Center() + Eigen::Vector3d(0.3, 0, 0)); });
+  ExpectInputError([&] { extend(moved, dir / "out1"); },
+                   {"model.h5", "camera 1", "moved by 0.3", "--extend.max-camera-shift"});
+  const std::string missing = model([](Scene* s) { s->views[0].name = "another.png"; });
+  ExpectInputError([&] { extend(missing, dir / "out2"); }, {"is not in the model"});
+  ExpectInputError([&] { extend(first.input, dir / "out3"); }, {"no new image"});
+  ExpectInputError([&] { extend(full, dir / "run"); }, {"another folder"});
+  CoordinatorOptions other = Options(full, dir / "out4");
+  other.extend_run = dir / "run";
+  other.manifold.w1 = 5;
+  ExpectInputError([&] { RunLifecycle(other, 9).Prepare(); }, {"other options"});
+  for (const char* out : {"out1", "out2", "out3", "out4"}) {
+    EXPECT_FALSE(std::filesystem::exists(std::filesystem::path(dir / out) / "run.h5")) << out;
+  }
+  EXPECT_EQ(FileBytes(dir / "run/run.h5"), run_bytes);
+
+  // A run not yet finished is not extended.
+  CoordinatorOptions unfinished = Options(first.input, dir / "running");
+  RunLifecycle(unfinished, 1).Prepare();
+  CoordinatorOptions options = Options(full, dir / "out5");
+  options.extend_run = dir / "running";
+  ExpectInputError([&] { RunLifecycle(options, 9).Prepare(); }, {"has not finished"});
 }
 
 }  // namespace

@@ -161,7 +161,8 @@ std::string CheckpointHash(int64_t completed, const std::string& scene_fingerpri
                            const std::vector<int64_t>& batch_offsets,
                            const std::vector<double>& positions,
                            const std::vector<int64_t>& camera_offsets,
-                           const std::vector<int32_t>& cameras) {
+                           const std::vector<int32_t>& cameras,
+                           const std::vector<int64_t>& extensions) {
   Xxh64 hash;
   hash.Update(&completed, sizeof completed);
   hash.Update(scene_fingerprint);
@@ -170,10 +171,32 @@ std::string CheckpointHash(int64_t completed, const std::string& scene_fingerpri
   hash.Update(positions.data(), positions.size() * sizeof(double));
   hash.Update(camera_offsets.data(), camera_offsets.size() * sizeof(int64_t));
   hash.Update(cameras.data(), cameras.size() * sizeof(int32_t));
+  // A run never extended hashes as before extensions existed.
+  if (!extensions.empty()) hash.Update(extensions.data(), extensions.size() * sizeof(int64_t));
   return fmt::format("{:016x}", hash.Digest());
 }
 
+constexpr size_t kExtensionColumns = 5;
+
+std::vector<int64_t> ExtensionRows(const std::vector<RunExtension>& extensions) {
+  std::vector<int64_t> rows;
+  for (const RunExtension& e : extensions) {
+    rows.insert(rows.end(),
+                {e.iteration, e.views_before, e.views_after, e.points_before, e.points_after});
+  }
+  return rows;
+}
+
 }  // namespace
+
+int32_t RunRecord::build_views() const {
+  return extensions.empty() ? static_cast<int32_t>(scene.views.size())
+                            : extensions.front().views_before;
+}
+
+int64_t RunRecord::build_points() const {
+  return extensions.empty() ? scene_points : extensions.front().points_before;
+}
 
 void ReleaseScenePoints(const std::string& run_file, RunRecord* record) {
   record->scene_copy_from = run_file;
@@ -212,10 +235,15 @@ void WriteRunFile(const RunRecord& record, const std::string& path) {
     }
     batch_offsets.push_back(static_cast<int64_t>(camera_offsets.size() - 1));
   }
+  const std::vector<int64_t> extensions = ExtensionRows(record.extensions);
   file.SetStringAttribute("/checkpoint", "content_hash",
                           CheckpointHash(record.completed_iterations(), record.scene_fingerprint,
                                          record.options_fingerprint, batch_offsets, positions,
-                                         camera_offsets, cameras));
+                                         camera_offsets, cameras, extensions));
+  if (!extensions.empty()) {
+    file.Write("/checkpoint/extensions", extensions,
+               H5Shape{record.extensions.size(), kExtensionColumns});
+  }
   file.Write("/checkpoint/batch_offsets", batch_offsets);
   file.Write("/checkpoint/positions", positions, H5Shape{positions.size() / 3, 3});
   file.Write("/checkpoint/camera_offsets", camera_offsets);
@@ -250,11 +278,15 @@ RunRecord ReadRunFile(const std::string& path) {
   const auto positions = file.Read<double>("/checkpoint/positions", {kH5Any, 3});
   const auto camera_offsets = file.Read<int64_t>("/checkpoint/camera_offsets", {kH5Any});
   const auto cameras = file.Read<int32_t>("/checkpoint/cameras", {kH5Any});
+  const std::vector<int64_t> extensions =
+      file.IsDataset("/checkpoint/extensions")
+          ? file.Read<int64_t>("/checkpoint/extensions", {kH5Any, kExtensionColumns})
+          : std::vector<int64_t>();
   // Files written before the hash have none; every newer one must match it.
   if (file.HasAttribute("/checkpoint", "content_hash") &&
       file.ReadStringAttribute("/checkpoint", "content_hash") !=
           CheckpointHash(completed, record.scene_fingerprint, record.options_fingerprint,
-                         batch_offsets, positions, camera_offsets, cameras)) {
+                         batch_offsets, positions, camera_offsets, cameras, extensions)) {
     fail("its content hash does not match its data: the file is damaged");
   }
   const int64_t num_points = static_cast<int64_t>(positions.size() / 3);
@@ -270,6 +302,27 @@ RunRecord ReadRunFile(const std::string& path) {
     fail("batch_offsets do not cover the positions");
   }
   const int32_t num_views = static_cast<int32_t>(record.scene.views.size());
+  RunExtension last;
+  last.views_after = 0;
+  for (size_t row = 0; row < extensions.size() / kExtensionColumns; ++row) {
+    const int64_t* r = &extensions[row * kExtensionColumns];
+    RunExtension e;
+    e.iteration = static_cast<int32_t>(r[0]);
+    e.views_before = static_cast<int32_t>(r[1]);
+    e.views_after = static_cast<int32_t>(r[2]);
+    e.points_before = r[3];
+    e.points_after = r[4];
+    const bool first = record.extensions.empty();
+    if (e.iteration < 1 || e.iteration > completed || (!first && e.iteration <= last.iteration) ||
+        e.views_before < 1 || e.views_after <= e.views_before || e.views_after > num_views ||
+        (!first && e.views_before != last.views_after) || e.points_before < 0 ||
+        e.points_after < e.points_before || e.points_after > record.scene_points ||
+        (!first && e.points_before != last.points_after)) {
+      fail(fmt::format("extensions row {} does not fit the scene and the iterations", row));
+    }
+    record.extensions.push_back(e);
+    last = e;
+  }
   for (int64_t b = 0; b < completed; ++b) {
     if (batch_offsets[b + 1] < batch_offsets[b]) fail("batch_offsets decrease");
     std::vector<RayPoint> batch;

@@ -6,7 +6,8 @@
 //   final.ply            the surface at the end
 //   run.h5               /scene: the scene; /stats/iterations and /stats/workers: per-iteration
 //                        statistics; /checkpoint: every iteration's accepted, sorted batch of
-//                        points (the input of DelaunayManifold::Insert)
+//                        points (the input of DelaunayManifold::Insert), and the extensions
+//                        (`manisweep extend`) with the iterations that added their cameras
 //   run.prev.h5          the checkpoint before run.h5 (a hard link or copy), the fallback when
 //                        run.h5 is damaged: /checkpoint carries an XXH64 content hash of what a
 //                        resume replays, checked before use
@@ -23,6 +24,7 @@
 #include <vector>
 
 #include "base/options.h"
+#include "coordinator/run_extension.h"
 #include "manifold/delaunay_manifold.h"
 #include "scene/scene.h"
 
@@ -90,10 +92,15 @@ struct RunRecord {
   std::string scene_fingerprint;    // HashHex of the scene's content
   std::string options_fingerprint;  // options that change the result (manifold, sweep, ...)
   std::vector<std::vector<RayPoint>> batches;  // iterations 1..N, sorted as inserted
-  std::vector<IterationStats> iterations;      // 0..N
+  // In order; the manifold is built from the views and points before the first one (all of
+  // them without one).
+  std::vector<RunExtension> extensions;
+  std::vector<IterationStats> iterations;  // 0..N
   std::vector<WorkerIterationStats> workers;
   std::string stop_reason;  // empty while running
   int completed_iterations() const { return static_cast<int>(batches.size()); }
+  int32_t build_views() const;
+  int64_t build_points() const;
 };
 
 // Frees record->scene's points; WriteRunFile then copies /scene from `run_file`, which must hold

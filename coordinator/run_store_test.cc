@@ -121,6 +121,37 @@ TEST(RunStore, EveryStatisticSurvivesRunH5) {
   EXPECT_EQ(read.workers[1].seconds_kernel, 0.75);
 }
 
+// An extended run's extensions survive run.h5 (and are in its content hash); a row that does not
+// fit the scene is refused, naming the dataset.
+TEST(RunStore, ExtensionsSurviveRunH5AndBadRowsAreRefused) {
+  const TempDir dir("run_store");
+  RunRecord record = RecordWithOneIteration(dir);
+  record.scene_points = static_cast<int64_t>(record.scene.points.size());
+  ASSERT_GE(record.scene.views.size(), 3u);
+  RunExtension e;
+  e.iteration = 1;
+  e.views_before = 2;
+  e.views_after = 3;
+  e.points_before = record.scene_points - 1;
+  e.points_after = record.scene_points;
+  record.extensions = {e};
+  const std::string path = (dir.path() / "run.h5").string();
+  WriteRunFile(record, path);
+  const RunRecord read = ReadRunFile(path);
+  ASSERT_EQ(read.extensions.size(), 1u);
+  EXPECT_EQ(read.extensions[0].iteration, 1);
+  EXPECT_EQ(read.extensions[0].views_before, 2);
+  EXPECT_EQ(read.extensions[0].views_after, 3);
+  EXPECT_EQ(read.extensions[0].points_before, e.points_before);
+  EXPECT_EQ(read.extensions[0].points_after, e.points_after);
+  EXPECT_EQ(read.build_views(), 2);
+  EXPECT_EQ(read.build_points(), e.points_before);
+
+  record.extensions[0].views_after = 99;  // more views than the scene has
+  WriteRunFile(record, path);
+  testing::ExpectInputError([&] { ReadRunFile(path); }, {path, "extensions row 0"});
+}
+
 // A coordinator frees the scene's points after its first checkpoint; later run files copy /scene
 // from the last one, so a resume still reads the whole scene.
 TEST(RunStore, ReleasedScenePointsAreCopiedFromTheLastRunFile) {

@@ -114,6 +114,12 @@ class DelaunayManifold {
   // range or non-finite input; may be called once.
   BuildStats Build(std::vector<RayPoint> points);
 
+  // Cameras after the first ones, numbered on from them (`manisweep extend`,
+  // docs/design/extend.md): rays from them come with later Insert calls, and regrowing frees
+  // them as any camera left in the matter. Between Build and an Insert, never inside one.
+  // Throws InputError for a pose that is not finite or a centre outside the Steiner box.
+  void AddCameras(const std::vector<ManifoldCamera>& cameras);
+
   // Incremental refinement (section 2.3): for each point in order, shrink O around its
   // conflict region, discard it if the region still meets O, otherwise insert it and update
   // the weights of the new cells exactly. Then regrow O from its boundary. New point ids

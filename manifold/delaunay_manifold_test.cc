@@ -14,6 +14,7 @@
 #include "base/error.h"
 #include "mesh/mesh_checker.h"
 #include "testing/manifold_test_hooks.h"
+#include "testing/testing.h"
 
 namespace ms {
 namespace {
@@ -809,6 +810,46 @@ TEST(DelaunayManifold, DuplicatesOfNewPointsAddEachRayOnce) {
   // recount from scratch.
   EXPECT_GT(parts.FinishInsert().discarded_duplicate, 0);
   ASSERT_EQ(parts.Validate(true), "");
+}
+
+// An extended run (`manisweep extend`): cameras added after the build, then the points they see
+// with their rays, old points among them as duplicates that gain the new cameras. The weights
+// equal a recount from scratch, O stays maximal, and the side only the new cameras see opens.
+TEST(DelaunayManifold, CamerasAddedAfterTheBuildSeeTheirPoints) {
+  const RandomScene all = SphereScene(500, 12, 11);
+  // The first six cameras build; the points only they see are the run's scene.
+  const std::vector<ManifoldCamera> first(all.cameras.begin(), all.cameras.begin() + 6);
+  const std::vector<ManifoldCamera> added(all.cameras.begin() + 6, all.cameras.end());
+  std::vector<RayPoint> built, batch;
+  for (const RayPoint& p : all.points) {
+    RayPoint old = p;
+    old.cameras.erase(
+        std::remove_if(old.cameras.begin(), old.cameras.end(), [](int32_t c) { return c >= 6; }),
+        old.cameras.end());
+    if (!old.cameras.empty()) built.push_back(old);
+    if (old.cameras.size() < p.cameras.size()) batch.push_back(p);  // a new camera sees it
+  }
+  ASSERT_GT(batch.size(), 200u);
+  DelaunayManifold manifold(first, ManifoldOptions{});
+  manifold.Build(built);
+  const size_t before = manifold.ExtractSurface().NumVertices();
+  manifold.AddCameras(added);
+  const InsertionStats stats = manifold.Insert(batch);
+  EXPECT_GT(stats.discarded_duplicate, 0);  // the points both halves see
+  EXPECT_GT(stats.gained_rays, 0);
+  EXPECT_GT(stats.inserted, 100);
+  ASSERT_EQ(manifold.Validate(true), "");
+  EXPECT_EQ(manifold.num_joinable_cells(), 0);
+  const Mesh mesh = manifold.ExtractSurface();
+  EXPECT_EQ(SurfaceProblems(mesh), "");
+  EXPECT_GT(mesh.NumVertices(), before + 100);
+  EXPECT_TRUE(manifold.CamerasInMatter().empty());
+
+  // A camera outside the box of the build cannot start a ray in it.
+  ManifoldCamera far = all.cameras.front();
+  far.center = Eigen::Vector3d(1e3, 0, 0);
+  testing::ExpectInputError([&] { manifold.AddCameras({far}); },
+                            {"camera 12", "outside the run's"});
 }
 
 // The paper's regrowing (from every free cell on the boundary of O) leaves O maximal after every

@@ -51,6 +51,7 @@ class DelaunayManifold::Impl {
   Impl(std::vector<ManifoldCamera> cameras, const ManifoldOptions& options);
 
   BuildStats Build(std::vector<RayPoint> points);
+  void AddCameras(const std::vector<ManifoldCamera>& cameras);
   InsertionStats Insert(const std::vector<RayPoint>& points);
   void BeginInsert();
   void InsertPart(const std::vector<RayPoint>& points);

@@ -61,6 +61,33 @@ void Scene::NormalizeObservations() {
   }
 }
 
+Scene SubsetOfViews(const Scene& scene, const std::vector<int>& keep, size_t min_views) {
+  std::vector<int32_t> renumbered(scene.views.size(), -1);
+  Scene out;
+  out.source = scene.source;
+  for (size_t k = 0; k < keep.size(); ++k) {
+    const int v = keep[k];
+    if (v < 0 || v >= static_cast<int>(scene.views.size()) || (k > 0 && v <= keep[k - 1])) {
+      throw InputError(scene.source + ": view " + std::to_string(v) +
+                       " is not a view of the scene, or not in ascending order (" +
+                       std::to_string(scene.views.size()) + " views)");
+    }
+    renumbered[v] = static_cast<int32_t>(k);
+    out.views.push_back(scene.views[v]);
+  }
+  for (const ScenePoint& p : scene.points) {
+    ScenePoint point = p;
+    point.observations.clear();
+    for (const Observation& o : p.observations) {
+      if (renumbered[o.view] < 0) continue;
+      point.observations.push_back(o);
+      point.observations.back().view = renumbered[o.view];
+    }
+    if (point.observations.size() >= min_views) out.points.push_back(std::move(point));
+  }
+  return out;
+}
+
 BoundingBox Scene::PointBounds() const {
   BoundingBox box;
   for (const ScenePoint& p : points) box.Extend(p.position);

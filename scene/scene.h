@@ -60,4 +60,10 @@ struct Scene {
   std::string Summary() const;
 };
 
+// The views `keep` (indices into scene.views, ascending, each once) renumbered 0, 1, ... and the
+// points at least `min_views` of them observe, with only those observations: the model of a
+// part of the images (`convert --keep-views`, a run to extend later). Throws InputError for an
+// index out of range or out of order.
+Scene SubsetOfViews(const Scene& scene, const std::vector<int>& keep, size_t min_views = 2);
+
 }  // namespace ms

@@ -56,5 +56,32 @@ TEST(Scene, ValidateNamesTheBadField) {
   EXPECT_THROW(scene.Validate(), InputError);
 }
 
+// The model of a part of the images: the views kept, renumbered; the points at least two of them
+// see, with only their observations.
+TEST(Scene, SubsetOfViewsKeepsThePointsTwoKeptViewsSee) {
+  Scene scene;
+  scene.source = "model";
+  for (int v = 0; v < 4; ++v) {
+    scene.views.push_back(MakeView());
+    scene.views.back().name = std::to_string(v) + ".png";
+  }
+  const auto point = [](std::vector<int32_t> views) {
+    ScenePoint p;
+    for (int32_t v : views) p.observations.push_back({v, 1.0f * v, 2.0f});
+    return p;
+  };
+  scene.points = {point({0, 1, 3}), point({1, 2}), point({2, 3}), point({0, 2})};
+  const Scene part = SubsetOfViews(scene, {1, 2, 3});
+  ASSERT_EQ(part.views.size(), 3u);
+  EXPECT_EQ(part.views[0].name, "1.png");
+  ASSERT_EQ(part.points.size(), 3u);  // {0, 2}: one kept view only
+  EXPECT_EQ(part.points[0].observations,
+            (std::vector<Observation>{{0, 1.0f, 2.0f}, {2, 3.0f, 2.0f}}));
+  EXPECT_EQ(part.points[1].observations.size(), 2u);
+  EXPECT_NO_THROW(part.Validate());
+  EXPECT_THROW(SubsetOfViews(scene, {2, 1}), InputError);
+  EXPECT_THROW(SubsetOfViews(scene, {4}), InputError);
+}
+
 }  // namespace
 }  // namespace ms

@@ -11,29 +11,17 @@ file, a missing image) end with exit 2 and one line naming the file. Exit 0 when
 import argparse
 import os
 import re
-import signal
 import socket
 import subprocess
 import sys
 
-from small_pyramid import fresh_small_pyramid, run
+from small_pyramid import fresh_small_pyramid, interrupt_after, run
 
 
 def free_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
-
-
-def interrupt_after(cmd, marker):
-    """Runs cmd, sends it SIGINT (Ctrl-C) once its log shows `marker`; returns its exit code."""
-    p = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
-    for line in p.stderr:
-        if marker in line:
-            p.send_signal(signal.SIGINT)
-            break
-    p.stderr.read()
-    return p.wait(timeout=120)
 
 
 def expect_bad_input(manisweep, scene, mesh, name, out):

@@ -2,6 +2,7 @@
 of 320 x 240), made in a fresh work folder."""
 import os
 import shutil
+import signal
 import subprocess
 
 
@@ -21,3 +22,14 @@ def fresh_small_pyramid(manisweep, workdir):
         print("FAIL synth:", r.stderr[-2000:])
         return None
     return data
+
+
+def interrupt_after(cmd, marker, timeout=300):
+    """Runs cmd, sends it SIGINT (Ctrl-C) once its log shows `marker`; returns its exit code."""
+    p = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+    for line in p.stderr:
+        if marker in line:
+            p.send_signal(signal.SIGINT)
+            break
+    p.stderr.read()
+    return p.wait(timeout=timeout)
