@@ -291,26 +291,27 @@ TEST(RunLifecycle, ARunStoppedBeforeItsFirstIterationWritesTheInitialMeshAsFinal
   EXPECT_EQ(final_mesh.faces, initial.faces);
 }
 
-// The sphere scene without its third camera: the run an extension starts from.
-std::string WriteFirstTwoViews(const TempDir& dir, const std::string& full) {
+// The sphere scene's first `views` cameras and the points at least `min_track` of them see.
+std::string WriteFirstViews(const TempDir& dir, const std::string& full, int views,
+                            size_t min_track = 2) {
   Scene scene = ReadScene(full);
-  scene.views.pop_back();
+  scene.views.resize(views);
   std::vector<ScenePoint> kept;
   for (ScenePoint p : scene.points) {
     p.observations.erase(std::remove_if(p.observations.begin(), p.observations.end(),
-                                        [](const Observation& o) { return o.view >= 2; }),
+                                        [&](const Observation& o) { return o.view >= views; }),
                          p.observations.end());
-    if (p.observations.size() >= 2) kept.push_back(p);
+    if (p.observations.size() >= min_track) kept.push_back(p);
   }
   scene.points = kept;
-  const std::string path = dir / "first.h5";
+  const std::string path = dir / ("first" + std::to_string(views) + ".h5");
   WriteScene(scene, path, SceneFormat::kAuto);
   return path;
 }
 
 // A finished run of the first two cameras (no sweep point: it converges after the build).
 CoordinatorOptions FinishedFirstRun(const TempDir& dir, const std::string& full) {
-  CoordinatorOptions options = Options(WriteFirstTwoViews(dir, full), dir / "run");
+  CoordinatorOptions options = Options(WriteFirstViews(dir, full, 2), dir / "run");
   RunLifecycle run(options, 1);
   EXPECT_FALSE(run.Prepare().stop);
   EXPECT_TRUE(run.Integrate({}, SweepRound()).stop);
@@ -366,6 +367,51 @@ TEST(RunLifecycle, AnExtensionInsertsTheNewCamerasPointsThenSweepsThem) {
   EXPECT_EQ(resumed.final_result().stop_reason, "reached --max-iterations 1");
   EXPECT_TRUE(CheckMesh(ReadMesh(dir / "extended/final.ply")).is_closed_manifold);
   EXPECT_EQ(FileBytes(dir / "run/run.h5"), run_bytes) << "the extended run was modified";
+}
+
+// An extended run extended again: one camera, then the second, then the third. A resume of the
+// last replays both extensions, each camera added just before its batch.
+TEST(RunLifecycle, AnExtendedRunExtendsAgainAndResumes) {
+  const TempDir dir("lifecycle");
+  const std::string full = WriteSphereScene(dir);
+  // One camera's box is small: a wider Steiner margin takes the others in (the same in every
+  // run, as an extension needs the run's options).
+  CoordinatorOptions first = Options(WriteFirstViews(dir, full, 1, 1), dir / "one");
+  first.manifold.steiner_margin = 1.5;
+  {
+    // One camera has no neighbour: the run ends after its build.
+    RunLifecycle one(first, 1);
+    EXPECT_TRUE(one.Prepare().stop);
+  }
+  CoordinatorOptions second = first;
+  second.input = WriteFirstViews(dir, full, 2);
+  second.output_dir = dir / "two";
+  second.extend_run = dir / "one";
+  {
+    RunLifecycle two(second, 2);
+    const StepOutcome next = two.Prepare();
+    ASSERT_FALSE(next.stop);
+    EXPECT_TRUE(two.Integrate({}, SweepRound()).stop);
+  }
+  CoordinatorOptions third = first;
+  third.input = full;
+  third.output_dir = dir / "three";
+  third.extend_run = dir / "two";
+  RunLifecycle three(third, 3);
+  ASSERT_FALSE(three.Prepare().stop);
+  const RunRecord record = ReadRunFile(dir / "three/run.h5");
+  ASSERT_EQ(record.extensions.size(), 2u);
+  EXPECT_EQ(record.extensions[0].views_before, 1);
+  EXPECT_EQ(record.extensions[1].views_before, 2);
+  EXPECT_EQ(record.extensions[1].views_after, 3);
+  EXPECT_EQ(record.build_views(), 1);
+
+  CoordinatorOptions resume = third;
+  resume.run.resume = true;
+  RunLifecycle resumed(resume, 4);
+  ASSERT_FALSE(resumed.Prepare().stop);
+  EXPECT_EQ(resumed.surface().vertices, three.surface().vertices);
+  EXPECT_EQ(resumed.surface().faces, three.surface().faces);
 }
 
 TEST(RunLifecycle, AnExtensionIsRefusedWithOneLineAndTheRunKept) {
