@@ -11,6 +11,9 @@ import argparse
 import hashlib
 import os
 import re
+import signal
+import socket
+import subprocess
 import sys
 
 from small_pyramid import fresh_small_pyramid, interrupt_after, run
@@ -104,6 +107,41 @@ def main():
     ok = report(code == 130 and same,
                 f"interrupted after iteration 5 (exit {code}), resumed: "
                 f"{'the same' if same else 'another'} final.ply") and ok
+
+    # kill -9 as the extension's points are inserted (its checkpoint being written or not):
+    # --resume starts it again or goes on, to the same bytes.
+    killed = os.path.join(work, "extended_killed")
+    cmd = [ms, "extend", "--run", first, "-i", scene, "-o", killed, "--workers", "2"] + SWEEP
+    p = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
+                         start_new_session=True)
+    for line in p.stderr:
+        if "extension (iteration 4)" in line:
+            os.killpg(p.pid, signal.SIGKILL)  # the workers too, as a lost node would
+            break
+    p.wait(timeout=60)
+    r = run(cmd + ["--resume"])
+    same = r.returncode == 0 and digest(killed).get("final.ply") == digest(ext2)["final.ply"]
+    ok = report(same, f"kill -9 at the extension's insertion, --resume: "
+                      f"{'the same' if same else 'another'} final.ply") and ok
+
+    # A coordinator with --extend-run and two `worker` processes (a cluster's shape).
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        endpoint = f"tcp://127.0.0.1:{probe.getsockname()[1]}"
+    cluster = os.path.join(work, "extended_cluster")
+    coordinator = subprocess.Popen(
+        [ms, "coordinator", "--extend-run", first, "-i", scene, "-o", cluster, "--bind",
+         endpoint, "--max-iterations", "3", "--no-report"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    workers = [subprocess.Popen([ms, "worker", "--connect", endpoint, "--kernel", "cpu"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+               for _ in range(2)]
+    code = coordinator.wait(timeout=300)
+    worker_codes = [w.wait(timeout=60) for w in workers]
+    same = code == 0 and digest(cluster).get("final.ply") == digest(ext2)["final.ply"]
+    ok = report(same and worker_codes == [0, 0],
+                f"coordinator --extend-run with 2 worker processes (exit {code}, workers "
+                f"{worker_codes}): {'the same' if same else 'another'} final.ply") and ok
 
     # The model as COLMAP text with camera 1 moved (its translation changed by 0.5 along x).
     moved_model = os.path.join(work, "moved")
