@@ -16,7 +16,8 @@ On a synthetic dataset (one with gt.ply), the closed meshes' MAE against the gro
 --eval-views is measured too (the paper's Sigma 0.06 unless --sigma).
 
     bench/extend_split.py --dataset ../shared/data/castle-P30 --first 15 --out OUT.json
-        [--work DIR] [--full-run DIR] [--eval-views 10,40,80,100] [-- --no-refine ...]
+        [--work DIR] [--first-run DIR] [--full-run DIR] [--eval-views 10,40,80,100]
+        [-- --no-refine ...]
     bench/extend_split.py --table OUT.json
 """
 import argparse
@@ -117,6 +118,7 @@ def main():
     a.add_argument("--first", type=int)
     a.add_argument("--out")
     a.add_argument("--work", default="/tmp/manisweep_extend_split")
+    a.add_argument("--first-run", help="a finished run of the first part with the same options")
     a.add_argument("--full-run", help="a finished run of the whole model with the same options")
     a.add_argument("--eval-views", help="synthetic sets: views for the MAE, e.g. 10,40,80,100")
     a.add_argument("--sigma", type=float, default=0.06)
@@ -139,18 +141,26 @@ def main():
     first_names = names[:args.first]
     runs = os.path.join(args.work, "runs")
     common = ["--workers", "2"] + options
-    out = {"first": os.path.join(runs, "first"), "extended": os.path.join(runs, "extended"),
+    out = {"first": args.first_run or os.path.join(runs, "first"),
+           "extended": os.path.join(runs, "extended"),
            "full": args.full_run or os.path.join(runs, "full")}
-    for d in out.values():
-        if os.path.exists(os.path.join(d, "run.h5")) and d != args.full_run:
+    given = {label for label, d in (("first", args.first_run), ("full", args.full_run)) if d}
+    for label, d in out.items():
+        if label not in given and os.path.exists(os.path.join(d, "run.h5")):
             sys.exit(f"{d} holds a run already: choose another --work")
-    seconds = {"first": timed([ms, "reconstruct", "--input", first, "--output", out["first"]]
-                              + common, log)}
+    seconds = {}
+    if "first" not in given:
+        seconds["first"] = timed([ms, "reconstruct", "--input", first, "--output", out["first"]]
+                                 + common, log)
     seconds["extend"] = timed([ms, "extend", "--run", out["first"], "--input", whole,
                                "--output", out["extended"]] + common, log)
-    if not args.full_run:
+    if "full" not in given:
         seconds["full"] = timed([ms, "reconstruct", "--input", whole, "--output", out["full"]]
                                 + common, log)
+    # A given run's time is the one its summary recorded (the same machine, another moment).
+    for label in given:
+        summary = json.load(open(os.path.join(out[label], "summary.json")))
+        seconds[label] = round(summary["seconds_this_process"], 1)
     first_ids = [str(i) for i in range(args.first)]
     kinds = ["final.ply"] + (["refined.ply"] if "--no-refine" not in options else [])
     meshes = {(label, kind): os.path.join(out[label], kind) for label in out for kind in kinds}
@@ -165,6 +175,7 @@ def main():
         }
     result = {**provenance("extend_split"), "dataset": os.path.basename(os.path.normpath(
         args.dataset)), "first": first_names, "options": options, "seconds": seconds,
+        "given_runs": sorted(given),
         "meshes": rows}
     goals = {}
     for kind in kinds:
@@ -175,8 +186,7 @@ def main():
             "first_part_lowest_change": min(drops.values()),
             "first_part_changes": drops,
         }
-    if "full" in seconds:
-        goals["time_ratio"] = round(seconds["extend"] / seconds["full"], 3)
+    goals["time_ratio"] = round(seconds["extend"] / seconds["full"], 3)
     if args.eval_views:
         views = [int(v) for v in args.eval_views.split(",")]
         result["mae"] = {f"{label} {kind}": mae(ms, args.dataset, path, views, args.sigma,
@@ -194,14 +204,14 @@ def table(result):
              "| run | seconds | mesh | photo-consistency | MAE (median of views) |",
              "|---|---|---|---|---|"]
     for name, row in result["meshes"].items():
-        label = name.split()[0]
+        label, kind = name.split()
         seconds = s.get("extend" if label == "extended" else label)
+        if label in result.get("given_runs", []):
+            seconds = f"{seconds} (earlier)"
         mae = result.get("mae", {}).get(name)
-        lines.append(f"| {label} | {seconds if seconds is not None else '(given)'} | "
-                     f"{name.split()[1]} | {row['consistency']:.1f}% | "
+        lines.append(f"| {label} | {seconds} | {kind} | {row['consistency']:.1f}% | "
                      f"{mae['median']:.4f} |" if mae else
-                     f"| {label} | {seconds if seconds is not None else '(given)'} | "
-                     f"{name.split()[1]} | {row['consistency']:.1f}% | |")
+                     f"| {label} | {seconds} | {kind} | {row['consistency']:.1f}% | |")
     for kind, g in result["goals"].items():
         if kind == "time_ratio":
             lines.append(f"extension time / full run: {g:.2f}")

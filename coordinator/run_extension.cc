@@ -95,6 +95,25 @@ ExtendedScene ExtendScene(const Scene& run_scene, const Scene& model, const std:
   return out;
 }
 
+std::vector<uint8_t> ExtensionSweptCameras(const Scene& scene, const RunExtension& extension,
+                                           const std::vector<std::vector<int>>& neighbours,
+                                           double min_shared) {
+  std::vector<uint8_t> swept(scene.views.size(), 0);
+  std::vector<int64_t> before(scene.views.size(), 0), shared(scene.views.size(), 0);
+  for (int64_t i = 0; i < extension.points_after; ++i) {
+    std::vector<int64_t>& count = i < extension.points_before ? before : shared;
+    for (const Observation& o : scene.points[i].observations) ++count[o.view];
+  }
+  for (int32_t c = 0; c < extension.views_before; ++c) {
+    swept[c] = shared[c] > 0 && shared[c] >= min_shared * before[c];
+  }
+  for (int32_t c = extension.views_before; c < extension.views_after; ++c) {
+    swept[c] = 1;
+    for (int n : neighbours[c]) swept[n] = 1;
+  }
+  return swept;
+}
+
 std::vector<RayPoint> ExtensionBatch(const Scene& scene, const RunExtension& extension) {
   std::vector<RayPoint> batch;
   for (int64_t i = extension.points_before; i < extension.points_after; ++i) {

@@ -47,6 +47,14 @@ struct ExtendedScene {
 ExtendedScene ExtendScene(const Scene& run_scene, const Scene& model, const std::string& model_path,
                           const ExtendOptions& options);
 
+// The cameras an extension sweeps (1 each): the new ones, their neighbours, and the old ones that
+// look into the new cameras' region: those that see at least `min_shared` as many of the
+// extension's points as of the points they were reconstructed from (a camera at the end of a
+// street looking down it sees the part the new images add; its neighbours by position are old).
+std::vector<uint8_t> ExtensionSweptCameras(const Scene& scene, const RunExtension& extension,
+                                           const std::vector<std::vector<int>>& neighbours,
+                                           double min_shared = 0.5);
+
 // The extension's batch: one RayPoint per appended point, with all its views.
 std::vector<RayPoint> ExtensionBatch(const Scene& scene, const RunExtension& extension);
 

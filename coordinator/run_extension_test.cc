@@ -60,6 +60,28 @@ TEST(ExtendScene, AppendsTheNewViewsAndThePointsTheySee) {
   EXPECT_EQ(batch[1].cameras, (std::vector<int32_t>{0, 1, 2}));
 }
 
+// The new cameras, their neighbours, and the old cameras that see the new region at least half as
+// much as what they were reconstructed from.
+TEST(ExtendScene, SweepsTheNewCamerasAndTheOldOnesThatLookIntoTheirRegion) {
+  Scene scene;
+  for (int v = 0; v < 5; ++v) scene.views.push_back(ViewAt(std::to_string(v) + ".png", v));
+  // The run: views 0-2, points 0-3. The extension: views 3 and 4, points 4-6.
+  scene.points = {PointSeenBy({0, 1}, 0), PointSeenBy({0, 1}, 0), PointSeenBy({1, 2}, 0),
+                  PointSeenBy({1, 2}, 0), PointSeenBy({2, 3}, 0), PointSeenBy({1, 3, 4}, 0),
+                  PointSeenBy({3, 4}, 0)};
+  RunExtension e;
+  e.views_before = 3;
+  e.views_after = 5;
+  e.points_before = 4;
+  e.points_after = 7;
+  // View 3's neighbour is 4, view 4's is 3: no old camera by position.
+  const std::vector<std::vector<int>> neighbours = {{1}, {0}, {1}, {4}, {3}};
+  // View 2: 1 shared of 2 before (0.5, swept); view 1: 1 of 4 (0.25); view 0: none.
+  EXPECT_EQ(ExtensionSweptCameras(scene, e, neighbours), (std::vector<uint8_t>{0, 0, 1, 1, 1}));
+  const std::vector<std::vector<int>> near_old = {{1}, {0}, {1}, {0}, {3}};
+  EXPECT_EQ(ExtensionSweptCameras(scene, e, near_old), (std::vector<uint8_t>{1, 0, 1, 1, 1}));
+}
+
 TEST(ExtendScene, RefusesMovedTurnedMissingAndNothingNew) {
   const ExtendOptions options;
   Fixture moved;

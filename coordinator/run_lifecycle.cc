@@ -117,6 +117,15 @@ StepOutcome RunLifecycle::Prepare() {
     neighbours_.push_back(SelectNeighbours(scene, static_cast<int>(c), options_.neighbours));
   }
   if (options_.manifold.witness_tolerance > 0) witness_candidates_ = WitnessCandidates(scene);
+  // While the scene's points are here: the first checkpoint lets them go.
+  swept_.clear();
+  if (!record_.extensions.empty()) {
+    swept_ = ExtensionSweptCameras(scene, record_.extensions.back(), neighbours_);
+    spdlog::info(
+        "extension: {} of {} cameras are swept (the new ones, their neighbours, and "
+        "the old ones that look into their region)",
+        std::count(swept_.begin(), swept_.end(), 1), swept_.size());
+  }
   BuildOrReplay(start, run_file);
   return NextOrStop();
 }
@@ -213,17 +222,6 @@ void RunLifecycle::InsertExtension() {
       s.discarded_duplicate, s.gained_rays, s.discarded_conflict, s.discarded_outside, row.vertices,
       row.faces, insert_s);
   Checkpoint();
-}
-
-std::vector<uint8_t> RunLifecycle::SweptCameras() const {
-  if (record_.extensions.empty()) return {};
-  const RunExtension& e = record_.extensions.back();
-  std::vector<uint8_t> swept(record_.scene.views.size(), 0);
-  for (int32_t c = e.views_before; c < e.views_after; ++c) {
-    swept[c] = 1;
-    for (int n : neighbours_[c]) swept[n] = 1;
-  }
-  return swept;
 }
 
 int RunLifecycle::SweepIterationsDone() const {
@@ -581,7 +579,7 @@ StepOutcome RunLifecycle::NextOrStop() {
     reason = fmt::format("reached --max-iterations {}", options_.run.max_iterations);
   } else {
     if (!surface_) MakeSweepSurface();
-    job_options_.swept = SweptCameras();
+    job_options_.swept = swept_;
     outcome.jobs = std::make_unique<IterationJobSource>(record_.scene, neighbours_, surface_,
                                                         *catalog_, static_cast<uint32_t>(done + 1),
                                                         session_id_, job_options_);

@@ -106,8 +106,6 @@ class RunLifecycle {
   IterationStats InsertionRow(int iteration, size_t found, const InsertionStats& s) const;
   // Inserts the last extension's batch: its iteration's statistics, then a checkpoint.
   void InsertExtension();
-  // The cameras swept from now on: every camera, or the last extension's and their neighbours.
-  std::vector<uint8_t> SweptCameras() const;
   // Sweep iterations since the start or the last extension.
   int SweepIterationsDone() const;
   void WriteInitial(const BuildStats& stats, double build_s);
@@ -152,6 +150,8 @@ class RunLifecycle {
   std::atomic<bool> catalog_ready_{false};
   std::vector<std::vector<int>> neighbours_;
   std::vector<std::vector<int>> witness_candidates_;  // empty when witness rays are off
+  // The cameras that get jobs: empty (every camera), or an extension's (run_extension.h).
+  std::vector<uint8_t> swept_;
   std::unique_ptr<DelaunayManifold> manifold_;
   // This iteration's insertion while its sweep runs: open, the points given, the seconds taken.
   bool insert_open_ = false;
