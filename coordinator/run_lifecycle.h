@@ -100,8 +100,9 @@ class RunLifecycle {
   // The finished run --extend-run, its scene extended by `model` and the extension recorded
   // (its batch not yet inserted).
   RunRecord ExtendedRecord(Scene model);
-  // Adds the cameras of the extension inserted at `iteration`, if one is.
-  void AddExtensionCameras(int iteration);
+  // Inserts iteration `iteration`'s batch: Insert, or the rebuild of an extension.
+  InsertionStats InsertBatch(int iteration, const std::vector<RayPoint>& batch);
+  InsertionStats RebuildWithExtension(const RunExtension& e, const std::vector<RayPoint>& batch);
   // An iteration's row as far as its insertion and the extracted mesh tell it.
   IterationStats InsertionRow(int iteration, size_t found, const InsertionStats& s) const;
   // Inserts the last extension's batch: its iteration's statistics, then a checkpoint.

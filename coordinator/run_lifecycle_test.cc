@@ -370,14 +370,12 @@ TEST(RunLifecycle, AnExtensionInsertsTheNewCamerasPointsThenSweepsThem) {
 }
 
 // An extended run extended again: one camera, then the second, then the third. A resume of the
-// last replays both extensions, each camera added just before its batch.
+// last replays both extensions, each rebuilding the manifold with its cameras and points.
 TEST(RunLifecycle, AnExtendedRunExtendsAgainAndResumes) {
   const TempDir dir("lifecycle");
   const std::string full = WriteSphereScene(dir);
-  // One camera's box is small: a wider Steiner margin takes the others in (the same in every
-  // run, as an extension needs the run's options).
+  // One camera's Steiner box does not hold the others: the rebuilt manifold's box does.
   CoordinatorOptions first = Options(WriteFirstViews(dir, full, 1, 1), dir / "one");
-  first.manifold.steiner_margin = 1.5;
   {
     // One camera has no neighbour: the run ends after its build.
     RunLifecycle one(first, 1);

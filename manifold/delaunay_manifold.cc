@@ -2,8 +2,6 @@
 // manifold_impl.h, surface extraction, and the public class's forwarding (docs/design/manifold.md).
 #include "manifold/delaunay_manifold.h"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -145,27 +143,6 @@ BuildStats DelaunayManifold::Impl::Build(std::vector<RayPoint> points) {
     if (!problem.empty()) throw InternalError("manifold invalid after build: " + problem);
   }
   return stats;
-}
-
-void DelaunayManifold::Impl::AddCameras(const std::vector<ManifoldCamera>& cameras) {
-  MS_CHECK(built_) << "AddCameras before Build";
-  MS_CHECK(!open_batch_) << "AddCameras with a batch open";
-  for (const ManifoldCamera& c : cameras) {
-    const std::string name = "camera " + std::to_string(cameras_.size());
-    if (!c.center.allFinite() || !c.R.allFinite()) throw InputError(name + ": pose is not finite");
-    // Its rays must start in a finite cell, as the first cameras' do.
-    if (!InSteinerBox(c.center)) {
-      throw InputError(fmt::format(
-          "{}: its centre ({:.6g}, {:.6g}, {:.6g}) lies outside the run's Steiner box "
-          "[{:.6g}, {:.6g}] x [{:.6g}, {:.6g}] x [{:.6g}, {:.6g}]: reconstruct the whole set "
-          "instead",
-          name, c.center.x(), c.center.y(), c.center.z(), box_min_.x(), box_max_.x(), box_min_.y(),
-          box_max_.y(), box_min_.z(), box_max_.z()));
-    }
-    cameras_.push_back(c);
-    ray_index_->AddCamera({c.R, c.center, c.u_min, c.u_max, c.v_min, c.v_max});
-    walker_.AddCamera(c.center);
-  }
 }
 
 void DelaunayManifold::Impl::CheckAndBound(const std::vector<RayPoint>& points, Eigen::Vector3d* lo,
@@ -1001,9 +978,6 @@ BuildStats DelaunayManifold::Build(std::vector<RayPoint> points) {
   rebuild_->box_max = impl_->box_max_;
   return stats;
 }
-void DelaunayManifold::AddCameras(const std::vector<ManifoldCamera>& cameras) {
-  impl_->AddCameras(cameras);
-}
 InsertionStats DelaunayManifold::Insert(const std::vector<RayPoint>& points) {
   BeginInsert();
   InsertPart(points);
@@ -1081,6 +1055,10 @@ std::string DelaunayManifold::Validate(bool check_weights) const {
   return impl_->Validate(check_weights);
 }
 void DelaunayManifold::set_walk_threads(int threads) { impl_->set_walk_threads(threads); }
+std::vector<RayPoint> DelaunayManifold::Points() const {
+  if (rebuild_) return rebuild_->points;
+  return impl_->Points();
+}
 int64_t DelaunayManifold::num_points() const { return impl_->num_points(); }
 int64_t DelaunayManifold::num_vertices() const { return impl_->num_vertices(); }
 int64_t DelaunayManifold::num_cells() const { return impl_->num_cells(); }

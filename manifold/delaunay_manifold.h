@@ -114,12 +114,6 @@ class DelaunayManifold {
   // range or non-finite input; may be called once.
   BuildStats Build(std::vector<RayPoint> points);
 
-  // Cameras after the first ones, numbered on from them (`manisweep extend`,
-  // docs/design/extend.md): rays from them come with later Insert calls, and regrowing frees
-  // them as any camera left in the matter. Between Build and an Insert, never inside one.
-  // Throws InputError for a pose that is not finite or a centre outside the Steiner box.
-  void AddCameras(const std::vector<ManifoldCamera>& cameras);
-
   // Incremental refinement (section 2.3): for each point in order, shrink O around its
   // conflict region, discard it if the region still meets O, otherwise insert it and update
   // the weights of the new cells exactly. Then regrow O from its boundary. New point ids
@@ -157,6 +151,10 @@ class DelaunayManifold {
   // (--manifold.regrow-seeds boundary) O is maximal: no free cell sharing a face with O could
   // join it keeping the surface manifold. Returns "" if valid.
   std::string Validate(bool check_weights = true) const;
+
+  // Every point so far (by id) with the cameras of its rays, sorted: what a manifold built anew
+  // from the same points starts from (`manisweep extend` rebuilds with its new points).
+  std::vector<RayPoint> Points() const;
 
   int64_t num_points() const;    // input points so far (ids 0..num_points-1)
   int64_t num_vertices() const;  // finite vertices incl. Steiner

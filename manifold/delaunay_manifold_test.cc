@@ -14,7 +14,6 @@
 #include "base/error.h"
 #include "mesh/mesh_checker.h"
 #include "testing/manifold_test_hooks.h"
-#include "testing/testing.h"
 
 namespace ms {
 namespace {
@@ -812,44 +811,30 @@ TEST(DelaunayManifold, DuplicatesOfNewPointsAddEachRayOnce) {
   ASSERT_EQ(parts.Validate(true), "");
 }
 
-// An extended run (`manisweep extend`): cameras added after the build, then the points they see
-// with their rays, old points among them as duplicates that gain the new cameras. The weights
-// equal a recount from scratch, O stays maximal, and the side only the new cameras see opens.
-TEST(DelaunayManifold, CamerasAddedAfterTheBuildSeeTheirPoints) {
-  const RandomScene all = SphereScene(500, 12, 11);
-  // The first six cameras build; the points only they see are the run's scene.
-  const std::vector<ManifoldCamera> first(all.cameras.begin(), all.cameras.begin() + 6);
-  const std::vector<ManifoldCamera> added(all.cameras.begin() + 6, all.cameras.end());
-  std::vector<RayPoint> built, batch;
-  for (const RayPoint& p : all.points) {
-    RayPoint old = p;
-    old.cameras.erase(
-        std::remove_if(old.cameras.begin(), old.cameras.end(), [](int32_t c) { return c >= 6; }),
-        old.cameras.end());
-    if (!old.cameras.empty()) built.push_back(old);
-    if (old.cameras.size() < p.cameras.size()) batch.push_back(p);  // a new camera sees it
+// Points() gives every point with its rays' cameras: a manifold built from them is the one built
+// from the input (what `manisweep extend` rebuilds from), and inserted points come with theirs.
+TEST(DelaunayManifold, ItsPointsBuildTheSameManifold) {
+  const RandomScene scene = SphereScene(300, 10, 21);
+  DelaunayManifold first(scene.cameras, ManifoldOptions{});
+  first.Build(scene.points);
+  const std::vector<RayPoint> points = first.Points();
+  ASSERT_EQ(points.size(), scene.points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    std::vector<int32_t> cameras = scene.points[i].cameras;
+    std::sort(cameras.begin(), cameras.end());
+    EXPECT_EQ(points[i].position, scene.points[i].position);
+    EXPECT_EQ(points[i].cameras, cameras) << "point " << i;
   }
-  ASSERT_GT(batch.size(), 200u);
-  DelaunayManifold manifold(first, ManifoldOptions{});
-  manifold.Build(built);
-  const size_t before = manifold.ExtractSurface().NumVertices();
-  manifold.AddCameras(added);
-  const InsertionStats stats = manifold.Insert(batch);
-  EXPECT_GT(stats.discarded_duplicate, 0);  // the points both halves see
-  EXPECT_GT(stats.gained_rays, 0);
-  EXPECT_GT(stats.inserted, 100);
-  ASSERT_EQ(manifold.Validate(true), "");
-  EXPECT_EQ(manifold.num_joinable_cells(), 0);
-  const Mesh mesh = manifold.ExtractSurface();
-  EXPECT_EQ(SurfaceProblems(mesh), "");
-  EXPECT_GT(mesh.NumVertices(), before + 100);
-  EXPECT_TRUE(manifold.CamerasInMatter().empty());
+  DelaunayManifold again(scene.cameras, ManifoldOptions{});
+  again.Build(points);
+  const Mesh a = first.ExtractSurface(), b = again.ExtractSurface();
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.faces, b.faces);
 
-  // A camera outside the box of the build cannot start a ray in it.
-  ManifoldCamera far = all.cameras.front();
-  far.center = Eigen::Vector3d(1e3, 0, 0);
-  testing::ExpectInputError([&] { manifold.AddCameras({far}); },
-                            {"camera 12", "outside the run's"});
+  const RandomScene more = SphereScene(40, 10, 22, 1.03);
+  const InsertionStats inserted = first.Insert(more.points);
+  const std::vector<RayPoint> after = first.Points();
+  EXPECT_EQ(static_cast<int64_t>(after.size()), 300 + inserted.inserted);
 }
 
 // The paper's regrowing (from every free cell on the boundary of O) leaves O maximal after every

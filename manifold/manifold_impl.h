@@ -51,7 +51,6 @@ class DelaunayManifold::Impl {
   Impl(std::vector<ManifoldCamera> cameras, const ManifoldOptions& options);
 
   BuildStats Build(std::vector<RayPoint> points);
-  void AddCameras(const std::vector<ManifoldCamera>& cameras);
   InsertionStats Insert(const std::vector<RayPoint>& points);
   void BeginInsert();
   void InsertPart(const std::vector<RayPoint>& points);
@@ -63,6 +62,14 @@ class DelaunayManifold::Impl {
   std::string Validate(bool check_weights);
 
   int64_t num_points() const { return static_cast<int64_t>(positions_.size()); }
+  std::vector<RayPoint> Points() const {
+    std::vector<RayPoint> points(positions_.size());
+    for (size_t i = 0; i < positions_.size(); ++i) points[i].position = positions_[i];
+    ray_index_->ForEachInDirectionOrder(
+        [&](const RayRef& ray) { points[ray.point].cameras.push_back(ray.camera); });
+    for (RayPoint& p : points) std::sort(p.cameras.begin(), p.cameras.end());
+    return points;
+  }
   bool built() const { return built_; }
   void set_walk_threads(int threads) { walks_.set_threads(threads); }
   int walk_threads() const { return walks_.threads(); }

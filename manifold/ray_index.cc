@@ -49,21 +49,19 @@ std::pair<int32_t, int32_t> FixedPointRange(double lo, double hi, double min,
 }  // namespace
 
 RayIndex::RayIndex(std::vector<Camera> cameras, int grid) : grid_(std::clamp(grid, 1, kMaxGrid)) {
-  for (const Camera& camera : cameras) AddCamera(camera);
+  cameras_.resize(cameras.size());
+  for (size_t c = 0; c < cameras.size(); ++c) {
+    CameraBuckets& cb = cameras_[c];
+    cb.camera = cameras[c];
+    MS_CHECK(cb.camera.u_max > cb.camera.u_min && cb.camera.v_max > cb.camera.v_min);
+    cb.su = 65536.0 / (cb.camera.u_max - cb.camera.u_min);
+    cb.sv = 65536.0 / (cb.camera.v_max - cb.camera.v_min);
+    cb.lo = cb.hi = cb.camera.center;
+  }
   for (int side = 1;; side *= 2) {
     morton_.emplace_back(std::min(side, grid_), MortonBuckets(std::min(side, grid_)));
     if (side >= grid_) break;
   }
-}
-
-int RayIndex::AddCamera(const Camera& camera) {
-  CameraBuckets& cb = cameras_.emplace_back();
-  cb.camera = camera;
-  MS_CHECK(cb.camera.u_max > cb.camera.u_min && cb.camera.v_max > cb.camera.v_min);
-  cb.su = 65536.0 / (cb.camera.u_max - cb.camera.u_min);
-  cb.sv = 65536.0 / (cb.camera.v_max - cb.camera.v_min);
-  cb.lo = cb.hi = cb.camera.center;
-  return static_cast<int>(cameras_.size()) - 1;
 }
 
 int RayIndex::SideFor(size_t rays) const {

@@ -42,8 +42,6 @@ class RayIndex {
 
   // `grid`: the most buckets per side of a camera's grid.
   RayIndex(std::vector<Camera> cameras, int grid = 128);
-  // A camera after the others (an extended run), with no ray yet; returns its index.
-  int AddCamera(const Camera& camera);
   // Filed rays per bucket a camera's grid aims at before it doubles its side.
   static constexpr size_t kRaysPerBucket = 4;
   // At most 65,536 buckets per side: a bucket holds whole fixed-point steps.

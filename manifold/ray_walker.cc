@@ -12,12 +12,6 @@ void RayWalker::LocateCameras(const std::vector<Eigen::Vector3d>& centers) {
   }
 }
 
-void RayWalker::AddCamera(const Eigen::Vector3d& center) {
-  camera_points_.push_back(ToPoint(center));
-  camera_cells_.emplace_back();
-  StartOf(static_cast<int>(camera_cells_.size()) - 1);
-}
-
 const CameraStart& RayWalker::StartOf(int camera) {
   CameraStart& start = camera_cells_[camera];
   if (!start.valid) {

@@ -123,9 +123,6 @@ class RayWalker {
 
   // Locates every camera centre (after the triangulation is built) and marks the start cells.
   void LocateCameras(const std::vector<Eigen::Vector3d>& centers);
-  // One camera more, after the cameras above (an extended run: docs/design/extend.md); located
-  // and its start cell marked now.
-  void AddCamera(const Eigen::Vector3d& center);
   const Point& camera_point(int camera) const { return camera_points_[camera]; }
 
   // The start of `camera`'s rays, located again if an insertion destroyed its cell.
