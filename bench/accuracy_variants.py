@@ -200,8 +200,11 @@ def cpu_name():
 
 
 def git_commit():
+    """HEAD's short hash, with "-dirty" when tracked files differ from it (a binary built from
+    the working tree is then not that commit's)."""
     try:
-        return subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], check=True,
+        return subprocess.run(["git", "-C", ROOT, "describe", "--always", "--dirty",
+                               "--abbrev=7", "--exclude", "*"], check=True,
                               capture_output=True, text=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
