@@ -166,6 +166,13 @@ def provenance(bench):
     }
 
 
+def split_run_options(argv):
+    """A bench's own arguments, and the options after `--` it passes to every manisweep run."""
+    if "--" not in argv:
+        return argv, []
+    return argv[:argv.index("--")], argv[argv.index("--") + 1:]
+
+
 def parse_bench_args(parser, table):
     """Adds --out and --table to a bench's parser and parses. With --table it prints that JSON
     as TABLE renders it and exits; otherwise --out is required."""

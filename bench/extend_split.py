@@ -28,7 +28,8 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from accuracy_variants import ROOT, provenance, run, write_result  # noqa: E402
+from accuracy_variants import (ROOT, provenance, run, split_run_options,  # noqa: E402
+                               write_result)
 from real_sets import consistency, images_of  # noqa: E402
 
 def text_model(manisweep, dataset, work, log):
@@ -109,9 +110,7 @@ def mae_of(evaluation):
 
 
 def main():
-    argv = sys.argv[1:]
-    options = argv[argv.index("--") + 1:] if "--" in argv else []
-    argv = argv[:argv.index("--")] if "--" in argv else argv
+    argv, options = split_run_options(sys.argv[1:])
     a = argparse.ArgumentParser(description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     a.add_argument("--dataset")

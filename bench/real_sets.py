@@ -24,7 +24,8 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from accuracy_variants import ROOT, provenance, run, write_result  # noqa: E402
+from accuracy_variants import (ROOT, provenance, run, split_run_options,  # noqa: E402
+                               write_result)
 
 FORMATS = ["colmap", "h5", "text"]
 ROW = re.compile(r"^(\d+|all)\s+(\d+)\s+([\d.]+)%\s+([\d.]+)%\s+([\d.]+)%\s+([\d.]+)%$")
@@ -140,9 +141,7 @@ def table(result):
 
 
 def main():
-    argv = sys.argv[1:]
-    options = argv[argv.index("--") + 1:] if "--" in argv else []
-    argv = argv[:argv.index("--")] if "--" in argv else argv
+    argv, options = split_run_options(sys.argv[1:])
     a = argparse.ArgumentParser(description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     a.add_argument("--dataset", action="append", default=[])
