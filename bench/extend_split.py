@@ -16,7 +16,8 @@ On a synthetic dataset (one with gt.ply), the closed meshes' MAE against the gro
 --eval-views is measured too (the paper's Sigma 0.06 unless --sigma).
 
     bench/extend_split.py --dataset ../shared/data/castle-P30 --first 15 --out OUT.json
-        [--work DIR] [--first-run DIR] [--full-run DIR] [--eval-views 10,40,80,100]
+        [--work DIR] [--first-format text|h5] [--first-run DIR] [--full-run DIR]
+        [--eval-views 10,40,80,100]
         [-- --no-refine ...]
     bench/extend_split.py --table OUT.json
 """
@@ -49,10 +50,18 @@ def text_model(manisweep, dataset, work, log):
     return d
 
 
-def first_part(manisweep, whole, first, work, log):
+def first_part(manisweep, whole, first, fmt, work, log):
     """The whole model's first FIRST views (`convert --keep-views`: their poses, and the points at
-    least two of them see). Returns its folder."""
-    d = os.path.join(work, "models", f"first{first}")
+    least two of them see), as COLMAP text (fmt "text") or scene.h5 ("h5"). Returns what
+    reconstruct reads: the text model's folder, or the scene.h5 file."""
+    d = os.path.join(work, "models", f"first{first}-{fmt}")
+    if fmt == "h5":
+        path = os.path.join(d, "scene.h5")
+        if not os.path.exists(path):
+            os.makedirs(d, exist_ok=True)
+            run([manisweep, "convert", "--input", whole, "--output", path,
+                 "--keep-views", f"0-{first - 1}"], log)
+        return path
     sparse = os.path.join(d, "sparse")
     if not os.path.exists(os.path.join(sparse, "points3D.txt")):
         os.makedirs(sparse, exist_ok=True)
@@ -117,6 +126,9 @@ def main():
     a.add_argument("--first", type=int)
     a.add_argument("--out")
     a.add_argument("--work", default="/tmp/manisweep_extend_split")
+    a.add_argument("--first-format", choices=["text", "h5"], default="text",
+                   help="the first part's model: COLMAP text or scene.h5 (a format that must not "
+                        "matter)")
     a.add_argument("--first-run", help="a finished run of the first part with the same options")
     a.add_argument("--full-run", help="a finished run of the whole model with the same options")
     a.add_argument("--eval-views", help="synthetic sets: views for the MAE, e.g. 10,40,80,100")
@@ -136,7 +148,7 @@ def main():
     names = view_names(whole)
     if not 0 < args.first < len(names):
         a.error(f"--first {args.first}: the model has {len(names)} images")
-    first = first_part(ms, whole, args.first, args.work, log)
+    first = first_part(ms, whole, args.first, args.first_format, args.work, log)
     first_names = names[:args.first]
     runs = os.path.join(args.work, "runs")
     common = ["--workers", "2"] + options
@@ -173,7 +185,8 @@ def main():
             "iterations": len([i for i in summary["iterations"] if i["iteration"] > 0]),
         }
     result = {**provenance("extend_split"), "dataset": os.path.basename(os.path.normpath(
-        args.dataset)), "first": first_names, "options": options, "seconds": seconds,
+        args.dataset)), "first": first_names, "first_format": args.first_format,
+        "options": options, "seconds": seconds,
         "given_runs": sorted(given),
         "meshes": rows}
     goals = {}
