@@ -1,7 +1,7 @@
 // Adding images to a finished run (`manisweep extend`, docs/design/extend.md): the new SfM
 // model, holding the run's cameras and new ones in the same frame, becomes the run's scene with
 // the new views and the new points appended; the new points, with their rays from old and new
-// cameras, are the extension's insertion batch.
+// cameras, are the extension's batch.
 #pragma once
 
 #include <cstdint>
@@ -23,8 +23,8 @@ struct ExtendOptions {
 
 // One extension as run.h5 records it: after the first `points_before` scene points built the
 // manifold (or an earlier extension added them), iteration `iteration` added the views
-// [views_before, views_after) and inserted the points [points_before, points_after) as its
-// batch. Replaying it adds the cameras before inserting that batch.
+// [views_before, views_after) and took the points [points_before, points_after) as its batch.
+// Replaying it builds the manifold anew with those cameras and points, as the extension did.
 struct RunExtension {
   int32_t iteration = 0;
   int32_t views_before = 0, views_after = 0;

@@ -183,10 +183,10 @@ InsertionStats RunLifecycle::InsertBatch(int iteration, const std::vector<RayPoi
 }
 
 // The paper's insertion discards a new point whose conflict region still meets O after
-// shrinking: inserted into the run's manifold, a region only the new cameras see (where the run's
-// O fans out in large cells to the Steiner box) lost 41% of castle-P30's new points that way.
-// The manifold is built anew instead, from the run's vertices with their rays and the new points,
-// in a Steiner box that holds every camera (docs/design/extend.md).
+// shrinking, and a region only the new cameras see (where the run's O fans out in large cells to
+// the Steiner box) loses most of its points that way. The manifold is built anew instead, from
+// the run's vertices with their rays and the new points, in a Steiner box that holds every camera
+// (docs/design/extend.md).
 InsertionStats RunLifecycle::RebuildWithExtension(const RunExtension& e,
                                                   const std::vector<RayPoint>& batch) {
   std::vector<RayPoint> points = manifold_->Points();
