@@ -439,6 +439,77 @@ TEST(RefineMesh, RemeshingLeavesUnseenFacesAlone) {
   EXPECT_TRUE(ValidWithBoundary(mesh));
 }
 
+// The faces of `mesh` that pass within `radius` of x, as their corners' positions.
+std::vector<std::array<Eigen::Vector3d, 3>> FacesNear(const Mesh& mesh, const Eigen::Vector3d& x,
+                                                      double radius) {
+  std::vector<std::array<Eigen::Vector3d, 3>> near;
+  for (const auto& f : mesh.faces) {
+    const std::array<Eigen::Vector3d, 3> t = {mesh.vertices[f[0]], mesh.vertices[f[1]],
+                                              mesh.vertices[f[2]]};
+    if ((x - ClosestPointOnTriangle(x, t)).norm() < radius) near.push_back(t);
+  }
+  return near;
+}
+
+// A camera whose centre is already nearer the surface than the moves' clearance (a swept mesh
+// can pass that near one) does not stop the level's remeshing: the faces near it stay as they
+// are, and the rest is remeshed. Splitting them would bring the surface nearer still (a split
+// point lies off its edge), and the pixel footprint, shrinking towards the camera, would ask for
+// splits without end. Gradients are zero, so that only the remeshing changes the mesh.
+TEST(RefineMesh, RemeshingLeavesFacesNearACameraAlone) {
+  const PyramidScene scene = MakePyramidScene();
+  Mesh mesh = LoweredApex(scene, 0.8);
+  SplitLongEdges(
+      &mesh, [](const Eigen::Vector3d& x) { return x.norm() < 3 ? 0.3 : 1e9; }, 100000, 1e-9);
+  // A fourth camera 3 mm off a face of the pyramid's +x side, looking along the surface.
+  const auto on_side = std::min_element(mesh.faces.begin(), mesh.faces.end(), [&](auto f, auto g) {
+    const auto middle = [&](const auto& t) {
+      return (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3;
+    };
+    const Eigen::Vector3d target(0.5, 0, 0.12);
+    return (middle(f) - target).norm() < (middle(g) - target).norm();
+  });
+  const Eigen::Vector3d normal = FaceCross(mesh.vertices, *on_side).normalized();
+  ASSERT_GT(normal.z(), 0);
+  const Eigen::Vector3d middle =
+      (mesh.vertices[(*on_side)[0]] + mesh.vertices[(*on_side)[1]] + mesh.vertices[(*on_side)[2]]) /
+      3;
+  const Eigen::Vector3d tangent = normal.cross(Eigen::Vector3d::UnitY()).normalized();
+  std::vector<SweepCamera> cameras = scene.cameras;
+  SweepCamera near_camera = cameras[0];
+  near_camera.id = 3;
+  near_camera.view = LookAtView(middle + 0.003 * normal, middle + tangent + 0.2 * normal, 160, 120,
+                                150);
+  cameras.push_back(near_camera);
+  const Eigen::Vector3d centre = near_camera.view.Center();
+  const std::vector<std::array<Eigen::Vector3d, 3>> near_before = FacesNear(mesh, centre, 0.01);
+  ASSERT_FALSE(near_before.empty());
+  const size_t vertices_before = mesh.vertices.size();
+
+  RefineOptions options;
+  options.iterations = 1;
+  options.levels = 1;
+  options.max_vertices = 20000;
+  RefineHooks hooks;
+  hooks.pair_gradients = [](const Mesh& at, int, std::vector<PairGradient>* per_pair) {
+    for (PairGradient& g : *per_pair) {
+      g.Resize(at.vertices.size());
+      g.pixels = 1;  // a defined pixel, of energy 0
+    }
+    return true;
+  };
+  const RefineStats stats = RefineMesh(&mesh, cameras, kPyramidPairs, options, hooks);
+  EXPECT_EQ(stats.remeshings_undone, 0);
+  EXPECT_GT(stats.splits, 0);
+  EXPECT_GT(mesh.vertices.size(), vertices_before);
+  const std::vector<std::array<Eigen::Vector3d, 3>> near_after = FacesNear(mesh, centre, 0.01);
+  ASSERT_EQ(near_after.size(), near_before.size());
+  for (size_t i = 0; i < near_before.size(); ++i) {
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(near_after[i][k], near_before[i][k]);
+  }
+  EXPECT_TRUE(ValidWithBoundary(mesh));
+}
+
 // Pairs are summed in pair order whatever the threads did: one thread and two give the same
 // mesh, bit for bit.
 TEST(RefineMesh, ThreadsDoNotChangeTheResult) {

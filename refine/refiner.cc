@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -154,10 +155,45 @@ std::vector<CameraSide> CameraSides(const Mesh& mesh, const std::vector<Eigen::V
   return sides;
 }
 
+// The vertices of the faces that pass within `radius` of one of `centres`. Remeshing leaves those
+// faces as they are: a surface that near a camera is one the moves keep clear of it, not one with
+// detail to add, and the pixel footprint there shrinks with the distance, so splits would follow
+// it down towards nothing.
+std::vector<uint8_t> VerticesNearCameras(const Mesh& mesh,
+                                         const std::vector<Eigen::Vector3d>& centres,
+                                         double radius) {
+  std::vector<uint8_t> near_face(mesh.faces.size(), 0);
+  ParallelFor(mesh.faces.size(), [&](size_t f) {
+    const std::array<Eigen::Vector3d, 3> t = {mesh.vertices[mesh.faces[f][0]],
+                                              mesh.vertices[mesh.faces[f][1]],
+                                              mesh.vertices[mesh.faces[f][2]]};
+    const Eigen::Vector3d middle = (t[0] + t[1] + t[2]) / 3;
+    double reach = 0;  // of the face from its middle
+    for (const Eigen::Vector3d& x : t) reach = std::max(reach, (x - middle).norm());
+    for (const Eigen::Vector3d& c : centres) {
+      if ((c - middle).norm() - reach >= radius) continue;  // too far for any point of the face
+      if ((c - ClosestPointOnTriangle(c, t)).norm() < radius) {
+        near_face[f] = 1;
+        break;
+      }
+    }
+  });
+  std::vector<uint8_t> frozen(mesh.vertices.size(), 0);
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    if (!near_face[f]) continue;
+    for (int32_t v : mesh.faces[f]) frozen[v] = 1;
+  }
+  return frozen;
+}
+
 // Remeshing at the start of a level (docs/design/refine.md "Remeshing"): collapses, splits, flips,
-// with edge lengths in pixels of `views`.
+// with edge lengths in pixels of `views`, none of them within `keep_out` of a camera centre.
 void Remesh(Mesh* mesh, const std::vector<RefineView>& views, const RefineOptions& options,
-            double tolerance, RefineStats* stats) {
+            const MoveOptions& move_options, double keep_out, RefineStats* stats) {
+  const double tolerance = move_options.tolerance;
+  const auto frozen = [&] {
+    return VerticesNearCameras(*mesh, move_options.keep_clear, keep_out);
+  };
   if (options.min_edge_px > 0) {
     const CollapseStats collapse = CollapseShortEdges(
         mesh,
@@ -167,17 +203,17 @@ void Remesh(Mesh* mesh, const std::vector<RefineView>& views, const RefineOption
           const double footprint = Footprint(views, x);
           return std::isfinite(footprint) ? options.min_edge_px * footprint : 0.0;
         },
-        options.max_face_turn_deg, tolerance);
+        options.max_face_turn_deg, tolerance, frozen());
     stats->collapses += collapse.collapses;
     stats->collapses_refused += collapse.refused;
   }
   const SplitStats split = SplitLongEdges(
       mesh, [&](const Eigen::Vector3d& x) { return options.max_edge_px * Footprint(views, x); },
-      options.max_vertices, tolerance);
+      options.max_vertices, tolerance, frozen());
   stats->splits += split.splits;
   stats->splits_refused += split.refused;
   if (options.flip_dihedral_deg > 0) {
-    const FlipStats flip = FlipEdges(mesh, options.flip_dihedral_deg, tolerance);
+    const FlipStats flip = FlipEdges(mesh, options.flip_dihedral_deg, tolerance, frozen());
     stats->flips += flip.flips;
     stats->flips_refused += flip.refused;
   }
@@ -186,19 +222,32 @@ void Remesh(Mesh* mesh, const std::vector<RefineView>& views, const RefineOption
 // Remeshing as above, kept only where it keeps the cameras where they were. Collapses and flips
 // move the surface a little, and are checked for self-intersections but not against the cameras:
 // where a camera changed sides of the mesh, or the surface came nearer to it than the moves'
-// clearance (and nearer than before), the level keeps the mesh as it was (a camera inside the
-// matter sees nothing but the inside of a face).
+// clearance (and nearer than before), the attempt is undone (a camera inside the matter sees
+// nothing but the inside of a face). Remeshing leaves the faces within twice the clearance of a
+// camera alone, so a surface that already passes that near one (a swept mesh may) does not stop
+// the level's remeshing elsewhere; the attempts after the first leave a wider zone alone, then
+// split only, then keep the mesh.
 void RemeshKeepingCameras(Mesh* mesh, const std::vector<RefineView>& views,
                           const RefineOptions& options, const MoveOptions& move_options, int level,
                           RefineStats* stats) {
+  const Timer timer;
   const std::vector<CameraSide> before = CameraSides(*mesh, move_options.keep_clear);
   const Mesh kept = *mesh;
-  // The remeshing asked for, then splits alone (they move the surface by 8 tolerances at most).
   RefineOptions splits_only = options;
   splits_only.min_edge_px = 0;
   splits_only.flip_dihedral_deg = 0;
-  for (const RefineOptions* attempt : {&options, static_cast<const RefineOptions*>(&splits_only)}) {
-    Remesh(mesh, views, *attempt, move_options.tolerance, stats);
+  struct Attempt {
+    const RefineOptions* options;
+    double keep_out;  // in clearances
+    const char* what;
+  };
+  const Attempt attempts[] = {{&options, 2, "remeshing"},
+                              {&options, 8, "remeshing further from the cameras"},
+                              {&splits_only, 8, "splitting alone"}};
+  for (const Attempt& attempt : attempts) {
+    RefineStats made;
+    Remesh(mesh, views, *attempt.options, move_options,
+           attempt.keep_out * move_options.clearance, &made);
     const std::vector<CameraSide> after = CameraSides(*mesh, move_options.keep_clear);
     size_t c = 0;
     while (
@@ -206,15 +255,27 @@ void RemeshKeepingCameras(Mesh* mesh, const std::vector<RefineView>& views,
         (after[c].distance >= move_options.clearance || after[c].distance >= before[c].distance)) {
       ++c;
     }
-    if (c == after.size()) return;
-    spdlog::warn("refine: remeshing at level {}{} put camera {} {} the mesh ({:.3g} from it); {}",
-                 level, attempt == &options ? "" : " by splits alone", c,
+    if (c == after.size()) {
+      stats->collapses += made.collapses;
+      stats->collapses_refused += made.collapses_refused;
+      stats->splits += made.splits;
+      stats->splits_refused += made.splits_refused;
+      stats->flips += made.flips;
+      stats->flips_refused += made.flips_refused;
+      spdlog::info(
+          "refine: level {} {}: {} vertices, {} split, {} collapsed, {} flipped; {:.1f} s", level,
+          attempt.what, mesh->vertices.size(), made.splits, made.collapses, made.flips,
+          timer.Seconds());
+      return;
+    }
+    spdlog::warn("refine: {} at level {} put camera {} {} the mesh ({:.3g} from it); undone",
+                 attempt.what, level, c,
                  after[c].winding == before[c].winding ? "too near" : "on the other side of",
-                 after[c].distance,
-                 attempt == &options ? "splitting alone instead" : "the level keeps the mesh");
+                 after[c].distance);
     *mesh = kept;
-    ++stats->remeshings_undone;
   }
+  ++stats->remeshings_undone;
+  spdlog::warn("refine: level {} keeps the mesh unremeshed", level);
 }
 
 }  // namespace

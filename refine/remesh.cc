@@ -22,6 +22,14 @@ using Edge = std::pair<int32_t, int32_t>;  // (smaller, larger) vertex index
 
 Edge Key(int32_t a, int32_t b) { return a < b ? Edge{a, b} : Edge{b, a}; }
 
+// Whether an edge has a frozen end (flags for the vertices the step was given; later ones are free).
+bool HasFrozenEnd(const std::vector<uint8_t>& frozen, const Edge& edge) {
+  const auto is_frozen = [&](int32_t v) {
+    return static_cast<size_t>(v) < frozen.size() && frozen[static_cast<size_t>(v)];
+  };
+  return is_frozen(edge.first) || is_frozen(edge.second);
+}
+
 // Every edge with the faces that have it (one on a boundary, two inside, in face order), sorted
 // by edge: a flat table built by one sort (a map of vectors cost two allocations an edge). An
 // edge in more than two faces is an InternalError naming `who`.
@@ -115,11 +123,12 @@ Eigen::Vector3d SplitPoint(const Mesh& mesh, const Edge& edge, const EdgeFaceTab
 // split unless one of its two faces was already split in this pass.
 std::vector<Split> SplitPass(Mesh* mesh,
                              const std::function<double(const Eigen::Vector3d&)>& max_length,
-                             int64_t max_vertices, const std::set<Edge>& refused, double offset) {
+                             int64_t max_vertices, const std::set<Edge>& refused, double offset,
+                             const std::vector<uint8_t>& frozen) {
   const EdgeFaceTable faces_of(*mesh, "SplitLongEdges");
   std::vector<std::pair<double, Edge>> long_edges;
   for (const auto& [edge, faces] : faces_of) {
-    if (refused.count(edge)) continue;
+    if (refused.count(edge) || HasFrozenEnd(frozen, edge)) continue;
     const Eigen::Vector3d& a = mesh->vertices[edge.first];
     const Eigen::Vector3d& b = mesh->vertices[edge.second];
     const double length = (a - b).norm();
@@ -236,11 +245,13 @@ int64_t UndoTroubledSplits(Mesh* mesh, std::vector<Split>* splits_ptr, double to
 
 SplitStats SplitLongEdges(Mesh* mesh,
                           const std::function<double(const Eigen::Vector3d&)>& max_length,
-                          int64_t max_vertices, double tolerance) {
+                          int64_t max_vertices, double tolerance,
+                          const std::vector<uint8_t>& frozen) {
   SplitStats stats;
   std::set<Edge> refused;
   while (static_cast<int64_t>(mesh->vertices.size()) < max_vertices) {
-    std::vector<Split> splits = SplitPass(mesh, max_length, max_vertices, refused, 8 * tolerance);
+    std::vector<Split> splits =
+        SplitPass(mesh, max_length, max_vertices, refused, 8 * tolerance, frozen);
     ++stats.rounds;
     if (splits.empty()) break;
     const int64_t undone = UndoTroubledSplits(mesh, &splits, tolerance, &refused);
@@ -267,7 +278,8 @@ double Angle(const Eigen::Vector3d& at, const Eigen::Vector3d& p, const Eigen::V
 }
 
 // One pass over the edges in index order; a face flips at most once per pass.
-std::vector<Flip> FlipPass(Mesh* mesh, double min_cos_dihedral, const std::set<Edge>& refused) {
+std::vector<Flip> FlipPass(Mesh* mesh, double min_cos_dihedral, const std::set<Edge>& refused,
+                           const std::vector<uint8_t>& frozen) {
   const EdgeFaceTable faces_of(*mesh, "FlipEdges");
   std::vector<int32_t> degree(mesh->vertices.size(), 0);
   for (const auto& entry : faces_of) {
@@ -278,7 +290,8 @@ std::vector<Flip> FlipPass(Mesh* mesh, double min_cos_dihedral, const std::set<E
   std::set<Edge> created;  // by this pass's flips
   std::vector<Flip> flips;
   for (const auto& [edge, faces] : faces_of) {
-    if (faces.size() != 2 || touched[faces[0]] || touched[faces[1]] || refused.count(edge)) {
+    if (faces.size() != 2 || touched[faces[0]] || touched[faces[1]] || refused.count(edge) ||
+        HasFrozenEnd(frozen, edge)) {
       continue;
     }
     // f0 has the edge as a -> b, f1 as b -> a (consistent orientation).
@@ -325,12 +338,13 @@ std::vector<Flip> FlipPass(Mesh* mesh, double min_cos_dihedral, const std::set<E
 
 }  // namespace
 
-FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance, int max_rounds) {
+FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance,
+                    const std::vector<uint8_t>& frozen, int max_rounds) {
   FlipStats stats;
   const double min_cos = std::cos(max_dihedral_deg * M_PI / 180);
   std::set<Edge> refused;
   for (int round = 0; round < max_rounds; ++round) {
-    std::vector<Flip> flips = FlipPass(mesh, min_cos, refused);
+    std::vector<Flip> flips = FlipPass(mesh, min_cos, refused, frozen);
     ++stats.rounds;
     if (flips.empty()) break;
     std::vector<uint8_t> alive(flips.size(), 1), focus(mesh->faces.size(), 0);
@@ -382,7 +396,8 @@ struct Collapse {
 // and the face-turn limit, none touching another's star.
 std::vector<Collapse> PlanCollapses(const Mesh& mesh,
                                     const std::function<double(const Eigen::Vector3d&)>& min_length,
-                                    double cos_turn, const std::set<Edge>& refused) {
+                                    double cos_turn, const std::set<Edge>& refused,
+                                    const std::vector<uint8_t>& frozen) {
   const EdgeFaceTable faces_of(mesh, "CollapseShortEdges");
   std::vector<std::vector<int32_t>> faces_at(mesh.vertices.size());
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
@@ -395,7 +410,10 @@ std::vector<Collapse> PlanCollapses(const Mesh& mesh,
     if (faces.size() == 1) on_boundary[edge.first] = on_boundary[edge.second] = 1;
   }
   for (const auto& [edge, faces] : faces_of) {
-    if (refused.count(edge) || on_boundary[edge.first] || on_boundary[edge.second]) continue;
+    if (refused.count(edge) || on_boundary[edge.first] || on_boundary[edge.second] ||
+        HasFrozenEnd(frozen, edge)) {
+      continue;
+    }
     const Eigen::Vector3d& a = mesh.vertices[edge.first];
     const Eigen::Vector3d& b = mesh.vertices[edge.second];
     const double length = (a - b).norm();
@@ -477,12 +495,13 @@ Mesh ApplyCollapses(const Mesh& mesh, const std::vector<Collapse>& plan,
 
 CollapseStats CollapseShortEdges(Mesh* mesh,
                                  const std::function<double(const Eigen::Vector3d&)>& min_length,
-                                 double max_face_turn_deg, double tolerance, int max_rounds) {
+                                 double max_face_turn_deg, double tolerance,
+                                 const std::vector<uint8_t>& frozen, int max_rounds) {
   CollapseStats stats;
   const double cos_turn = std::cos(max_face_turn_deg * M_PI / 180);
   std::set<Edge> refused;
   for (int round = 0; round < max_rounds; ++round) {
-    std::vector<Collapse> plan = PlanCollapses(*mesh, min_length, cos_turn, refused);
+    std::vector<Collapse> plan = PlanCollapses(*mesh, min_length, cos_turn, refused, frozen);
     ++stats.rounds;
     if (plan.empty()) break;
     while (!plan.empty()) {

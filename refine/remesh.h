@@ -8,11 +8,16 @@
 // them) find touching. Each pass of splits is checked as moves are (exact self-intersections, the
 // floating-point tolerance), and the splits whose faces the checker objects to are undone and not
 // tried again.
+//
+// Every step takes `frozen` vertex flags (one per vertex of the mesh it is given, or empty for
+// none; vertices added later are free): a split, collapse or flip with a frozen end is not made,
+// so the faces whose three vertices are all frozen stay as they are.
 #pragma once
 
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "mesh/mesh.h"
 
@@ -31,7 +36,8 @@ struct SplitStats {
 // two faces, or one on a boundary.
 SplitStats SplitLongEdges(Mesh* mesh,
                           const std::function<double(const Eigen::Vector3d&)>& max_length,
-                          int64_t max_vertices, double tolerance);
+                          int64_t max_vertices, double tolerance,
+                          const std::vector<uint8_t>& frozen = {});
 
 struct CollapseStats {
   int64_t collapses = 0;  // edges collapsed (vertices removed)
@@ -50,7 +56,8 @@ struct CollapseStats {
 // the end. Every edge must be in exactly two faces.
 CollapseStats CollapseShortEdges(Mesh* mesh,
                                  const std::function<double(const Eigen::Vector3d&)>& min_length,
-                                 double max_face_turn_deg, double tolerance, int max_rounds = 5);
+                                 double max_face_turn_deg, double tolerance,
+                                 const std::vector<uint8_t>& frozen = {}, int max_rounds = 5);
 
 struct FlipStats {
   int64_t flips = 0;    // edges flipped
@@ -65,6 +72,7 @@ struct FlipStats {
 // keeps the face count and a closed 2-manifold one: it is skipped where the new edge exists
 // already or a vertex would keep fewer than 3 neighbours; flips are checked as splits are and
 // undone where the checker objects. Passes repeat until none flips (at most max_rounds).
-FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance, int max_rounds = 5);
+FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance,
+                    const std::vector<uint8_t>& frozen = {}, int max_rounds = 5);
 
 }  // namespace ms
