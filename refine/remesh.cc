@@ -13,6 +13,7 @@
 
 #include "base/check.h"
 #include "base/error.h"
+#include "mesh/face_grid.h"
 #include "refine/mesh_moves.h"
 
 namespace ms {
@@ -22,7 +23,8 @@ using Edge = std::pair<int32_t, int32_t>;  // (smaller, larger) vertex index
 
 Edge Key(int32_t a, int32_t b) { return a < b ? Edge{a, b} : Edge{b, a}; }
 
-// Whether an edge has a frozen end (flags for the vertices the step was given; later ones are free).
+// Whether an edge has a frozen end (flags for the vertices the step was given; later ones are
+// free).
 bool HasFrozenEnd(const std::vector<uint8_t>& frozen, const Edge& edge) {
   const auto is_frozen = [&](int32_t v) {
     return static_cast<size_t>(v) < frozen.size() && frozen[static_cast<size_t>(v)];
@@ -98,6 +100,19 @@ std::vector<int64_t> TroubledFaces(const CheckerProblems& problems) {
   return faces;
 }
 
+// The checker's problems among the faces flagged in `focus`: looked for among the grid's
+// candidates where few faces are flagged, by a box search where many are (it sorts every face's
+// box once, where the grid looks around each flagged face).
+CheckerProblems FindProblemsNear(const Mesh& mesh, double tolerance,
+                                 const std::vector<uint8_t>& focus, const FaceGrid& grid) {
+  const auto flagged = std::count(focus.begin(), focus.end(), 1);
+  if (8 * static_cast<size_t>(flagged) > focus.size()) {
+    return FindCheckerProblems(mesh, tolerance, focus);
+  }
+  const PairCandidates candidates = grid.Candidates(mesh, focus);
+  return FindCheckerProblems(mesh, tolerance, focus, &candidates);
+}
+
 // One split: edge (u, v) of faces f0 and f1 at the new vertex m; faces f0 and f1 were changed
 // and faces added0 and added1 appended.
 struct Split {
@@ -171,7 +186,7 @@ std::vector<Split> SplitPass(Mesh* mesh,
 // objects to none of them (what is left was there before the pass); the remaining splits' face
 // indices follow the removal of the undone ones' faces. Returns how many were undone.
 int64_t UndoTroubledSplits(Mesh* mesh, std::vector<Split>* splits_ptr, double tolerance,
-                           std::set<Edge>* refused) {
+                           std::set<Edge>* refused, FaceGrid* grid) {
   std::vector<Split>& splits = *splits_ptr;  // face indices are renumbered as faces go
   int64_t undone = 0;
   std::vector<uint8_t> alive(splits.size(), 1);
@@ -181,7 +196,7 @@ int64_t UndoTroubledSplits(Mesh* mesh, std::vector<Split>* splits_ptr, double to
     for (int k = 0; k < s.num_faces; ++k) focus[s.faces[k]] = focus[s.added[k]] = 1;
   }
   while (true) {
-    const CheckerProblems problems = FindCheckerProblems(*mesh, tolerance, focus);
+    const CheckerProblems problems = FindProblemsNear(*mesh, tolerance, focus, *grid);
     if (problems.Empty()) break;
     // The split that made each face or vertex.
     std::map<int64_t, size_t> by_face;
@@ -229,6 +244,10 @@ int64_t UndoTroubledSplits(Mesh* mesh, std::vector<Split>* splits_ptr, double to
       focus.push_back(restored[f]);
     }
     mesh->faces = std::move(kept);
+    grid->Renumber(new_index);
+    for (size_t f = 0; f < focus.size(); ++f) {
+      if (focus[f]) grid->Update(*mesh, static_cast<int32_t>(f));  // restored
+    }
     for (size_t i = 0; i < splits.size(); ++i) {
       if (!alive[i]) continue;
       Split& s = splits[i];
@@ -249,12 +268,20 @@ SplitStats SplitLongEdges(Mesh* mesh,
                           const std::vector<uint8_t>& frozen) {
   SplitStats stats;
   std::set<Edge> refused;
+  FaceGrid grid(*mesh, tolerance);
   while (static_cast<int64_t>(mesh->vertices.size()) < max_vertices) {
+    const size_t faces_before = mesh->faces.size();
     std::vector<Split> splits =
         SplitPass(mesh, max_length, max_vertices, refused, 8 * tolerance, frozen);
     ++stats.rounds;
     if (splits.empty()) break;
-    const int64_t undone = UndoTroubledSplits(mesh, &splits, tolerance, &refused);
+    for (const Split& s : splits) {
+      for (int k = 0; k < s.num_faces; ++k) grid.Update(*mesh, s.faces[k]);
+    }
+    for (size_t f = faces_before; f < mesh->faces.size(); ++f) {
+      grid.Update(*mesh, static_cast<int32_t>(f));
+    }
+    const int64_t undone = UndoTroubledSplits(mesh, &splits, tolerance, &refused, &grid);
     stats.splits += static_cast<int64_t>(splits.size()) - undone;
     stats.refused += undone;
   }
@@ -343,10 +370,14 @@ FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance,
   FlipStats stats;
   const double min_cos = std::cos(max_dihedral_deg * M_PI / 180);
   std::set<Edge> refused;
+  FaceGrid grid(*mesh, tolerance);
   for (int round = 0; round < max_rounds; ++round) {
     std::vector<Flip> flips = FlipPass(mesh, min_cos, refused, frozen);
     ++stats.rounds;
     if (flips.empty()) break;
+    for (const Flip& flip : flips) {
+      for (int32_t f : flip.faces) grid.Update(*mesh, f);
+    }
     std::vector<uint8_t> alive(flips.size(), 1), focus(mesh->faces.size(), 0);
     std::map<int64_t, size_t> by_face;
     for (size_t i = 0; i < flips.size(); ++i) {
@@ -357,7 +388,7 @@ FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance,
     }
     int64_t undone = 0;
     while (true) {
-      const CheckerProblems problems = FindCheckerProblems(*mesh, tolerance, focus);
+      const CheckerProblems problems = FindProblemsNear(*mesh, tolerance, focus, grid);
       std::set<size_t> bad;
       for (int64_t f : TroubledFaces(problems)) {
         if (auto it = by_face.find(f); it != by_face.end() && alive[it->second]) {
@@ -370,6 +401,7 @@ FlipStats FlipEdges(Mesh* mesh, double max_dihedral_deg, double tolerance,
         const Flip& flip = flips[i];
         for (int k = 0; k < 2; ++k) {
           mesh->faces[flip.faces[k]] = flip.old_faces[k];
+          grid.Update(*mesh, flip.faces[k]);
           focus[flip.faces[k]] = 1;
         }
         refused.insert(flip.edge);  // not tried again
