@@ -436,12 +436,16 @@ void AddExamples(const std::vector<T>& sorted, int max_examples, std::vector<T>*
 }
 
 // Edges and angles of the faces with three distinct indices.
-void MeasureFaces(const Mesh& mesh, const std::vector<uint8_t>& usable, FloatRobustnessReport* r) {
+void MeasureFaces(const Mesh& mesh, const std::vector<uint8_t>& usable,
+                  const std::vector<uint8_t>& focus, FloatRobustnessReport* r) {
   double shortest = std::numeric_limits<double>::infinity();
   double smallest = std::numeric_limits<double>::infinity();
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const auto& t = mesh.faces[f];
-    if (!usable[f] || t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+    if (!usable[f] || (!focus.empty() && !focus[f]) || t[0] == t[1] || t[1] == t[2] ||
+        t[0] == t[2]) {
+      continue;
+    }
     for (int k = 0; k < 3; ++k) {
       const int32_t a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
       const Eigen::Vector3d ab = mesh.vertices[b] - mesh.vertices[a];
@@ -867,7 +871,7 @@ FloatRobustnessReport CheckFloatRobustness(const Mesh& mesh, const std::vector<u
   SetTolerance(lo, hi, options, &r);
 
   Timer timer;
-  MeasureFaces(mesh, usable, &r);
+  MeasureFaces(mesh, usable, options.focus_faces, &r);
   const double measure_seconds = timer.Seconds();
   timer.Restart();
   FindNearVertices(mesh, referenced, options, &r);

@@ -39,6 +39,7 @@ struct FloatRobustnessOptions {
   // Empty: every pair is tested. Otherwise one flag per face: only face pairs with a flagged face,
   // and vertex pairs with a vertex of one, are tested (a partial check, for code that changed
   // those faces of a mesh that passed before, e.g. refine/mesh_moves.h; not a verdict on the mesh).
+  // The shortest edge and smallest angle are then those of the flagged faces.
   std::vector<uint8_t> focus_faces;
   // The pair searches run slab by slab along x, with about this many boxes a slab: CGAL copies
   // the boxes it searches, and a slab's copy is all that is held. The pairs found do not depend
