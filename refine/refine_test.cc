@@ -478,8 +478,8 @@ TEST(RefineMesh, RemeshingLeavesFacesNearACameraAlone) {
   std::vector<SweepCamera> cameras = scene.cameras;
   SweepCamera near_camera = cameras[0];
   near_camera.id = 3;
-  near_camera.view = LookAtView(middle + 0.003 * normal, middle + tangent + 0.2 * normal, 160, 120,
-                                150);
+  near_camera.view =
+      LookAtView(middle + 0.003 * normal, middle + tangent + 0.2 * normal, 160, 120, 150);
   cameras.push_back(near_camera);
   const Eigen::Vector3d centre = near_camera.view.Center();
   const std::vector<std::array<Eigen::Vector3d, 3>> near_before = FacesNear(mesh, centre, 0.01);

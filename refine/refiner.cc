@@ -191,9 +191,7 @@ std::vector<uint8_t> VerticesNearCameras(const Mesh& mesh,
 void Remesh(Mesh* mesh, const std::vector<RefineView>& views, const RefineOptions& options,
             const MoveOptions& move_options, double keep_out, RefineStats* stats) {
   const double tolerance = move_options.tolerance;
-  const auto frozen = [&] {
-    return VerticesNearCameras(*mesh, move_options.keep_clear, keep_out);
-  };
+  const auto frozen = [&] { return VerticesNearCameras(*mesh, move_options.keep_clear, keep_out); };
   if (options.min_edge_px > 0) {
     const CollapseStats collapse = CollapseShortEdges(
         mesh,
@@ -246,8 +244,8 @@ void RemeshKeepingCameras(Mesh* mesh, const std::vector<RefineView>& views,
                               {&splits_only, 8, "splitting alone"}};
   for (const Attempt& attempt : attempts) {
     RefineStats made;
-    Remesh(mesh, views, *attempt.options, move_options,
-           attempt.keep_out * move_options.clearance, &made);
+    Remesh(mesh, views, *attempt.options, move_options, attempt.keep_out * move_options.clearance,
+           &made);
     const std::vector<CameraSide> after = CameraSides(*mesh, move_options.keep_clear);
     size_t c = 0;
     while (
@@ -262,10 +260,9 @@ void RemeshKeepingCameras(Mesh* mesh, const std::vector<RefineView>& views,
       stats->splits_refused += made.splits_refused;
       stats->flips += made.flips;
       stats->flips_refused += made.flips_refused;
-      spdlog::info(
-          "refine: level {} {}: {} vertices, {} split, {} collapsed, {} flipped; {:.1f} s", level,
-          attempt.what, mesh->vertices.size(), made.splits, made.collapses, made.flips,
-          timer.Seconds());
+      spdlog::info("refine: level {} {}: {} vertices, {} split, {} collapsed, {} flipped; {:.1f} s",
+                   level, attempt.what, mesh->vertices.size(), made.splits, made.collapses,
+                   made.flips, timer.Seconds());
       return;
     }
     spdlog::warn("refine: {} at level {} put camera {} {} the mesh ({:.3g} from it); undone",
