@@ -9,6 +9,7 @@
 #include <chrono>
 #include <filesystem>
 #include <set>
+#include <string>
 #include <utility>
 
 #include "base/check.h"
@@ -22,6 +23,22 @@
 
 namespace ms {
 namespace fs = std::filesystem;
+namespace {
+
+// Sorted indices as runs: "1, 7-12" (what `convert --keep-views` reads).
+std::string IndexRanges(const std::vector<int>& sorted) {
+  std::string out;
+  for (size_t i = 0; i < sorted.size();) {
+    size_t j = i;
+    while (j + 1 < sorted.size() && sorted[j + 1] == sorted[j] + 1) ++j;
+    if (!out.empty()) out += ", ";
+    out += j == i ? fmt::format("{}", sorted[i]) : fmt::format("{}-{}", sorted[i], sorted[j]);
+    i = j + 1;
+  }
+  return out;
+}
+
+}  // namespace
 
 RunLifecycle::RunLifecycle(const CoordinatorOptions& options, uint64_t session_id)
     : options_(options), session_id_(session_id) {
@@ -122,11 +139,17 @@ StepOutcome RunLifecycle::Prepare() {
   // While the scene's points are here: the first checkpoint lets them go.
   swept_.clear();
   if (!record_.extensions.empty()) {
-    swept_ = ExtensionSweptCameras(scene, record_.extensions.back(), neighbours_);
+    const RunExtension& e = record_.extensions.back();
+    swept_ = ExtensionSweptCameras(scene, e, neighbours_);
+    std::vector<int> left;  // the run's cameras that get no job
+    for (int c = 0; c < e.views_before; ++c) {
+      if (!swept_[c]) left.push_back(c);
+    }
     spdlog::info(
         "extension: {} of {} cameras are swept (the new ones, their neighbours, and "
-        "the old ones that look into their region)",
-        std::count(swept_.begin(), swept_.end(), 1), swept_.size());
+        "the old ones that look into their region); not swept: {}",
+        std::count(swept_.begin(), swept_.end(), 1), swept_.size(),
+        left.empty() ? "none" : IndexRanges(left));
   }
   BuildOrReplay(start, run_file);
   return NextOrStop();
