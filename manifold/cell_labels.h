@@ -31,6 +31,7 @@ class CellLabels {
         w1_(options.w1),
         w2_(options.w2),
         free_threshold_(options.free_threshold),
+        behind_ratio_(options.behind_ratio),
         w2_rule_(options.w2_rule) {}
 
   // Graded Steiner points in use (decided by Build): cells of Steiner points only are free.
@@ -66,6 +67,9 @@ class CellLabels {
         c->vertex(2)->info().id < 0 && c->vertex(3)->info().id < 0) {
       return true;
     }
+    // Rays that end just in front of a cell are evidence of matter there: a cell that more of
+    // them enter past their points than cross it stays matter (behind_ratio).
+    if (c->info().crossings < behind_ratio_ * c->info().behind) return false;
     return Weight(c) >= free_threshold_;
   }
 
@@ -174,7 +178,7 @@ class CellLabels {
 
   const Delaunay& dt_;
   // Weights (paper section 2.1): w1 per crossing ray, w2 per ray spreading from a neighbour.
-  const double w1_, w2_, free_threshold_;
+  const double w1_, w2_, free_threshold_, behind_ratio_;
   const W2Rule w2_rule_;
   bool graded_ = false;
   // Spread counts past 16 bits, by cell (CellInfo::kSpreadOverflow).

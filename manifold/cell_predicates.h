@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <utility>
+#include <vector>
 
 #include "manifold/triangulation.h"
 
@@ -92,6 +93,30 @@ inline CGAL::Orientation FaceSide(const Cell_handle& c, int i, const Point& x) {
                        &c->vertex(3)->point()};
   p[i] = &x;
   return CGAL::orientation(*p[0], *p[1], *p[2], *p[3]);
+}
+
+// The cell a ray from `camera` enters past its end point, the vertex v: of the finite cells in
+// `star` (v's), the one whose corner at v holds the ray's direction, i.e. that holds
+// v + (v - camera) on its side of each of its faces through v. The first in `star`'s order that
+// holds it strictly, else the first that holds it on a face; a default handle if none does.
+inline Cell_handle CellBehind(const Vertex_handle& v, const Point& camera,
+                              const std::vector<Cell_handle>& star) {
+  const Point& p = v->point();
+  const Point beyond(2 * p.x() - camera.x(), 2 * p.y() - camera.y(), 2 * p.z() - camera.z());
+  Cell_handle on_face;
+  for (const Cell_handle& c : star) {
+    const int i = c->index(v);
+    bool strict = true, holds = true;
+    for (int j = 0; j < 4 && holds; ++j) {
+      if (j == i) continue;
+      const CGAL::Orientation side = FaceSide(c, j, beyond);
+      holds = side != CGAL::NEGATIVE;
+      strict &= side == CGAL::POSITIVE;
+    }
+    if (holds && strict) return c;
+    if (holds && on_face == Cell_handle()) on_face = c;
+  }
+  return on_face;
 }
 
 // Sign of K_ij (see kPluckerSign).

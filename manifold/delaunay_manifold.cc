@@ -120,6 +120,7 @@ BuildStats DelaunayManifold::Impl::Build(std::vector<RayPoint> points) {
 
   timer.Restart();
   TraceRays(points, &stats);
+  CountRaysBehind();
   stats.seconds_ray_tracing = timer.Seconds();
   // What the manifold needs of the points is in it now; growing is the build's peak of memory,
   // so the points with their cameras go before it.
@@ -309,6 +310,35 @@ void DelaunayManifold::Impl::TraceRays(const std::vector<RayPoint>& points, Buil
       });
 }
 
+DelaunayManifold::Impl::Cell_handle DelaunayManifold::Impl::CellBehindRay(
+    const RayRef& ray, std::vector<Cell_handle>* star) const {
+  const Vertex_handle v = vertex_of_point_[ray.point];
+  star->clear();
+  dt_.finite_incident_cells(v, std::back_inserter(*star));
+  return manifold_detail::CellBehind(v, walker_.camera_point(ray.camera), *star);
+}
+
+void DelaunayManifold::Impl::CountRaysBehind() {
+  if (options_.behind_ratio <= 0) return;
+  std::vector<Cell_handle> star;
+  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
+    const Cell_handle c = CellBehindRay(ray, &star);
+    if (c != Cell_handle()) ++c->info().behind;
+  });
+}
+
+void DelaunayManifold::Impl::CountRaysBehindAfterBatch(const InsertionBatch& batch) {
+  if (options_.behind_ratio <= 0) return;
+  std::vector<Cell_handle> star;
+  ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
+    const bool new_ray = static_cast<size_t>(ray.id) >= batch.first_new_ray;
+    if (!new_ray && vertex_of_point_[ray.point]->info().changed != batch.number) return;
+    const Cell_handle c = CellBehindRay(ray, &star);
+    if (c == Cell_handle()) return;
+    if (new_ray || c->info().born >= batch.first_part) ++c->info().behind;
+  });
+}
+
 void DelaunayManifold::Impl::GrowInitial(BuildStats* stats) {
   for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
     stats->free_cells += labels_.IsFree(c);
@@ -379,6 +409,7 @@ InsertionStats DelaunayManifold::Impl::FinishInsert() {
   } else {
     RewalkMarked(&batch, batch.part, &stats);
   }
+  CountRaysBehindAfterBatch(batch);
   stats.seconds_insertion += timer.Seconds();
 
   timer.Restart();
@@ -422,6 +453,7 @@ DelaunayManifold::Impl::InsertionBatch DelaunayManifold::Impl::StartBatch() {
   batch.first_part = parts_ + 1;
   batch.part = parts_;
   batch.first_new_id = static_cast<int32_t>(positions_.size());
+  batch.first_new_ray = ray_index_->size();
   batch.rays.Reset(ray_index_->size(), parts_);
   batch.box_slack = 1e-9 * (box_max_ - box_min_).norm();
   return batch;

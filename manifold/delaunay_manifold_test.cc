@@ -12,6 +12,7 @@
 #include <set>
 
 #include "base/error.h"
+#include "manifold/cell_predicates.h"
 #include "mesh/mesh_checker.h"
 #include "testing/manifold_test_hooks.h"
 
@@ -311,6 +312,66 @@ TEST(DelaunayManifold, SphereIsReconstructedAsAClosedManifold) {
   EXPECT_GT(sphere_faces, 600);
   // w2 smoothing may free a few cells just inside the hull (faces facing inwards).
   EXPECT_GT(outward, 0.93 * sphere_faces);
+}
+
+// Outliers' rays cross the sphere and free cells inside it. Counting the rays that end just in
+// front of each cell (--manifold.behind-ratio) keeps some of those cells matter, and the counts
+// that insertion keeps up to date equal a recount from scratch after every batch.
+TEST(DelaunayManifold, RaysEndingInFrontOfACellKeepItMatter) {
+  for (uint32_t seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    RandomScene scene = SphereScene(300, 10, seed);
+    std::mt19937 rng(seed);
+    AddOutliers(40, &rng, &scene);
+    ManifoldOptions behind_options;
+    behind_options.behind_ratio = 1;
+    DelaunayManifold paper(scene.cameras, ManifoldOptions{});
+    DelaunayManifold behind(scene.cameras, behind_options);
+    const BuildStats paper_stats = paper.Build(scene.points);
+    const BuildStats behind_stats = behind.Build(scene.points);
+    EXPECT_LT(behind_stats.free_cells, paper_stats.free_cells);
+    ASSERT_EQ(behind.Validate(true), "");
+    ASSERT_EQ(SurfaceProblems(behind.ExtractSurface()), "");
+    for (int batch = 0; batch < 3; ++batch) {
+      RandomScene more = SphereScene(60, 10, seed * 1000 + batch, 0.98 + 0.02 * batch);
+      AddOutliers(5, &rng, &more);
+      behind.Insert(more.points);
+      ASSERT_EQ(behind.Validate(true), "") << "batch " << batch;
+      ASSERT_EQ(SurfaceProblems(behind.ExtractSurface()), "") << "batch " << batch;
+    }
+  }
+}
+
+// CellBehind finds the cell a ray enters past its end point: the one that holds a point a
+// hair beyond the vertex along the ray.
+TEST(CellBehind, IsTheCellJustPastThePoint) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0, 1);
+  manifold_detail::Delaunay dt;
+  for (int i = 0; i < 400; ++i) dt.insert(manifold_detail::Point(g(rng), g(rng), g(rng)));
+  const manifold_detail::Point camera(5, -3, 2);
+  int64_t compared = 0;
+  std::vector<manifold_detail::Cell_handle> star;
+  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
+    star.clear();
+    dt.finite_incident_cells(v, std::back_inserter(star));
+    const manifold_detail::Cell_handle behind = manifold_detail::CellBehind(v, camera, star);
+    const manifold_detail::Point& p = v->point();
+    const double eps = 1e-7;
+    const manifold_detail::Point just_past(p.x() + eps * (p.x() - camera.x()),
+                                           p.y() + eps * (p.y() - camera.y()),
+                                           p.z() + eps * (p.z() - camera.z()));
+    manifold_detail::Locate_type type;
+    int li, lj;
+    const manifold_detail::Cell_handle located = dt.locate(just_past, type, li, lj, v->cell());
+    if (type != manifold_detail::Delaunay::CELL || dt.is_infinite(located)) {
+      EXPECT_TRUE(behind == manifold_detail::Cell_handle() || !dt.is_infinite(located));
+      continue;
+    }
+    EXPECT_TRUE(behind == located);
+    ++compared;
+  }
+  EXPECT_GT(compared, 300);
 }
 
 // A camera stands in free space: its cell belongs to O. One at the centre of the sphere that

@@ -133,6 +133,7 @@ class DelaunayManifold::Impl {
     uint32_t first_part = 0;          // parts first_part, first_part + 1, ...: cells carry theirs
     uint32_t part = 0;                // the current part (CellInfo::born of the cells it makes)
     int32_t first_new_id = 0;         // id of the current part's first inserted point
+    size_t first_new_ray = 0;         // id of the batch's first new ray in the index
     manifold_detail::BatchRays rays;  // what the batch knows of each ray in the index
     // The rays each part marked (by part - first_part); a ray is walked from the bucket of the
     // last part that marked it.
@@ -165,6 +166,8 @@ class DelaunayManifold::Impl {
                    BuildStats* stats);
   // (2) Every viewing ray walked and counted on the cells it crosses.
   void TraceRays(const std::vector<RayPoint>& points, BuildStats* stats);
+  // (2b) With behind_ratio > 0: every ray counted on the cell it enters past its point.
+  void CountRaysBehind();
   // (3) O grown from the heaviest free cell.
   void GrowInitial(BuildStats* stats);
 
@@ -211,6 +214,12 @@ class DelaunayManifold::Impl {
   void TraceNewRays(InsertionBatch* batch, InsertionStats* stats);
   void GainCameras(const Vertex_handle& vertex, const std::vector<int32_t>& cameras,
                    InsertionBatch* batch);
+  // With behind_ratio > 0, at the end of a batch: its new rays counted on the cells they enter
+  // past their point, and the older rays that end at a vertex the batch changed on theirs if
+  // it was born in the batch (a cell behind that survived the batch has its rays counted).
+  void CountRaysBehindAfterBatch(const InsertionBatch& batch);
+  // The cell `ray` enters past its point (CellBehind); `star` is scratch.
+  Cell_handle CellBehindRay(const RayRef& ray, std::vector<Cell_handle>* star) const;
   // Regrows O from its boundary where the batch changed something, frees cameras left in the
   // matter and joins pockets (stats->camera_stars_completed, stats->pockets_joined).
   void Regrow(const InsertionBatch& batch, InsertionStats* stats);

@@ -9,6 +9,15 @@ MS_OPTION(double, w2, 0.5, "w2", "w_2: weight added to each face neighbour of a 
           AtLeast(0))
 MS_OPTION(double, free_threshold, 4.0, "free-threshold",
           "t_w: a cell is free space when its weight reaches this", Above(0))
+// Evidence of matter, beyond the paper (Labatut et al.'s graph cut weighs it too): a ray that
+// ends at a point says the space just past the point is matter. Long cells that reach from a
+// facade's last points past its edge are crossed by rays that graze the edge; without this one
+// such ray frees them and the strip of facade up to the edge with them
+// (docs/design/accuracy.md, "Where the carved band comes from").
+MS_OPTION(double, behind_ratio, 0.0, "behind-ratio",
+          "a cell stays matter while fewer rays cross it than this x the rays that, continued "
+          "past their point (a vertex of the cell), enter it (0 = the paper's weights alone)",
+          AtLeast(0))
 MS_OPTION(W2Rule, w2_rule, W2Rule::kCameraSide, "w2-rule",
           "which face neighbours of a crossed cell get w_2: camera-side (only between the camera "
           "and the cell) or all-faces (the paper's wording)",

@@ -112,12 +112,22 @@ std::string DelaunayManifold::Impl::ValidateWeights() {
     }
     walker_.Walk(start, walker_.camera_point(ray.camera), vertex_of_point_[ray.point], count);
   });
+  std::unordered_map<const void*, int32_t> behind;
+  if (options_.behind_ratio > 0) {
+    std::vector<Cell_handle> star;
+    ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
+      const Cell_handle c = CellBehindRay(ray, &star);
+      if (c != Cell_handle()) ++behind[&*c];
+    });
+  }
   int64_t wrong = 0;
   for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
     const auto it = recount.find(&*c);
     const std::array<int32_t, 5> expected =
         it == recount.end() ? std::array<int32_t, 5>{0, 0, 0, 0, 0} : it->second;
-    bool same = c->info().crossings == expected[0];
+    const auto b = behind.find(&*c);
+    bool same = c->info().crossings == expected[0] &&
+                c->info().behind == (b == behind.end() ? 0 : b->second);
     for (int i = 0; i < 4; ++i) same &= labels_.Spread(c, i) == expected[1 + i];
     if (!same) ++wrong;
   }
