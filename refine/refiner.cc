@@ -191,6 +191,7 @@ std::vector<uint8_t> VerticesNearCameras(const Mesh& mesh,
 void Remesh(Mesh* mesh, const std::vector<RefineView>& views, const RefineOptions& options,
             const MoveOptions& move_options, double keep_out, RefineStats* stats) {
   const double tolerance = move_options.tolerance;
+  // Found again before each step: collapses renumber the vertices, splits add some.
   const auto frozen = [&] { return VerticesNearCameras(*mesh, move_options.keep_clear, keep_out); };
   if (options.min_edge_px > 0) {
     const CollapseStats collapse = CollapseShortEdges(
@@ -215,6 +216,16 @@ void Remesh(Mesh* mesh, const std::vector<RefineView>& views, const RefineOption
     stats->flips += flip.flips;
     stats->flips_refused += flip.refused;
   }
+}
+
+// The remeshing counters of `made` added to `stats`.
+void AddRemeshCounts(const RefineStats& made, RefineStats* stats) {
+  stats->collapses += made.collapses;
+  stats->collapses_refused += made.collapses_refused;
+  stats->splits += made.splits;
+  stats->splits_refused += made.splits_refused;
+  stats->flips += made.flips;
+  stats->flips_refused += made.flips_refused;
 }
 
 // Remeshing as above, kept only where it keeps the cameras where they were. Collapses and flips
@@ -254,12 +265,7 @@ void RemeshKeepingCameras(Mesh* mesh, const std::vector<RefineView>& views,
       ++c;
     }
     if (c == after.size()) {
-      stats->collapses += made.collapses;
-      stats->collapses_refused += made.collapses_refused;
-      stats->splits += made.splits;
-      stats->splits_refused += made.splits_refused;
-      stats->flips += made.flips;
-      stats->flips_refused += made.flips_refused;
+      AddRemeshCounts(made, stats);
       spdlog::info("refine: level {} {}: {} vertices, {} split, {} collapsed, {} flipped; {:.1f} s",
                    level, attempt.what, mesh->vertices.size(), made.splits, made.collapses,
                    made.flips, timer.Seconds());
