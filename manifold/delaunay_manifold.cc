@@ -323,7 +323,7 @@ void DelaunayManifold::Impl::CountRaysBehind() {
   std::vector<Cell_handle> star;
   ray_index_->ForEachInDirectionOrder([&](const RayRef& ray) {
     const Cell_handle c = CellBehindRay(ray, &star);
-    if (c != Cell_handle()) ++c->info().behind;
+    if (c != Cell_handle()) labels_.CountBehind(c);
   });
 }
 
@@ -335,7 +335,7 @@ void DelaunayManifold::Impl::CountRaysBehindAfterBatch(const InsertionBatch& bat
     if (!new_ray && vertex_of_point_[ray.point]->info().changed != batch.number) return;
     const Cell_handle c = CellBehindRay(ray, &star);
     if (c == Cell_handle()) return;
-    if (new_ray || c->info().born >= batch.first_part) ++c->info().behind;
+    if (new_ray || c->info().born >= batch.first_part) labels_.CountBehind(c);
   });
 }
 

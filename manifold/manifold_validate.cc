@@ -127,7 +127,7 @@ std::string DelaunayManifold::Impl::ValidateWeights() {
         it == recount.end() ? std::array<int32_t, 5>{0, 0, 0, 0, 0} : it->second;
     const auto b = behind.find(&*c);
     bool same = c->info().crossings == expected[0] &&
-                c->info().behind == (b == behind.end() ? 0 : b->second);
+                labels_.Behind(c) == (b == behind.end() ? 0 : b->second);
     for (int i = 0; i < 4; ++i) same &= labels_.Spread(c, i) == expected[1 + i];
     if (!same) ++wrong;
   }

@@ -31,9 +31,9 @@ struct VertexInfo {
   uint32_t relabelled = 0;         // CellLabels::relabels() when a cell around it last flipped
 };
 
-// 24 bytes, which CGAL's cell (8 handles and a byte of its own) lays out in 96 bytes: at 5 cells
-// a point every 8 bytes of the cell cost 40 bytes a point (docs/design/scalability.md, "Memory
-// per point").
+// 20 bytes, which CGAL's cell (8 handles and a byte of its own) lays out in 88 bytes: at 5 cells
+// a point every 4 bytes here cost 20 bytes a point (docs/design/scalability.md, "Memory per
+// point").
 struct CellInfo {
   // A spread count at this value lives in CellLabels' overflow table: only cells beside the
   // cameras of large scenes pass 65,534.
@@ -42,9 +42,6 @@ struct CellInfo {
   static constexpr uint32_t kMaxPart = (1u << 29) - 1;
   CellInfo() : born(0), outside(0), queued(0), has_camera(0) {}
   int32_t crossings = 0;  // viewing rays whose open segment meets the open cell
-  // Viewing rays that, continued past their point (a vertex of this cell), enter this cell
-  // first (CellBehind); counted only with ManifoldOptions::behind_ratio > 0.
-  int32_t behind = 0;
   // Of those, the rays that spread w2 across face i to the neighbour there (see
   // CellLabels::Weight; read through CellLabels::Spread).
   uint16_t spread[4] = {0, 0, 0, 0};
