@@ -185,6 +185,15 @@ def main():
     print(f"wrote {path}")
 
 
+def print_table_if_asked(path, render):
+    """`--table PATH`: print PATH's table with `render` and say so (the caller then exits)."""
+    if not path:
+        return False
+    with open(path) as f:
+        print(render(json.load(f)))
+    return True
+
+
 def provenance(bench):
     """What every bench JSON starts with: the bench, where, at which commit, when, and the command
     line that wrote it."""
@@ -210,9 +219,7 @@ def parse_bench_args(parser, table):
     parser.add_argument("--out", help="JSON to write")
     parser.add_argument("--table", help="print the table of this JSON and exit")
     args = parser.parse_args()
-    if args.table:
-        with open(args.table) as f:
-            print(table(json.load(f)))
+    if print_table_if_asked(args.table, table):
         sys.exit(0)
     if not args.out:
         parser.error("--out or --table is required")

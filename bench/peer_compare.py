@@ -26,7 +26,7 @@ import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from accuracy_variants import provenance, write_result  # noqa: E402
+from accuracy_variants import print_table_if_asked, provenance, write_result  # noqa: E402
 
 OPENMVS_STEPS = ["InterfaceCOLMAP", "DensifyPointCloud", "ReconstructMesh", "RefineMesh"]
 
@@ -263,8 +263,7 @@ def main():
     a.add_argument("--table", help="print the table of this JSON and exit")
     a.add_argument("reconstruct", nargs="*", help="after --: options for manisweep reconstruct")
     args = a.parse_args()
-    if args.table:
-        print(table(json.load(open(args.table))))
+    if print_table_if_asked(args.table, table):
         return 0
     if not args.dataset or not args.out:
         a.error("needs --dataset and --out")

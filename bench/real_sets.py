@@ -24,8 +24,8 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from accuracy_variants import (ROOT, provenance, run, split_run_options,  # noqa: E402
-                               write_result)
+from accuracy_variants import (ROOT, print_table_if_asked, provenance, run,  # noqa: E402
+                               split_run_options, write_result)
 
 FORMATS = ["colmap", "h5", "text"]
 ROW = re.compile(r"^(\d+|all)\s+(\d+)\s+([\d.]+)%\s+([\d.]+)%\s+([\d.]+)%\s+([\d.]+)%$")
@@ -151,8 +151,7 @@ def main():
     a.add_argument("--manisweep", default=os.path.join(ROOT, "build", "app", "manisweep"))
     a.add_argument("--table", help="print the table of an existing JSON and exit")
     args = a.parse_args(argv)
-    if args.table:
-        print(table(json.load(open(args.table))))
+    if print_table_if_asked(args.table, table):
         return 0
     if not args.dataset or not args.out:
         a.error("needs --dataset and --out")

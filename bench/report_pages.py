@@ -18,7 +18,7 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from accuracy_variants import provenance, write_result  # noqa: E402
+from accuracy_variants import print_table_if_asked, provenance, write_result  # noqa: E402
 
 
 def measure(manisweep, chrome, label, run_dir, work):
@@ -67,8 +67,7 @@ def main():
     a.add_argument("--table", help="print the table of this JSON and exit")
     a.add_argument("runs", nargs="*", help="LABEL=RUN_DIR")
     args = a.parse_args()
-    if args.table:
-        print(table(json.load(open(args.table))))
+    if print_table_if_asked(args.table, table):
         return 0
     chrome = shutil.which("chromium") or shutil.which("chromium-browser")
     if not chrome or not args.out or not args.runs:

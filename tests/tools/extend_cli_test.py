@@ -7,7 +7,6 @@ folder as it was, gives the same bytes with one worker or two and after an inter
 resumed extension, and refuses a model whose old cameras moved (exit 2, one line naming the
 camera, nothing written). Exit 0 when all hold.
 """
-import argparse
 import hashlib
 import os
 import re
@@ -16,7 +15,7 @@ import socket
 import subprocess
 import sys
 
-from small_pyramid import fresh_small_pyramid, interrupt_after, run
+from small_pyramid import fresh_small_pyramid, interrupt_after, parse_test_arguments, run
 
 SWEEP = ["--max-iterations", "3", "--kernel", "cpu", "--no-refine", "--no-report"]
 
@@ -44,11 +43,7 @@ def mae_from(ms, data, mesh, view):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--manisweep", required=True)
-    parser.add_argument("--verdict", required=True, help="tests/tools/open3d_verdict.py")
-    parser.add_argument("--workdir", required=True)
-    args = parser.parse_args()
+    args = parse_test_arguments(__doc__)
     ms, work = args.manisweep, args.workdir
     data = fresh_small_pyramid(ms, work)
     if data is None:

@@ -8,14 +8,13 @@ after an interrupted and resumed `reconstruct --refine`, and from `coordinator -
 `worker` processes; bad inputs (an open mesh, a truncated
 file, a missing image) end with exit 2 and one line naming the file. Exit 0 when all hold.
 """
-import argparse
 import os
 import re
 import socket
 import subprocess
 import sys
 
-from small_pyramid import fresh_small_pyramid, interrupt_after, run
+from small_pyramid import fresh_small_pyramid, interrupt_after, parse_test_arguments, run
 
 
 def free_port():
@@ -155,11 +154,7 @@ def check_bad_inputs(ms, scene, data, initial, work):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--manisweep", required=True)
-    parser.add_argument("--verdict", required=True, help="tests/tools/open3d_verdict.py")
-    parser.add_argument("--workdir", required=True)
-    args = parser.parse_args()
+    args = parse_test_arguments(__doc__)
     ms = args.manisweep
     data = fresh_small_pyramid(ms, args.workdir)
     if data is None:

@@ -1,5 +1,6 @@
 """What the command-line tests here share: the small downward pyramid they reconstruct (6 views
 of 320 x 240), made in a fresh work folder."""
+import argparse
 import os
 import shutil
 import signal
@@ -8,6 +9,16 @@ import subprocess
 
 def run(cmd, **kw):
     return subprocess.run(cmd, capture_output=True, text=True, timeout=600, **kw)
+
+
+def parse_test_arguments(description):
+    """The arguments every such test takes: the binary, the Open3D verdict script, a work
+    folder."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--manisweep", required=True)
+    parser.add_argument("--verdict", required=True, help="tests/tools/open3d_verdict.py")
+    parser.add_argument("--workdir", required=True)
+    return parser.parse_args()
 
 
 def fresh_small_pyramid(manisweep, workdir):
