@@ -19,7 +19,7 @@ LAYERS = [
     ["gl"],
     ["proto"],
     ["manifold", "sweep"],
-    ["refine"],
+    ["refine", "tiles"],
     ["coordinator", "worker", "tools", "colmap"],
     ["report"],
     ["app"],

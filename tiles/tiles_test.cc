@@ -1,0 +1,209 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include "base/error.h"
+#include "tiles/tile_layout.h"
+#include "tiles/tile_stars.h"
+
+namespace ms {
+namespace {
+
+std::vector<Eigen::Vector3d> RandomPoints(int count, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < count; ++i) points.emplace_back(u(rng), u(rng), u(rng));
+  return points;
+}
+
+// Appends the corners of [lo, hi]^3 and returns their ids: the hull every tile holds.
+std::vector<int32_t> AddHullCorners(double lo, double hi, std::vector<Eigen::Vector3d>* points) {
+  std::vector<int32_t> ids;
+  for (int c = 0; c < 8; ++c) {
+    ids.push_back(static_cast<int32_t>(points->size()));
+    points->emplace_back(c & 1 ? hi : lo, c & 2 ? hi : lo, c & 4 ? hi : lo);
+  }
+  return ids;
+}
+
+// The whole triangulation's finite cells, as one tile owning everything holds them.
+std::vector<TileCell> WholeCells(const std::vector<Eigen::Vector3d>& points) {
+  TileHolding all;
+  for (int32_t i = 0; i < static_cast<int32_t>(points.size()); ++i) all.owned.push_back(i);
+  return OwnedCells(points, all);
+}
+
+// The tiles' owned cells, each cell once, must be exactly the whole triangulation's.
+void ExpectTilesPartitionTheWhole(const std::vector<Eigen::Vector3d>& points,
+                                  const std::vector<int32_t>& hull, int tiles) {
+  SCOPED_TRACE("tiles " + std::to_string(tiles));
+  const TileLayout layout = TileLayout::Split(points, tiles);
+  StarExchangeStats stats;
+  const std::vector<TileHolding> holdings = ExchangeStarPoints(points, hull, layout, &stats);
+  ASSERT_EQ(static_cast<int>(holdings.size()), tiles);
+  std::vector<TileCell> united;
+  size_t owned_points = 0;
+  for (const TileHolding& h : holdings) {
+    owned_points += h.owned.size();
+    const std::vector<TileCell> cells = OwnedCells(points, h);
+    united.insert(united.end(), cells.begin(), cells.end());
+  }
+  EXPECT_EQ(owned_points, points.size());
+  std::sort(united.begin(), united.end());
+  EXPECT_EQ(std::adjacent_find(united.begin(), united.end()), united.end())
+      << "a cell owned by two tiles";
+  const std::vector<TileCell> whole = WholeCells(points);
+  EXPECT_EQ(united.size(), whole.size());
+  EXPECT_TRUE(united == whole) << "the tiles' cells differ from the whole triangulation's";
+  if (tiles > 1) {
+    EXPECT_GT(stats.foreign_points, 0);
+    EXPECT_GE(stats.rounds, 2);
+  }
+}
+
+TEST(TileLayout, SplitsBalanceThePointsAndCoverSpace) {
+  const std::vector<Eigen::Vector3d> points = RandomPoints(1000, 1);
+  for (int tiles : {1, 2, 3, 5, 8}) {
+    const TileLayout layout = TileLayout::Split(points, tiles);
+    std::vector<int> counts(tiles, 0);
+    for (const auto& p : points) ++counts[layout.TileOf(p)];
+    const auto [least, most] = std::minmax_element(counts.begin(), counts.end());
+    // Shares of floor/ceil(n / tiles) up to one point lost per split level.
+    EXPECT_LE(*most - *least, 1000 / tiles / 10 + 3) << tiles << " tiles";
+    for (const auto& p : points) {
+      const int t = layout.TileOf(p);
+      EXPECT_TRUE((p.array() >= layout.lower(t).array()).all() &&
+                  (p.array() < layout.upper(t).array()).all());
+    }
+    // Far points still have a tile.
+    EXPECT_GE(layout.TileOf(Eigen::Vector3d(1e30, -1e30, 5)), 0);
+  }
+}
+
+TEST(TileLayout, TilesMeetingABoxAreThoseWhoseRegionsMeetIt) {
+  const TileLayout layout = TileLayout::Split(RandomPoints(500, 2), 6);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.2, 1.2);
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::Vector3d a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng));
+    const Eigen::Vector3d lo = a.cwiseMin(b), hi = a.cwiseMax(b);
+    std::vector<int> expected;
+    for (int t = 0; t < layout.num_tiles(); ++t) {
+      if ((lo.array() < layout.upper(t).array()).all() &&
+          (hi.array() >= layout.lower(t).array()).all()) {
+        expected.push_back(t);
+      }
+    }
+    EXPECT_EQ(layout.TilesMeeting(lo, hi), expected);
+  }
+}
+
+TEST(TileLayout, JsonRoundTripKeepsEveryTile) {
+  const std::vector<Eigen::Vector3d> points = RandomPoints(300, 4);
+  const TileLayout layout = TileLayout::Split(points, 5);
+  const TileLayout read = TileLayout::FromJson(layout.ToJson(), "tiles.json");
+  EXPECT_EQ(read.num_tiles(), 5);
+  for (const auto& p : points) EXPECT_EQ(read.TileOf(p), layout.TileOf(p));
+  EXPECT_EQ(read.ToJson(), layout.ToJson());
+}
+
+TEST(TileLayout, BadInputNamesItsSource) {
+  EXPECT_THROW(TileLayout::Split(RandomPoints(10, 5), 0), InputError);
+  std::vector<Eigen::Vector3d> nan_point = RandomPoints(10, 5);
+  nan_point[3].y() = std::nan("");
+  EXPECT_THROW(TileLayout::Split(nan_point, 2), InputError);
+  for (const char* json :
+       {"{", "{\"tiles\": 2}", "{\"tiles\": 2, \"nodes\": [{\"tile\": 0}]}",
+        "{\"tiles\": 2, \"nodes\": [{\"axis\": 0, \"split\": 0.5, \"low\": 0, \"high\": 2}, "
+        "{\"tile\": 0}, {\"tile\": 1}]}",
+        "{\"tiles\": 2, \"nodes\": [{\"axis\": 0, \"split\": 0.5, \"low\": 1, \"high\": 2}, "
+        "{\"tile\": 1}, {\"tile\": 1}]}"}) {
+    try {
+      TileLayout::FromJson(json, "run/tiles.json");
+      ADD_FAILURE() << "accepted " << json;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("run/tiles.json"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(TileStars, TilesPartitionTheTriangulationOfRandomPoints) {
+  std::vector<Eigen::Vector3d> points = RandomPoints(3000, 6);
+  const std::vector<int32_t> hull = AddHullCorners(-1, 2, &points);
+  for (int tiles : {1, 2, 3, 5, 8}) ExpectTilesPartitionTheWhole(points, hull, tiles);
+}
+
+// A grid: every cube's eight corners lie on one sphere, so the triangulation is decided by
+// CGAL's symbolic perturbation, which each tile must reproduce.
+TEST(TileStars, TilesPartitionTheTriangulationOfCosphericalGridPoints) {
+  std::vector<Eigen::Vector3d> points;
+  for (int x = 0; x < 9; ++x) {
+    for (int y = 0; y < 9; ++y) {
+      for (int z = 0; z < 9; ++z) points.emplace_back(x, y, z);
+    }
+  }
+  const std::vector<int32_t> hull = AddHullCorners(-3, 11, &points);
+  for (int tiles : {2, 4, 7}) ExpectTilesPartitionTheWhole(points, hull, tiles);
+}
+
+// Facades: points on a few planes with little noise make long flat cells whose circumspheres
+// reach far across seams.
+TEST(TileStars, TilesPartitionTheTriangulationOfPlanarFacades) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0, 1), noise(-1e-3, 1e-3);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 2500; ++i) {
+    const int facade = i % 4;
+    const double a = 20 * u(rng), h = 8 * u(rng);
+    points.emplace_back(facade < 2 ? a : facade * 3.0 + noise(rng),
+                        facade < 2 ? facade * 6.0 + noise(rng) : a, h);
+  }
+  const std::vector<int32_t> hull = AddHullCorners(-10, 30, &points);
+  for (int tiles : {2, 4, 8}) ExpectTilesPartitionTheWhole(points, hull, tiles);
+}
+
+// What the exchange is for: tiles that hold only their own points and the hull get cells wrong
+// along the seams.
+TEST(TileStars, WithoutTheExchangeTheSeamsDiffer) {
+  std::vector<Eigen::Vector3d> points = RandomPoints(1000, 10);
+  const std::vector<int32_t> hull = AddHullCorners(-1, 2, &points);
+  const TileLayout layout = TileLayout::Split(points, 4);
+  std::vector<TileCell> united;
+  for (TileHolding h : ExchangeStarPoints(points, hull, layout)) {
+    std::vector<int32_t> kept;
+    for (int32_t id : h.foreign) {
+      if (std::find(hull.begin(), hull.end(), id) != hull.end()) kept.push_back(id);
+    }
+    h.foreign = kept;
+    const std::vector<TileCell> cells = OwnedCells(points, h);
+    united.insert(united.end(), cells.begin(), cells.end());
+  }
+  std::sort(united.begin(), united.end());
+  EXPECT_FALSE(united == WholeCells(points));
+}
+
+TEST(TileStars, RefusesAPointOutsideTheHull) {
+  std::vector<Eigen::Vector3d> points = RandomPoints(200, 8);
+  const std::vector<int32_t> hull = AddHullCorners(-1, 2, &points);
+  points.emplace_back(5, 0.5, 0.5);
+  const TileLayout layout = TileLayout::Split(points, 2);
+  try {
+    ExchangeStarPoints(points, hull, layout);
+    ADD_FAILURE() << "accepted a point outside the hull";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("point 208"), std::string::npos) << e.what();
+  }
+}
+
+TEST(TileStars, RefusesRepeatedPoints) {
+  std::vector<Eigen::Vector3d> points = RandomPoints(200, 9);
+  points.push_back(points[17]);
+  const std::vector<int32_t> hull = AddHullCorners(-1, 2, &points);
+  EXPECT_THROW(ExchangeStarPoints(points, hull, TileLayout::Split(points, 3)), InputError);
+}
+
+}  // namespace
+}  // namespace ms
