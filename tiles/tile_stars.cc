@@ -10,8 +10,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <string>
-#include <unordered_map>
 #include <unordered_set>
 #include <utility>
 
@@ -44,13 +44,14 @@ struct CellHash {
   }
 };
 
-// A box that surely holds a cell's closed circumball: the centre and squared radius are
+// A ball that surely holds a cell's closed circumball: the centre and squared radius are
 // constructed exactly (lazily) and read as enclosing intervals, so even a flat cell, whose
-// floating-point circumcentre may be far off, gets a box that is large rather than wrong.
-struct Box {
-  Eigen::Vector3d lo, hi;
+// floating-point circumcentre may be far off, gets a ball that is large rather than wrong.
+struct Ball {
+  Eigen::Vector3d centre_lo, centre_hi;  // a box that holds the centre
+  double radius = 0;                     // at least the radius
 };
-Box CircumballBox(const Delaunay::Cell_handle& c) {
+Ball CircumballBound(const Delaunay::Cell_handle& c) {
   std::array<Exact::Point_3, 4> p;
   for (int i = 0; i < 4; ++i) {
     const Point& q = c->vertex(i)->point();
@@ -58,76 +59,107 @@ Box CircumballBox(const Delaunay::Cell_handle& c) {
   }
   const Exact::Point_3 centre = CGAL::circumcenter(p[0], p[1], p[2], p[3]);
   const double r2_high = CGAL::to_interval(CGAL::squared_distance(centre, p[0])).second;
-  const double r = std::nextafter(std::sqrt(r2_high), std::numeric_limits<double>::infinity());
-  Box box;
+  Ball ball;
+  ball.radius = std::nextafter(std::sqrt(r2_high), std::numeric_limits<double>::infinity());
   for (int a = 0; a < 3; ++a) {
     const std::pair<double, double> x = CGAL::to_interval(centre.cartesian(a));
-    box.lo[a] = std::nextafter(x.first - r, -std::numeric_limits<double>::infinity());
-    box.hi[a] = std::nextafter(x.second + r, std::numeric_limits<double>::infinity());
+    ball.centre_lo[a] = x.first;
+    ball.centre_hi[a] = x.second;
   }
-  return box;
+  return ball;
 }
 
-// A tile's own points, bucketed for box queries (the sphere queries other tiles ask it).
-class PointGrid {
+// Whether the box [lo, hi] may meet the ball: false only when every point of the box is
+// farther than the radius from every centre the ball allows.
+bool MayMeet(const Ball& ball, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  double gap2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double gap = std::max({0.0, lo[a] - ball.centre_hi[a], ball.centre_lo[a] - hi[a]});
+    gap2 += gap * gap;
+  }
+  // Slack for the rounding of the gaps.
+  return gap2 <= ball.radius * ball.radius * (1 + 1e-9);
+}
+
+// The tiles whose regions may meet the ball (its bounding box rounded outwards).
+std::vector<int> TilesTheBallMayMeet(const TileLayout& layout, const Ball& ball) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::nextafter(ball.centre_lo[a] - ball.radius, -kInf);
+    hi[a] = std::nextafter(ball.centre_hi[a] + ball.radius, kInf);
+  }
+  return layout.TilesMeeting(lo, hi);
+}
+
+// A tile's own points in a static k-d tree, for the sphere queries other tiles ask it. A
+// query descends only into boxes the ball may meet, so the large, empty spheres of cells that
+// reach out of the scene cost their boundary's points, not their bounding box's.
+class PointIndex {
  public:
-  PointGrid(const std::vector<Eigen::Vector3d>& points, const std::vector<int32_t>& ids)
-      : points_(points) {
-    if (ids.empty()) return;
-    lo_ = hi_ = points[ids[0]];
-    for (int32_t id : ids) {
-      lo_ = lo_.cwiseMin(points[id]);
-      hi_ = hi_.cwiseMax(points[id]);
-    }
-    // About 8 points a bucket along the largest extent's scale.
-    const double extent = (hi_ - lo_).maxCoeff();
-    step_ = extent > 0 ? 2 * extent / std::cbrt(static_cast<double>(ids.size())) : 1.0;
-    for (int32_t id : ids) buckets_[Key(Index(points[id]))].push_back(id);
+  PointIndex(const std::vector<Eigen::Vector3d>& points, std::vector<int32_t> ids)
+      : points_(points), ids_(std::move(ids)) {
+    if (!ids_.empty()) Build(0, ids_.size());
   }
 
-  // Calls visit(id) for every point in the closed box (and possibly a few more).
+  // Calls visit(id) for every point the ball may hold (a superset of those it holds).
   template <typename Visit>
-  void ForEachIn(const Box& box, Visit&& visit) const {
-    if (buckets_.empty()) return;
-    const Eigen::Vector3d lo = box.lo.cwiseMax(lo_), hi = box.hi.cwiseMin(hi_);
-    if ((lo.array() > hi.array()).any()) return;
-    const Eigen::Vector3i a = Index(lo), b = Index(hi);
-    const double span =
-        static_cast<double>(b.x() - a.x() + 1) * (b.y() - a.y() + 1) * (b.z() - a.z() + 1);
-    if (span > static_cast<double>(buckets_.size())) {
-      for (const auto& [key, ids] : buckets_) {
-        for (int32_t id : ids) visit(id);
-      }
-      return;
-    }
-    for (int x = a.x(); x <= b.x(); ++x) {
-      for (int y = a.y(); y <= b.y(); ++y) {
-        for (int z = a.z(); z <= b.z(); ++z) {
-          auto it = buckets_.find(Key(Eigen::Vector3i(x, y, z)));
-          if (it == buckets_.end()) continue;
-          for (int32_t id : it->second) visit(id);
-        }
-      }
-    }
+  void ForEachIn(const Ball& ball, Visit&& visit) const {
+    if (!nodes_.empty()) Visit1(0, ball, visit);
   }
 
  private:
-  Eigen::Vector3i Index(const Eigen::Vector3d& p) const {
-    return ((p - lo_) / step_).array().floor().cast<int>();
+  static constexpr size_t kLeafSize = 16;
+  struct Node {
+    Eigen::Vector3d lo, hi;
+    size_t begin, end;
+    int32_t low = -1, high = -1;  // children (-1: a leaf)
+  };
+
+  int32_t Build(size_t begin, size_t end) {
+    const int32_t index = static_cast<int32_t>(nodes_.size());
+    nodes_.push_back({points_[ids_[begin]], points_[ids_[begin]], begin, end});
+    for (size_t i = begin; i < end; ++i) {
+      nodes_[index].lo = nodes_[index].lo.cwiseMin(points_[ids_[i]]);
+      nodes_[index].hi = nodes_[index].hi.cwiseMax(points_[ids_[i]]);
+    }
+    if (end - begin <= kLeafSize) return index;
+    int axis = 0;
+    (nodes_[index].hi - nodes_[index].lo).maxCoeff(&axis);
+    const size_t middle = begin + (end - begin) / 2;
+    std::nth_element(ids_.begin() + begin, ids_.begin() + middle, ids_.begin() + end,
+                     [&](int32_t a, int32_t b) { return points_[a][axis] < points_[b][axis]; });
+    const int32_t low = Build(begin, middle);
+    const int32_t high = Build(middle, end);
+    nodes_[index].low = low;
+    nodes_[index].high = high;
+    return index;
   }
-  static int64_t Key(const Eigen::Vector3i& i) {
-    return (static_cast<int64_t>(i.x()) << 42) ^ (static_cast<int64_t>(i.y()) << 21) ^ i.z();
+
+  template <typename Visit>
+  void Visit1(int32_t index, const Ball& ball, Visit& visit) const {
+    const Node& node = nodes_[index];
+    if (!MayMeet(ball, node.lo, node.hi)) return;
+    if (node.low < 0) {
+      for (size_t i = node.begin; i < node.end; ++i) visit(ids_[i]);
+      return;
+    }
+    Visit1(node.low, ball, visit);
+    Visit1(node.high, ball, visit);
   }
 
   const std::vector<Eigen::Vector3d>& points_;
-  Eigen::Vector3d lo_ = Eigen::Vector3d::Zero(), hi_ = Eigen::Vector3d::Zero();
-  double step_ = 1;
-  std::unordered_map<int64_t, std::vector<int32_t>> buckets_;
+  std::vector<int32_t> ids_;  // in tree order
+  std::vector<Node> nodes_;
 };
+
+// One point in this many of the other tiles' (by id) starts in every tile.
+constexpr int32_t kFirstSampleStride = 64;
 
 struct TileState {
   Delaunay dt;
-  std::vector<uint8_t> held;  // per point id
+  std::vector<uint8_t> held;   // per point id
+  std::vector<uint8_t> exact;  // per point id: its star must be the whole triangulation's
   std::unordered_set<TileCell, CellHash> asked;
   std::vector<int32_t> incoming;  // points learnt this round, to insert next
 };
@@ -142,6 +174,18 @@ void InsertHeld(const std::vector<Eigen::Vector3d>& points, TileState* tile) {
     throw InputError("tiles: two points at the same position (merge duplicates first)");
   }
   tile->incoming.clear();
+}
+
+// The vertices whose stars the tile needs exact: its own points, whose stars hold its cells,
+// and every vertex of its cells, whose stars decide whether a cell of its may flip while the
+// surface stays manifold (the regularity test of growing).
+void MarkStarsToMakeExact(const std::vector<int32_t>& owner, int tile, TileState* state) {
+  state->exact.assign(owner.size(), 0);
+  for (size_t id = 0; id < owner.size(); ++id) state->exact[id] = owner[id] == tile;
+  for (auto c = state->dt.finite_cells_begin(); c != state->dt.finite_cells_end(); ++c) {
+    if (owner[KeyOf(c)[0]] != tile) continue;
+    for (int i = 0; i < 4; ++i) state->exact[c->vertex(i)->info()] = 1;
+  }
 }
 
 }  // namespace
@@ -166,15 +210,18 @@ std::vector<TileHolding> ExchangeStarPoints(const std::vector<Eigen::Vector3d>& 
   }
 
   std::vector<TileState> state(tiles);
-  std::vector<PointGrid> grids;
-  grids.reserve(tiles);
+  std::vector<PointIndex> indexes;
+  indexes.reserve(tiles);
   for (int t = 0; t < tiles; ++t) {
-    grids.emplace_back(points, holdings[t].owned);
+    indexes.emplace_back(points, holdings[t].owned);
     state[t].held.assign(n, 0);
     for (int32_t id : holdings[t].owned) state[t].held[id] = 1;
     state[t].incoming = holdings[t].owned;
-    for (int32_t id : hull) {
-      if (!state[t].held[id]) {
+    // The hull, and a sparse sample of the other tiles' points: without it the first
+    // triangulation has cells across the empty rest of the scene whose spheres take in
+    // everything there. Points not in a star at the end are let go again.
+    for (int32_t id = 0; id < n; ++id) {
+      if (!state[t].held[id] && (is_hull[id] || id % kFirstSampleStride == 0)) {
         state[t].held[id] = 1;
         state[t].incoming.push_back(id);
       }
@@ -188,19 +235,20 @@ std::vector<TileHolding> ExchangeStarPoints(const std::vector<Eigen::Vector3d>& 
     for (int t = 0; t < tiles; ++t) InsertHeld(points, &state[t]);
     for (int t = 0; t < tiles; ++t) {
       TileState& tile = state[t];
+      MarkStarsToMakeExact(owner, t, &tile);
       for (auto c = tile.dt.finite_cells_begin(); c != tile.dt.finite_cells_end(); ++c) {
-        bool own = false;
-        for (int i = 0; i < 4; ++i) own = own || owner[c->vertex(i)->info()] == t;
-        if (!own || !tile.asked.insert(KeyOf(c)).second) continue;
+        bool around = false;
+        for (int i = 0; i < 4; ++i) around = around || tile.exact[c->vertex(i)->info()];
+        if (!around || !tile.asked.insert(KeyOf(c)).second) continue;
         ++local.spheres_asked;
-        const Box box = CircumballBox(c);
+        const Ball ball = CircumballBound(c);
         const Point& p0 = c->vertex(0)->point();
         const Point& p1 = c->vertex(1)->point();
         const Point& p2 = c->vertex(2)->point();
         const Point& p3 = c->vertex(3)->point();
-        for (int other : layout.TilesMeeting(box.lo, box.hi)) {
+        for (int other : TilesTheBallMayMeet(layout, ball)) {
           if (other == t) continue;
-          grids[other].ForEachIn(box, [&](int32_t id) {
+          indexes[other].ForEachIn(ball, [&](int32_t id) {
             if (tile.held[id]) return;
             if (CGAL::side_of_bounded_sphere(p0, p1, p2, p3, ToPoint(points[id])) ==
                 CGAL::ON_UNBOUNDED_SIDE) {
@@ -226,8 +274,19 @@ std::vector<TileHolding> ExchangeStarPoints(const std::vector<Eigen::Vector3d>& 
                          " lies outside the convex hull of the hull points");
       }
     }
+    // Only the vertices of the exact stars are needed: without the other points learnt on the
+    // way, those stars' spheres stay empty, so the stars stay.
+    MarkStarsToMakeExact(owner, t, &state[t]);
+    std::vector<uint8_t> needed(n, 0);
+    for (auto c = state[t].dt.finite_cells_begin(); c != state[t].dt.finite_cells_end(); ++c) {
+      bool around = false;
+      for (int i = 0; i < 4; ++i) around = around || state[t].exact[c->vertex(i)->info()];
+      if (!around) continue;
+      for (int i = 0; i < 4; ++i) needed[c->vertex(i)->info()] = 1;
+    }
+    for (int32_t id : hull) needed[id] = 1;
     for (int32_t id = 0; id < n; ++id) {
-      if (state[t].held[id] && owner[id] != t) holdings[t].foreign.push_back(id);
+      if (needed[id] && owner[id] != t) holdings[t].foreign.push_back(id);
     }
     local.foreign_points += static_cast<int64_t>(holdings[t].foreign.size());
   }
@@ -236,22 +295,91 @@ std::vector<TileHolding> ExchangeStarPoints(const std::vector<Eigen::Vector3d>& 
   return holdings;
 }
 
-std::vector<TileCell> OwnedCells(const std::vector<Eigen::Vector3d>& points,
-                                 const TileHolding& holding) {
+namespace {
+
+Delaunay TriangulateHolding(const std::vector<Eigen::Vector3d>& points,
+                            const TileHolding& holding) {
   std::vector<std::pair<Point, int32_t>> batch;
   for (const auto* ids : {&holding.owned, &holding.foreign}) {
     for (int32_t id : *ids) batch.emplace_back(ToPoint(points[id]), id);
   }
-  Delaunay dt(batch.begin(), batch.end());
+  return Delaunay(batch.begin(), batch.end());
+}
+
+bool Owns(const TileHolding& holding, const TileCell& cell) {
+  return std::binary_search(holding.owned.begin(), holding.owned.end(), cell[0]);
+}
+
+}  // namespace
+
+std::vector<TileCell> OwnedCells(const std::vector<Eigen::Vector3d>& points,
+                                 const TileHolding& holding) {
+  const Delaunay dt = TriangulateHolding(points, holding);
   std::vector<TileCell> cells;
   for (auto c = dt.finite_cells_begin(); c != dt.finite_cells_end(); ++c) {
     const TileCell key = KeyOf(c);
-    if (std::binary_search(holding.owned.begin(), holding.owned.end(), key[0])) {
+    if (Owns(holding, key)) cells.push_back(key);
+  }
+  std::sort(cells.begin(), cells.end());
+  return cells;
+}
+
+std::vector<TileCell> CellsAroundOwnedCells(const std::vector<Eigen::Vector3d>& points,
+                                            const TileHolding& holding) {
+  const Delaunay dt = TriangulateHolding(points, holding);
+  std::unordered_set<int32_t> vertices(holding.owned.begin(), holding.owned.end());
+  for (auto c = dt.finite_cells_begin(); c != dt.finite_cells_end(); ++c) {
+    const TileCell key = KeyOf(c);
+    if (Owns(holding, key)) vertices.insert(key.begin(), key.end());
+  }
+  std::vector<TileCell> cells;
+  for (auto c = dt.finite_cells_begin(); c != dt.finite_cells_end(); ++c) {
+    const TileCell key = KeyOf(c);
+    if (std::any_of(key.begin(), key.end(), [&](int32_t id) { return vertices.count(id); })) {
       cells.push_back(key);
     }
   }
   std::sort(cells.begin(), cells.end());
   return cells;
+}
+
+std::vector<std::vector<int>> TileNeighbours(const std::vector<Eigen::Vector3d>& points,
+                                             const std::vector<TileHolding>& holdings,
+                                             const TileLayout& layout) {
+  std::vector<std::vector<int>> neighbours(holdings.size());
+  for (size_t t = 0; t < holdings.size(); ++t) {
+    std::set<int> found;
+    for (const TileCell& cell : CellsAroundOwnedCells(points, holdings[t])) {
+      const int owner = layout.TileOf(points[cell[0]]);
+      if (owner != static_cast<int>(t)) found.insert(owner);
+    }
+    neighbours[t].assign(found.begin(), found.end());
+  }
+  // Symmetric: a tile that reads another's labels is read by it for the same stars' sake.
+  for (size_t t = 0; t < holdings.size(); ++t) {
+    for (int other : neighbours[t]) {
+      auto& back = neighbours[other];
+      if (!std::binary_search(back.begin(), back.end(), static_cast<int>(t))) {
+        back.insert(std::upper_bound(back.begin(), back.end(), static_cast<int>(t)),
+                    static_cast<int>(t));
+      }
+    }
+  }
+  return neighbours;
+}
+
+std::vector<int> ColourTiles(const std::vector<std::vector<int>>& neighbours) {
+  std::vector<int> colour(neighbours.size(), -1);
+  for (size_t t = 0; t < neighbours.size(); ++t) {
+    std::set<int> taken;
+    for (int other : neighbours[t]) {
+      if (colour[other] >= 0) taken.insert(colour[other]);
+    }
+    int c = 0;
+    while (taken.count(c)) ++c;
+    colour[t] = c;
+  }
+  return colour;
 }
 
 }  // namespace ms

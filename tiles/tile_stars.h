@@ -10,6 +10,9 @@
 // its smallest point id, which holds it exactly: the tiles' cells partition the whole
 // triangulation with no gap and no overlap, and a seam is stitched vertex for vertex.
 //
+// A tile also holds exactly the stars of every vertex of its cells: growing tests whether a
+// cell may flip from the labels around its four vertices, which other tiles' cells may share.
+//
 // Here the tiles exchange in one process; a tile coordinator will answer the same sphere
 // queries over the network.
 #pragma once
@@ -52,5 +55,21 @@ using TileCell = std::array<int32_t, 4>;
 // tile's share of the whole triangulation.
 std::vector<TileCell> OwnedCells(const std::vector<Eigen::Vector3d>& points,
                                  const TileHolding& holding);
+
+// The finite cells around every vertex of the tile's owned cells and around its own points,
+// ascending: the stars the regularity test reads when a cell of the tile flips. With
+// ExchangeStarPoints' holdings every one is a cell of the whole triangulation.
+std::vector<TileCell> CellsAroundOwnedCells(const std::vector<Eigen::Vector3d>& points,
+                                            const TileHolding& holding);
+
+// For each tile, the tiles owning a cell of those stars (or reading one of its cells there),
+// ascending: the tiles whose labels it reads while it grows, and which read its labels.
+std::vector<std::vector<int>> TileNeighbours(const std::vector<Eigen::Vector3d>& points,
+                                             const std::vector<TileHolding>& holdings,
+                                             const TileLayout& layout);
+
+// A colour per tile, no two neighbours alike (greedy, in tile order): tiles of one colour may
+// change their labels at the same time, since no star holds cells of two of them.
+std::vector<int> ColourTiles(const std::vector<std::vector<int>>& neighbours);
 
 }  // namespace ms
