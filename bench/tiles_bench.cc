@@ -62,7 +62,11 @@ Vertices SceneVertices(const ms::Scene& scene) {
 }
 
 nlohmann::json RunTiles(const Vertices& v, int tiles) {
-  const ms::TileLayout layout = ms::TileLayout::Split(v.points, tiles);
+  // The split balances the scene's points: the Steiner points fill the enlarged box, whose
+  // longest sides across a street would otherwise put seams along it.
+  const std::vector<Eigen::Vector3d> scene_points(v.points.begin(),
+                                                  v.points.begin() + v.scene_points);
+  const ms::TileLayout layout = ms::TileLayout::Split(scene_points, tiles);
   ms::StarExchangeStats stats;
   const std::vector<ms::TileHolding> holdings =
       ms::ExchangeStarPoints(v.points, v.hull, layout, &stats);

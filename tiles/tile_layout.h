@@ -6,6 +6,9 @@
 //   int tile = layout.TileOf(p);      // every point of space lies in exactly one tile
 //   WriteFile(run / "tiles.json", layout.ToJson());
 //
+// Pass the scene's points, not the Steiner points the manifold adds: those fill a box enlarged
+// around the scene, whose long sides across a street would put seams along it.
+//
 // The leaves cover all of space: the outer sides of the outer tiles are unbounded, so a point
 // found later (a swept point) always has a tile. A split is half-open: coordinate < split goes
 // to the low side. The layout depends only on the points and the tile count.
