@@ -190,6 +190,80 @@ void MarkStarsToMakeExact(const std::vector<int32_t>& owner, int tile, TileState
 
 }  // namespace
 
+namespace {
+
+// The cells of the tile's triangulation with a vertex whose star must be exact.
+template <typename Visit>
+void ForEachCellAroundExactStars(const TileState& tile, Visit&& visit) {
+  for (auto c = tile.dt.finite_cells_begin(); c != tile.dt.finite_cells_end(); ++c) {
+    bool around = false;
+    for (int i = 0; i < 4; ++i) around = around || tile.exact[c->vertex(i)->info()];
+    if (around) visit(c);
+  }
+}
+
+// One tile's turn in a round: it asks the other tiles for their points in the circumball of
+// every cell around its exact stars that it has not asked about yet, and queues the points in
+// the ball for insertion. Returns whether it learnt one.
+bool AskAboutNewCells(const std::vector<Eigen::Vector3d>& points, const TileLayout& layout,
+                      const std::vector<PointIndex>& indexes, int t, TileState* tile,
+                      StarExchangeStats* stats) {
+  bool learnt = false;
+  ForEachCellAroundExactStars(*tile, [&](const Delaunay::Cell_handle& c) {
+    if (!tile->asked.insert(KeyOf(c)).second) return;
+    ++stats->spheres_asked;
+    const Ball ball = CircumballBound(c);
+    const Point& p0 = c->vertex(0)->point();
+    const Point& p1 = c->vertex(1)->point();
+    const Point& p2 = c->vertex(2)->point();
+    const Point& p3 = c->vertex(3)->point();
+    for (int other : TilesTheBallMayMeet(layout, ball)) {
+      if (other == t) continue;
+      indexes[other].ForEachIn(ball, [&](int32_t id) {
+        if (tile->held[id] || CGAL::side_of_bounded_sphere(p0, p1, p2, p3, ToPoint(points[id])) ==
+                                  CGAL::ON_UNBOUNDED_SIDE) {
+          return;
+        }
+        tile->held[id] = 1;
+        tile->incoming.push_back(id);
+        ++stats->points_sent;
+        learnt = true;
+      });
+    }
+  });
+  return learnt;
+}
+
+// An own point on the tile's convex hull lies outside the hull points' hull.
+void CheckInsideHull(const TileState& tile, const std::vector<uint8_t>& is_hull) {
+  std::vector<Delaunay::Vertex_handle> on_hull;
+  tile.dt.adjacent_vertices(tile.dt.infinite_vertex(), std::back_inserter(on_hull));
+  for (const auto& v : on_hull) {
+    if (!is_hull[v->info()]) {
+      throw InputError("tiles: point " + std::to_string(v->info()) +
+                       " lies outside the convex hull of the hull points");
+    }
+  }
+}
+
+// The other tiles' points a tile keeps: the vertices of its exact stars and the hull. Without
+// the rest learnt on the way those stars' spheres stay empty, so the stars stay.
+std::vector<int32_t> StarVertices(const std::vector<int32_t>& owner, int t,
+                                  const std::vector<int32_t>& hull, const TileState& tile) {
+  std::vector<uint8_t> needed(owner.size(), 0);
+  ForEachCellAroundExactStars(tile, [&](const Delaunay::Cell_handle& c) {
+    for (int i = 0; i < 4; ++i) needed[c->vertex(i)->info()] = 1;
+  });
+  for (int32_t id : hull) needed[id] = 1;
+  std::vector<int32_t> foreign;
+  for (size_t id = 0; id < owner.size(); ++id) {
+    if (needed[id] && owner[id] != t) foreign.push_back(static_cast<int32_t>(id));
+  }
+  return foreign;
+}
+
+}  // namespace
+
 std::vector<TileHolding> ExchangeStarPoints(const std::vector<Eigen::Vector3d>& points,
                                             const std::vector<int32_t>& hull,
                                             const TileLayout& layout, StarExchangeStats* stats) {
@@ -204,8 +278,9 @@ std::vector<TileHolding> ExchangeStarPoints(const std::vector<Eigen::Vector3d>& 
   }
   std::vector<uint8_t> is_hull(n, 0);
   for (int32_t id : hull) {
-    if (id < 0 || id >= n)
+    if (id < 0 || id >= n) {
       throw InputError("tiles: hull point id " + std::to_string(id) + " out of range");
+    }
     is_hull[id] = 1;
   }
 
@@ -234,60 +309,13 @@ std::vector<TileHolding> ExchangeStarPoints(const std::vector<Eigen::Vector3d>& 
     ++local.rounds;
     for (int t = 0; t < tiles; ++t) InsertHeld(points, &state[t]);
     for (int t = 0; t < tiles; ++t) {
-      TileState& tile = state[t];
-      MarkStarsToMakeExact(owner, t, &tile);
-      for (auto c = tile.dt.finite_cells_begin(); c != tile.dt.finite_cells_end(); ++c) {
-        bool around = false;
-        for (int i = 0; i < 4; ++i) around = around || tile.exact[c->vertex(i)->info()];
-        if (!around || !tile.asked.insert(KeyOf(c)).second) continue;
-        ++local.spheres_asked;
-        const Ball ball = CircumballBound(c);
-        const Point& p0 = c->vertex(0)->point();
-        const Point& p1 = c->vertex(1)->point();
-        const Point& p2 = c->vertex(2)->point();
-        const Point& p3 = c->vertex(3)->point();
-        for (int other : TilesTheBallMayMeet(layout, ball)) {
-          if (other == t) continue;
-          indexes[other].ForEachIn(ball, [&](int32_t id) {
-            if (tile.held[id]) return;
-            if (CGAL::side_of_bounded_sphere(p0, p1, p2, p3, ToPoint(points[id])) ==
-                CGAL::ON_UNBOUNDED_SIDE) {
-              return;
-            }
-            tile.held[id] = 1;
-            tile.incoming.push_back(id);
-            ++local.points_sent;
-            learnt = true;
-          });
-        }
-      }
+      MarkStarsToMakeExact(owner, t, &state[t]);
+      learnt = AskAboutNewCells(points, layout, indexes, t, &state[t], &local) || learnt;
     }
   }
-
   for (int t = 0; t < tiles; ++t) {
-    // An owned point on the tile's convex hull is outside the hull points' hull.
-    std::vector<Delaunay::Vertex_handle> on_hull;
-    state[t].dt.adjacent_vertices(state[t].dt.infinite_vertex(), std::back_inserter(on_hull));
-    for (const auto& v : on_hull) {
-      if (!is_hull[v->info()]) {
-        throw InputError("tiles: point " + std::to_string(v->info()) +
-                         " lies outside the convex hull of the hull points");
-      }
-    }
-    // Only the vertices of the exact stars are needed: without the other points learnt on the
-    // way, those stars' spheres stay empty, so the stars stay.
-    MarkStarsToMakeExact(owner, t, &state[t]);
-    std::vector<uint8_t> needed(n, 0);
-    for (auto c = state[t].dt.finite_cells_begin(); c != state[t].dt.finite_cells_end(); ++c) {
-      bool around = false;
-      for (int i = 0; i < 4; ++i) around = around || state[t].exact[c->vertex(i)->info()];
-      if (!around) continue;
-      for (int i = 0; i < 4; ++i) needed[c->vertex(i)->info()] = 1;
-    }
-    for (int32_t id : hull) needed[id] = 1;
-    for (int32_t id = 0; id < n; ++id) {
-      if (needed[id] && owner[id] != t) holdings[t].foreign.push_back(id);
-    }
+    CheckInsideHull(state[t], is_hull);
+    holdings[t].foreign = StarVertices(owner, t, hull, state[t]);
     local.foreign_points += static_cast<int64_t>(holdings[t].foreign.size());
   }
   local.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
