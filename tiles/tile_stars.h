@@ -1,14 +1,15 @@
 // Which points each tile must hold so that the Delaunay star of every point it owns is exactly
 // that point's star in the triangulation of all points (docs/design/scalability.md, "Tiles").
 //
-// A tile owns the points its region holds (TileLayout::TileOf) and holds, besides, the points
-// of other tiles that lie in the circumsphere of a cell around one of its own points. Rounds of
-// that exchange run until no tile learns a new point: then no point it lacks conflicts with a
-// cell of its own points' stars, so those stars are the global ones (CGAL's symbolic
-// perturbation makes the triangulation of any subset agree with the whole one wherever the
-// empty-sphere test agrees). Every cell of the whole triangulation belongs to the tile owning
-// its smallest point id, which holds it exactly: the tiles' cells partition the whole
-// triangulation with no gap and no overlap, and a seam is stitched vertex for vertex.
+// A tile owns the points its region holds (TileLayout::TileOf). Starting from them, the hull
+// and a sparse sample of the rest, it asks the other tiles, round after round, for their points
+// inside the circumsphere of every cell around its vertices, until no tile learns a new point:
+// then no point it lacks conflicts with those cells, so its stars are the whole
+// triangulation's (CGAL's symbolic perturbation makes the triangulation of any subset agree
+// with the whole one wherever the empty-sphere test agrees). It keeps only those stars'
+// vertices. Every cell of the whole triangulation belongs to the tile owning its smallest point
+// id, which holds it exactly: the tiles' cells partition the whole triangulation with no gap
+// and no overlap, and a seam is stitched vertex for vertex.
 //
 // A tile also holds exactly the stars of every vertex of its cells: growing tests whether a
 // cell may flip from the labels around its four vertices, which other tiles' cells may share.
