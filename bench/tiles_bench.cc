@@ -16,6 +16,7 @@
 
 #include "base/error.h"
 #include "base/log.h"
+#include "manifold/manifold_options.h"
 #include "manifold/steiner_points.h"
 #include "scene/scene_io.h"
 #include "tiles/tile_layout.h"
@@ -46,9 +47,14 @@ Vertices SceneVertices(const ms::Scene& scene) {
     lo = lo.cwiseMin(view.Center());
     hi = hi.cwiseMax(view.Center());
   }
-  ms::SteinerOptions steiner;  // the manifold's defaults: margin 0.5, grid 3, graded
-  steiner.graded = true;
-  steiner.clearance = 1.5;
+  // The manifold's default Steiner options, read from its option group, not copied.
+  const ms::ManifoldOptions defaults;
+  ms::SteinerOptions steiner;
+  steiner.margin = defaults.steiner_margin;
+  steiner.grid = defaults.steiner_grid;
+  steiner.graded = defaults.steiner_graded != ms::GradedSteiner::kOff;
+  steiner.clearance = defaults.steiner_clearance;
+  steiner.min_spacing_factor = defaults.steiner_min_spacing;
   const ms::SteinerPoints made = ms::MakeSteinerPoints(lo, hi, data, steiner);
   v.scene_points = static_cast<int64_t>(data.size());
   v.steiner_points = static_cast<int64_t>(made.points.size());
