@@ -59,7 +59,7 @@ class CellLabels {
   }
 
   bool IsFree(const Cell_handle& c) const {
-    if (dt_.is_infinite(c)) return false;
+    if (dt_.is_infinite(c) || c->info().frozen) return false;
     // With graded Steiner points, a cell of Steiner points only is empty space (no input point
     // in its circumsphere): free without rays, so the free space stays one region around the
     // cameras instead of narrow cones that growing cannot carve (docs/design/manifold.md).
@@ -95,6 +95,23 @@ class CellLabels {
         overflow_[&*c][i] = static_cast<int64_t>(CellInfo::kSpreadOverflow);
       } else {
         ++overflow_.at(&*c)[i];
+      }
+    }
+  }
+
+  // Sets c's counts at once, as counted elsewhere (a tile's, cell_ray_counts.h): `crossings`
+  // rays, camera_beyond[i] of them with the camera beyond face i.
+  void SetCounts(const Cell_handle& c, int32_t crossings,
+                 const std::array<int64_t, 4>& camera_beyond) {
+    CellInfo& info = c->info();
+    info.crossings = crossings;
+    for (int i = 0; i < 4; ++i) {
+      const int64_t n = w2_rule_ == W2Rule::kAllFaces ? crossings : camera_beyond[i];
+      if (n < CellInfo::kSpreadOverflow) {
+        info.spread[i] = static_cast<uint16_t>(n);
+      } else {
+        info.spread[i] = CellInfo::kSpreadOverflow;
+        overflow_[&*c][i] = n;
       }
     }
   }

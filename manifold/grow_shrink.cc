@@ -40,7 +40,7 @@ void FaceConnectedPieces(const std::vector<Cell_handle>& cells, std::vector<int>
 }  // namespace
 
 void GrowShrink::Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_handle>* added_cells,
-                      Refusals* refusals) {
+                      Refusals* refusals, double min_weight) {
   Refusals within(Refusals::Kind::kRequeued);
   Refusals& kept = refusals != nullptr ? *refusals : within;
   std::priority_queue<QueueEntry> queue;
@@ -50,7 +50,8 @@ void GrowShrink::Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_ha
   };
   const auto push_new = [&](const Cell_handle& c) {
     if (c->info().queued || !labels_.FreeOutsideO(c)) return;
-    push({labels_.Weight(c), KeyOf(c), c});
+    const double weight = labels_.Weight(c);
+    if (weight >= min_weight) push({weight, KeyOf(c), c});
   };
   // A refused cell again, its weight and key as they were: it is still free (no weight changes
   // while refusals are kept), so only whether it joined O since is asked.

@@ -45,8 +45,10 @@ class GrowShrink {
   // take part too (tested only where a cell around them has flipped since), and on return it
   // holds the cells refused at the end: every free cell next to O that is not in it, if the
   // seeds and refusals held all those there were.
+  // Cells lighter than `min_weight` are left out (a tile grows its cells in bands of weight,
+  // tile_manifold.h).
   void Grow(const std::vector<Cell_handle>& seeds, std::vector<Cell_handle>* added = nullptr,
-            Refusals* refusals = nullptr);
+            Refusals* refusals = nullptr, double min_weight = 0);
 
   // Grows O from the heaviest free cell (with options.grow_all_components, then from the
   // heaviest free cell of every further component). Returns the cells added.

@@ -154,7 +154,16 @@ class RayWalker {
   // threads at once with LocalMarks).
   template <typename Marks, typename Visit>
   int64_t WalkWith(const CameraStart& start, const Point& a, const Vertex_handle& target,
-                   Marks& marks, WalkScratch& scratch, Visit&& visit) const;
+                   Marks& marks, WalkScratch& scratch, Visit&& visit) const {
+    return WalkSegmentWith(start, a, target->point(), &target, marks, scratch, visit);
+  }
+  // The same for a segment a -> b that ends at any point b of the triangulation, a vertex or
+  // not (a tile walking a ray to a point it does not hold).
+  template <typename Marks, typename Visit>
+  int64_t WalkToPointWith(const CameraStart& start, const Point& a, const Point& b, Marks& marks,
+                          WalkScratch& scratch, Visit&& visit) const {
+    return WalkSegmentWith(start, a, b, nullptr, marks, scratch, visit);
+  }
   // The same from camera `camera`'s start, which must be located (LocateStarts).
   template <typename Marks, typename Visit>
   int64_t WalkFromCameraWith(int camera, const Vertex_handle& target, Marks& marks,
@@ -188,6 +197,11 @@ class RayWalker {
   std::vector<Cell_handle> StartCandidates(const CameraStart& start, bool concurrent = false) const;
 
  private:
+  // The walks forwards: to the vertex *end_vertex at b, or to the point b (end_vertex null).
+  template <typename Marks, typename Visit>
+  int64_t WalkSegmentWith(const CameraStart& start, const Point& a, const Point& b,
+                          const Vertex_handle* end_vertex, Marks& marks, WalkScratch& scratch,
+                          Visit&& visit) const;
   // Exhaustive enumeration for degenerate segments (see the definition).
   template <typename Marks, typename Visit>
   void WalkFallback(Cell_handle from, const Point& a, const Point& b, Marks& marks,
@@ -223,9 +237,9 @@ inline void PrefetchCell(const Cell_handle& c) {
 }
 
 template <typename Marks, typename Visit>
-int64_t RayWalker::WalkWith(const CameraStart& start, const Point& a, const Vertex_handle& target,
-                            Marks& marks, WalkScratch& scratch, Visit&& visit) const {
-  const Point& b = target->point();
+int64_t RayWalker::WalkSegmentWith(const CameraStart& start, const Point& a, const Point& b,
+                                   const Vertex_handle* end_vertex, Marks& marks,
+                                   WalkScratch& scratch, Visit&& visit) const {
   marks.Begin();
   int64_t steps = 0;
   Cell_handle current;
@@ -256,8 +270,8 @@ int64_t RayWalker::WalkWith(const CameraStart& start, const Point& a, const Vert
     ++steps;
     Cell_handle next;
     int exit = -1;
-    // A crossed cell incident to the end point is the last one (convexity).
-    const bool last = current->has_vertex(target);
+    // A crossed cell incident to the end vertex is the last one (convexity).
+    const bool last = end_vertex != nullptr && current->has_vertex(*end_vertex);
     if (entry >= 0 && !last) {
       exit = FastExitFace(current, entry, a, b);
     }
@@ -268,6 +282,9 @@ int64_t RayWalker::WalkWith(const CameraStart& start, const Point& a, const Vert
         if (i != entry && i != exit && FaceSide(current, i, a) == CGAL::NEGATIVE) mask |= 1u << i;
       }
       visit(current, mask);
+      // The line leaves through `exit`; an end point that is not beyond it ends the segment in
+      // this cell, or on its boundary, where the open segment crosses nothing further.
+      if (end_vertex == nullptr && FaceSide(current, exit, b) != CGAL::NEGATIVE) break;
     } else {
       // General step, exact in every case: the exit is the face whose bound on the segment's
       // parameter is smallest; ties mean leaving through an edge or a vertex.

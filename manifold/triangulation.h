@@ -39,17 +39,20 @@ struct CellInfo {
   // cameras of large scenes pass 65,534.
   static constexpr uint16_t kSpreadOverflow = UINT16_MAX;
   // Parts an insertion may number (born's bits).
-  static constexpr uint32_t kMaxPart = (1u << 29) - 1;
-  CellInfo() : born(0), outside(0), queued(0), has_camera(0) {}
+  static constexpr uint32_t kMaxPart = (1u << 28) - 1;
+  CellInfo() : born(0), outside(0), queued(0), has_camera(0), frozen(0) {}
   int32_t crossings = 0;  // viewing rays whose open segment meets the open cell
   // Of those, the rays that spread w2 across face i to the neighbour there (see
   // CellLabels::Weight; read through CellLabels::Spread).
   uint16_t spread[4] = {0, 0, 0, 0};
   uint32_t stamp = 0;    // visit marker for walks and set building (RayWalker::NextStamp)
-  uint32_t born : 29;    // insertion part that created the cell (0: the initial build)
+  uint32_t born : 28;    // insertion part that created the cell (0: the initial build)
   uint32_t outside : 1;  // in O
   uint32_t queued : 1;   // in the growing queue
   uint32_t has_camera : 1;
+  // Another tile owns the cell (tile_manifold.h): its label is that tile's, set from outside,
+  // and never free here.
+  uint32_t frozen : 1;
 };
 
 using Vb = CGAL::Triangulation_vertex_base_with_info_3<VertexInfo, Kernel>;

@@ -1,10 +1,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <set>
 
 #include "base/error.h"
+#include "manifold/cell_ray_counts.h"
+#include "mesh/mesh.h"
+#include "mesh/mesh_checker.h"
+#include "tiles/tile_growth.h"
 #include "tiles/tile_layout.h"
 #include "tiles/tile_stars.h"
 
@@ -205,6 +210,163 @@ TEST(TileStars, WithoutTheExchangeTheSeamsDiffer) {
   }
   std::sort(united.begin(), united.end());
   EXPECT_FALSE(united == WholeCells(points));
+}
+
+// Cameras among the points, and rays from three of them to every point but the hull's.
+struct RayScene {
+  std::vector<Eigen::Vector3d> cameras;
+  std::vector<ViewingRay> rays;
+};
+RayScene CamerasAndRays(const std::vector<Eigen::Vector3d>& points,
+                        const std::vector<int32_t>& hull, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-0.5, 1.5);
+  RayScene scene;
+  for (int c = 0; c < 8; ++c) scene.cameras.emplace_back(u(rng), u(rng), u(rng));
+  for (int32_t id = 0; id < static_cast<int32_t>(points.size()); ++id) {
+    if (std::find(hull.begin(), hull.end(), id) != hull.end()) continue;
+    for (int k = 0; k < 3; ++k) scene.rays.push_back({static_cast<int32_t>(rng() % 8), id});
+  }
+  return scene;
+}
+
+bool SameCounts(const CellRayCount& a, const CellRayCount& b) {
+  return a.ids == b.ids && a.crossings == b.crossings && a.camera_beyond == b.camera_beyond;
+}
+
+// Each tile counts the rays on the cells it owns, walking them through its own triangulation
+// (most end at points it does not hold); together the tiles' counts are the whole's.
+std::vector<CellRayCount> UnitedTileCounts(const std::vector<Eigen::Vector3d>& points,
+                                           const std::vector<TileHolding>& holdings,
+                                           const RayScene& scene, int64_t* rays_walked) {
+  std::vector<int> owner(points.size(), -1);
+  for (size_t t = 0; t < holdings.size(); ++t) {
+    for (int32_t id : holdings[t].owned) owner[id] = static_cast<int>(t);
+  }
+  std::vector<CellRayCount> united;
+  for (size_t t = 0; t < holdings.size(); ++t) {
+    std::vector<int32_t> held = holdings[t].owned;
+    held.insert(held.end(), holdings[t].foreign.begin(), holdings[t].foreign.end());
+    CellRayCountStats stats;
+    const std::vector<CellRayCount> counts = CountRaysOnCells(
+        points, held, scene.cameras, scene.rays,
+        [&](const std::array<int32_t, 4>& ids) { return owner[ids[0]] == static_cast<int>(t); },
+        &stats);
+    *rays_walked += stats.rays_walked;
+    united.insert(united.end(), counts.begin(), counts.end());
+  }
+  std::sort(united.begin(), united.end(),
+            [](const CellRayCount& a, const CellRayCount& b) { return a.ids < b.ids; });
+  return united;
+}
+
+TEST(TileRays, TilesCountTheWholeTriangulationsRaysOnTheirCells) {
+  std::vector<Eigen::Vector3d> points = RandomPoints(800, 5);
+  const std::vector<int32_t> hull = AddHullCorners(-1, 2, &points);
+  const RayScene scene = CamerasAndRays(points, hull, 9);
+  std::vector<int32_t> all(points.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int32_t>(i);
+  const std::vector<CellRayCount> whole = CountRaysOnCells(
+      points, all, scene.cameras, scene.rays, [](const std::array<int32_t, 4>&) { return true; });
+  int64_t whole_crossings = 0;
+  for (const CellRayCount& n : whole) whole_crossings += n.crossings;
+  ASSERT_GT(whole_crossings, static_cast<int64_t>(scene.rays.size()));
+  for (int tiles : {2, 5}) {
+    SCOPED_TRACE("tiles " + std::to_string(tiles));
+    const TileLayout layout = TileLayout::Split(points, tiles);
+    int64_t rays_walked = 0;
+    const std::vector<CellRayCount> united =
+        UnitedTileCounts(points, ExchangeStarPoints(points, hull, layout), scene, &rays_walked);
+    ASSERT_EQ(united.size(), whole.size());
+    EXPECT_TRUE(std::equal(united.begin(), united.end(), whole.begin(), SameCounts))
+        << "a tile's counts differ from the whole triangulation's";
+  }
+}
+
+// Without the exchange a tile's cells near its seams are not the whole's, nor their counts.
+TEST(TileRays, WithoutTheExchangeTheCountsDiffer) {
+  std::vector<Eigen::Vector3d> points = RandomPoints(800, 5);
+  const std::vector<int32_t> hull = AddHullCorners(-1, 2, &points);
+  const RayScene scene = CamerasAndRays(points, hull, 9);
+  std::vector<int32_t> all(points.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int32_t>(i);
+  const std::vector<CellRayCount> whole = CountRaysOnCells(
+      points, all, scene.cameras, scene.rays, [](const std::array<int32_t, 4>&) { return true; });
+  const TileLayout layout = TileLayout::Split(points, 4);
+  std::vector<TileHolding> bare = ExchangeStarPoints(points, hull, layout);
+  for (TileHolding& h : bare) {
+    h.foreign.clear();
+    for (int32_t id : hull) {
+      if (!std::binary_search(h.owned.begin(), h.owned.end(), id)) h.foreign.push_back(id);
+    }
+  }
+  int64_t rays_walked = 0;
+  const std::vector<CellRayCount> united = UnitedTileCounts(points, bare, scene, &rays_walked);
+  EXPECT_FALSE(united.size() == whole.size() &&
+               std::equal(united.begin(), united.end(), whole.begin(), SameCounts));
+}
+
+// A sphere of points seen from cameras around it, inside a box of Steiner corners: growing
+// fills the seen space around the sphere.
+TiledScene SphereScene(int count) {
+  TiledScene scene;
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < count; ++i) {
+    const double z = 1 - 2 * (i + 0.5) / count, r = std::sqrt(1 - z * z);
+    scene.points.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);
+  }
+  scene.first_steiner = count;
+  scene.hull = AddHullCorners(-4, 4, &scene.points);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0, 1);
+  for (int c = 0; c < 14; ++c) {
+    scene.cameras.push_back(2.5 * Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized());
+  }
+  for (int32_t id = 0; id < count; ++id) {
+    const Eigen::Vector3d& p = scene.points[id];
+    for (int32_t c = 0; c < static_cast<int32_t>(scene.cameras.size()); ++c) {
+      const Eigen::Vector3d to_camera = scene.cameras[c] - p;
+      if (p.dot(to_camera) > 0.3 * to_camera.norm()) scene.rays.push_back({c, id});
+    }
+  }
+  return scene;
+}
+
+TEST(TileGrowth, TilesGrowOneClosedManifoldStitchedByIds) {
+  const TiledScene scene = SphereScene(600);
+  std::vector<Eigen::Vector3d> scene_points(scene.points.begin(),
+                                            scene.points.begin() + scene.first_steiner);
+  int64_t untiled_outside = 0;
+  for (int tiles : {1, 2, 4, 8}) {
+    SCOPED_TRACE("tiles " + std::to_string(tiles));
+    const TiledSurface grown =
+        GrowTiles(scene, TileLayout::Split(scene_points, tiles), ManifoldOptions());
+    std::vector<TileManifold::Cell> outside;
+    for (const auto& cells : grown.outside)
+      outside.insert(outside.end(), cells.begin(), cells.end());
+    std::sort(outside.begin(), outside.end());
+    ASSERT_GT(outside.size(), 100u);
+    EXPECT_EQ(std::adjacent_find(outside.begin(), outside.end()), outside.end())
+        << "a cell in two tiles' O";
+    // The faces the tiles give, stitched by point id, are one closed 2-manifold (exact: every
+    // vertex's faces are one cycle, every edge in two faces, consistently oriented).
+    Mesh mesh;
+    mesh.vertices = scene.points;
+    mesh.faces = grown.faces;
+    const MeshReport report = CheckMesh(mesh);
+    EXPECT_TRUE(report.is_closed_manifold) << report.ToTable();
+    EXPECT_GT(report.num_faces, 600);
+    if (tiles == 1) untiled_outside = static_cast<int64_t>(outside.size());
+    std::printf("tiles %d: %zu cells in O, %zu faces, %d rounds, %d colours\n", tiles,
+                outside.size(), grown.faces.size(), grown.stats.rounds, grown.stats.colours);
+    // Another growing order (a queue per tile, in bands of weight), much the same free space.
+    EXPECT_NEAR(static_cast<double>(outside.size()), static_cast<double>(untiled_outside),
+                0.02 * untiled_outside);
+    EXPECT_GT(grown.stats.rounds, 0);
+    if (tiles > 1) {
+      EXPECT_GT(grown.stats.labels_read, 0);
+    }
+  }
 }
 
 TEST(TileStars, RefusesAPointOutsideTheHull) {

@@ -1,0 +1,228 @@
+#include "manifold/tile_manifold.h"
+
+#include <algorithm>
+#include <iterator>
+#include <string>
+#include <unordered_map>
+#include <utility>
+
+#include "base/error.h"
+#include "manifold/cell_labels.h"
+#include "manifold/grow_shrink.h"
+#include "manifold/regularity.h"
+#include "manifold/triangulation.h"
+
+namespace ms {
+
+using manifold_detail::Cell_handle;
+using manifold_detail::Delaunay;
+using manifold_detail::Vertex_handle;
+
+namespace {
+
+struct CellHash {
+  size_t operator()(const TileManifold::Cell& k) const {
+    uint64_t h = 1469598103934665603ull;
+    for (int32_t v : k) h = (h ^ static_cast<uint32_t>(v)) * 1099511628211ull;
+    return h;
+  }
+};
+
+}  // namespace
+
+class TileManifold::Impl {
+ public:
+  Impl(const std::vector<Eigen::Vector3d>& points, const std::vector<int32_t>& held,
+       const std::function<bool(int32_t)>& owns, int32_t first_steiner, bool graded,
+       const std::vector<CellRayCount>& counts, const ManifoldOptions& options)
+      : first_steiner_(first_steiner),
+        options_(options),
+        labels_(dt_, options_),
+        regularity_(dt_),
+        grow_(dt_, options_, labels_, regularity_) {
+    Triangulate(points, held);
+    labels_.set_graded(graded);
+    for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
+      for (int i = 0; i < 4; ++i) ++c->vertex(i)->info().cells;
+    }
+    std::unordered_map<Cell, const CellRayCount*, CellHash> count_of;
+    for (const CellRayCount& n : counts) count_of[n.ids] = &n;
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      const Cell key = KeyOf(c);
+      c->info().frozen = !owns(key[0]);
+      owned_cells_ += !c->info().frozen;
+      const auto it = count_of.find(key);
+      if (it == count_of.end()) continue;
+      // The counts are by ascending ids; face i of the cell is opposite its vertex i.
+      std::array<int64_t, 4> beyond;
+      for (int i = 0; i < 4; ++i) {
+        const int32_t opposite = TileId(c->vertex(i)->info().id);
+        beyond[i] =
+            it->second->camera_beyond[std::find(key.begin(), key.end(), opposite) - key.begin()];
+      }
+      labels_.SetCounts(c, static_cast<int32_t>(it->second->crossings), beyond);
+    }
+    IndexReadCells();
+  }
+
+  std::optional<Seed> HeaviestFreeCell() const {
+    std::optional<Seed> best;
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      if (!labels_.FreeOutsideO(c)) continue;  // frozen cells are never free
+      bool touches = false;
+      for (int i = 0; i < 4; ++i) touches |= c->vertex(i)->info().outside_cells > 0;
+      if (touches) continue;
+      const Seed seed{labels_.Weight(c), KeyOf(c)};
+      if (!best || seed.weight > best->weight ||
+          (seed.weight == best->weight && seed.cell < best->cell)) {
+        best = seed;
+      }
+    }
+    return best;
+  }
+
+  std::vector<Cell> Grow(const std::optional<Cell>& seed, double min_weight) {
+    std::vector<Cell_handle> seeds = grow_.BoundarySeeds(RegrowSeeds::kBoundary, 0);
+    if (seed) {
+      const Cell_handle c = FindOwned(*seed);
+      if (c == Cell_handle()) throw InternalError("tile: a seed cell the tile does not own");
+      seeds.push_back(c);
+    }
+    std::vector<Cell_handle> added;
+    grow_.Grow(seeds, &added, nullptr, min_weight);
+    std::vector<Cell> keys;
+    keys.reserve(added.size());
+    for (const Cell_handle& c : added) keys.push_back(KeyOf(c));
+    return keys;
+  }
+
+  int64_t SetFrozenLabels(const std::vector<Cell>& cells, bool outside) {
+    int64_t labelled = 0;
+    for (const Cell& key : cells) {
+      const auto it = read_cells_.find(key);
+      if (it == read_cells_.end()) continue;
+      labels_.SetOutside(it->second, outside);
+      ++labelled;
+    }
+    return labelled;
+  }
+
+  std::vector<Cell> OutsideCells() const {
+    std::vector<Cell> cells;
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      if (!c->info().frozen && c->info().outside) cells.push_back(KeyOf(c));
+    }
+    std::sort(cells.begin(), cells.end());
+    return cells;
+  }
+
+  std::vector<Face> SurfaceFaces() const {
+    std::vector<Face> faces;
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      if (c->info().frozen || !c->info().outside) continue;
+      for (int i = 0; i < 4; ++i) {
+        if (labels_.InO(c->neighbor(i))) continue;
+        Face face;  // the order that makes the normal point into c
+        for (int j = 0; j < 3; ++j) {
+          face[j] = TileId(c->vertex(Delaunay::vertex_triple_index(i, j))->info().id);
+        }
+        std::rotate(face.begin(), std::min_element(face.begin(), face.end()), face.end());
+        faces.push_back(face);
+      }
+    }
+    return faces;
+  }
+
+  int64_t num_owned_cells() const { return owned_cells_; }
+  int64_t num_read_cells() const { return static_cast<int64_t>(read_cells_.size()); }
+
+ private:
+  // Steiner points carry negative ids in the triangulation (-1 - k for the k-th), as in
+  // DelaunayManifold, where the graded rule reads them.
+  int32_t VertexId(int32_t id) const {
+    return id < first_steiner_ ? id : -1 - (id - first_steiner_);
+  }
+  int32_t TileId(int32_t vertex_id) const {
+    return vertex_id >= 0 ? vertex_id : first_steiner_ + (-1 - vertex_id);
+  }
+  Cell KeyOf(const Cell_handle& c) const {
+    Cell key;
+    for (int i = 0; i < 4; ++i) key[i] = TileId(c->vertex(i)->info().id);
+    std::sort(key.begin(), key.end());
+    return key;
+  }
+  Cell_handle FindOwned(const Cell& key) const {
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      if (!c->info().frozen && KeyOf(c) == key) return c;
+    }
+    return Cell_handle();
+  }
+  // The frozen cells around the vertices of owned cells: growing reads their labels (the
+  // manifold test reads the stars of a flipped cell's vertices).
+  void IndexReadCells() {
+    std::vector<Cell_handle> star;
+    for (auto v = dt_.finite_vertices_begin(); v != dt_.finite_vertices_end(); ++v) {
+      star.clear();
+      dt_.finite_incident_cells(v, std::back_inserter(star));
+      const bool near_owned = std::any_of(star.begin(), star.end(),
+                                          [](const Cell_handle& c) { return !c->info().frozen; });
+      if (!near_owned) continue;
+      for (const Cell_handle& c : star) {
+        if (c->info().frozen) read_cells_.emplace(KeyOf(c), c);
+      }
+    }
+  }
+  void Triangulate(const std::vector<Eigen::Vector3d>& points, const std::vector<int32_t>& held) {
+    std::vector<std::pair<manifold_detail::Point, manifold_detail::VertexInfo>> input;
+    input.reserve(held.size());
+    for (int32_t id : held) {
+      if (id < 0 || static_cast<size_t>(id) >= points.size()) {
+        throw InputError("tile: held point id " + std::to_string(id) + " is out of range");
+      }
+      manifold_detail::VertexInfo info;
+      info.id = VertexId(id);
+      input.emplace_back(manifold_detail::ToPoint(points[id]), info);
+    }
+    dt_.insert(input.begin(), input.end());
+    if (dt_.number_of_vertices() != held.size()) {
+      throw InputError("tile: the held points repeat a position");
+    }
+    if (dt_.dimension() < 3) throw InputError("tile: the held points span no volume");
+  }
+
+  const int32_t first_steiner_;
+  const ManifoldOptions options_;
+  Delaunay dt_;
+  manifold_detail::CellLabels labels_;
+  manifold_detail::Regularity regularity_;
+  manifold_detail::GrowShrink grow_;
+  int64_t owned_cells_ = 0;
+  std::unordered_map<Cell, Cell_handle, CellHash> read_cells_;
+};
+
+TileManifold::TileManifold(const std::vector<Eigen::Vector3d>& points,
+                           const std::vector<int32_t>& held,
+                           const std::function<bool(int32_t)>& owns, int32_t first_steiner,
+                           bool graded, const std::vector<CellRayCount>& counts,
+                           const ManifoldOptions& options)
+    : impl_(std::make_unique<Impl>(points, held, owns, first_steiner, graded, counts, options)) {}
+TileManifold::~TileManifold() = default;
+TileManifold::TileManifold(TileManifold&&) noexcept = default;
+TileManifold& TileManifold::operator=(TileManifold&&) noexcept = default;
+
+std::optional<TileManifold::Seed> TileManifold::HeaviestFreeCell() const {
+  return impl_->HeaviestFreeCell();
+}
+std::vector<TileManifold::Cell> TileManifold::Grow(const std::optional<Cell>& seed,
+                                                   double min_weight) {
+  return impl_->Grow(seed, min_weight);
+}
+int64_t TileManifold::SetFrozenLabels(const std::vector<Cell>& cells, bool outside) {
+  return impl_->SetFrozenLabels(cells, outside);
+}
+std::vector<TileManifold::Cell> TileManifold::OutsideCells() const { return impl_->OutsideCells(); }
+std::vector<TileManifold::Face> TileManifold::SurfaceFaces() const { return impl_->SurfaceFaces(); }
+int64_t TileManifold::num_owned_cells() const { return impl_->num_owned_cells(); }
+int64_t TileManifold::num_read_cells() const { return impl_->num_read_cells(); }
+
+}  // namespace ms

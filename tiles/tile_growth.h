@@ -1,0 +1,55 @@
+// Growing O over tiles (docs/design/scalability.md, "Tiles"): every tile triangulates the
+// points it holds (tile_stars.h), counts the viewing rays on the cells around its own
+// (manifold/cell_ray_counts.h) and grows its own cells (manifold/tile_manifold.h), reading the
+// other tiles' labels on the cells it does not own. Tiles grow in phases by colour: tiles of
+// one colour share no star, so each flip is tested on the labels the whole triangulation has,
+// and the tiles' surfaces together are one closed 2-manifold, stitched by point ids. Phases go
+// round until a round adds nothing.
+//
+// The growing order differs from one coordinator's (one queue over all cells), so the surface
+// may differ from the untiled one; it is the same with any number of workers.
+//
+// Here the tiles run one after another in one process; a tile coordinator will send its
+// labels to its neighbours at the end of its phase.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "manifold/cell_ray_counts.h"
+#include "manifold/manifold_options.h"
+#include "manifold/tile_manifold.h"
+#include "tiles/tile_layout.h"
+
+namespace ms {
+
+// What the tiles start from: the triangulation's vertices and the rays.
+struct TiledScene {
+  std::vector<Eigen::Vector3d> points;  // the scene's points, then the Steiner points
+  int32_t first_steiner = 0;            // the first Steiner point's id
+  std::vector<int32_t> hull;            // the Steiner box points, which every tile holds
+  bool graded = false;                  // a cell of Steiner points only is free (CellLabels)
+  std::vector<Eigen::Vector3d> cameras;
+  std::vector<ViewingRay> rays;
+};
+
+struct TileGrowthStats {
+  int colours = 0;
+  int rounds = 0;           // rounds over the colours until one added nothing
+  int64_t labels_read = 0;  // frozen cells set in O, over all phases and tiles
+  int64_t foreign_points = 0;
+  double seconds_exchange = 0, seconds_counting = 0, seconds_growing = 0;
+};
+
+struct TiledSurface {
+  std::vector<std::array<int32_t, 3>> faces;             // by point id, normals into O, sorted
+  std::vector<std::vector<TileManifold::Cell>> outside;  // per tile, its cells in O
+  TileGrowthStats stats;
+};
+
+TiledSurface GrowTiles(const TiledScene& scene, const TileLayout& layout,
+                       const ManifoldOptions& options);
+
+}  // namespace ms
