@@ -1,10 +1,15 @@
 // What splitting a scene into tiles costs each tile (docs/design/scalability.md, "Tiles"):
-//   tiles_bench SCENE [--tiles 1 2 4 8] [--json FILE]
+//   tiles_bench SCENE [--tiles 1 2 4 8] [--rays] [--grow DIR] [--json FILE]
 // The vertices are the scene's points (exact repeats once) and the Steiner points the manifold
 // adds with its default options: the box grid (which every tile holds) and the graded points in
 // the empty space, all of them (the manifold keeps those hidden in every view). For each tile
 // count: the k-d layout, the exchange that makes every tile's stars exact, and per tile its own
-// and foreign points and its cells; the colours of the growing phases.
+// and foreign points and its cells; the colours of the growing phases. With --rays, also the
+// visibility counts: each tile walks the rays that may reach its cells through its own
+// triangulation, and the bench checks that together they count what the whole triangulation
+// counts, cell for cell. With --grow, the tiles grow O in colour phases (tiles/tile_growth.h);
+// the bench checks the surface they give together (a closed 2-manifold, exactly) and writes it
+// as DIR/initial_tiles<N>.ply, for `manisweep evaluate`.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
@@ -16,9 +21,14 @@
 
 #include "base/error.h"
 #include "base/log.h"
+#include "manifold/cell_ray_counts.h"
 #include "manifold/manifold_options.h"
 #include "manifold/steiner_points.h"
+#include "mesh/mesh.h"
+#include "mesh/mesh_checker.h"
+#include "mesh/mesh_io.h"
 #include "scene/scene_io.h"
+#include "tiles/tile_growth.h"
 #include "tiles/tile_layout.h"
 #include "tiles/tile_stars.h"
 
@@ -28,17 +38,27 @@ struct Vertices {
   std::vector<Eigen::Vector3d> points;
   std::vector<int32_t> hull;  // the Steiner box grid
   int64_t scene_points = 0, steiner_points = 0;
+  std::vector<Eigen::Vector3d> cameras;
+  std::vector<ms::ViewingRay> rays;  // to the points' ids (exact repeats share one)
 };
+
+bool Before(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+}
 
 Vertices SceneVertices(const ms::Scene& scene) {
   Vertices v;
   std::vector<Eigen::Vector3d> data;
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
   for (const ms::ScenePoint& p : scene.points) data.push_back(p.position);
-  std::sort(data.begin(), data.end(), [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-  });
+  std::sort(data.begin(), data.end(), Before);
   data.erase(std::unique(data.begin(), data.end()), data.end());
+  for (const ms::ScenePoint& p : scene.points) {
+    const auto id = std::lower_bound(data.begin(), data.end(), p.position, Before) - data.begin();
+    for (const ms::Observation& o : p.observations) {
+      v.rays.push_back({o.view, static_cast<int32_t>(id)});
+    }
+  }
   for (const Eigen::Vector3d& p : data) {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
@@ -46,6 +66,7 @@ Vertices SceneVertices(const ms::Scene& scene) {
   for (const ms::View& view : scene.views) {
     lo = lo.cwiseMin(view.Center());
     hi = hi.cwiseMax(view.Center());
+    v.cameras.push_back(view.Center());
   }
   // The manifold's default Steiner options, read from its option group, not copied.
   const ms::ManifoldOptions defaults;
@@ -67,7 +88,93 @@ Vertices SceneVertices(const ms::Scene& scene) {
   return v;
 }
 
-nlohmann::json RunTiles(const Vertices& v, int tiles) {
+bool SameCounts(const ms::CellRayCount& a, const ms::CellRayCount& b) {
+  return a.ids == b.ids && a.crossings == b.crossings && a.camera_beyond == b.camera_beyond;
+}
+
+// The whole triangulation's counts: one tile that holds and counts everything.
+struct WholeCounts {
+  std::vector<ms::CellRayCount> cells;
+  ms::CellRayCountStats stats;
+};
+WholeCounts CountWhole(const Vertices& v) {
+  std::vector<int32_t> all(v.points.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int32_t>(i);
+  WholeCounts whole;
+  whole.cells = ms::CountRaysOnCells(
+      v.points, all, v.cameras, v.rays, [](const std::array<int32_t, 4>&) { return true; },
+      &whole.stats);
+  return whole;
+}
+
+// Each tile counts the rays on the cells it owns; adds per tile what that cost to `per_tile`
+// and returns whether the tiles' counts together are the whole's.
+bool CountTileRays(const Vertices& v, const std::vector<ms::TileHolding>& holdings,
+                   const WholeCounts& whole, nlohmann::json* per_tile) {
+  std::vector<int> owner(v.points.size(), -1);
+  for (size_t t = 0; t < holdings.size(); ++t) {
+    for (int32_t id : holdings[t].owned) owner[id] = static_cast<int>(t);
+  }
+  std::vector<ms::CellRayCount> united;
+  for (size_t t = 0; t < holdings.size(); ++t) {
+    std::vector<int32_t> held = holdings[t].owned;
+    held.insert(held.end(), holdings[t].foreign.begin(), holdings[t].foreign.end());
+    ms::CellRayCountStats stats;
+    const std::vector<ms::CellRayCount> counts = ms::CountRaysOnCells(
+        v.points, held, v.cameras, v.rays,
+        [&](const std::array<int32_t, 4>& ids) { return owner[ids[0]] == static_cast<int>(t); },
+        &stats);
+    united.insert(united.end(), counts.begin(), counts.end());
+    (*per_tile)[t]["rays_walked"] = stats.rays_walked;
+    (*per_tile)[t]["ray_cell_steps"] = stats.cell_steps;
+    (*per_tile)[t]["seconds_rays"] = stats.seconds;
+  }
+  std::sort(united.begin(), united.end(),
+            [](const ms::CellRayCount& a, const ms::CellRayCount& b) { return a.ids < b.ids; });
+  return united.size() == whole.cells.size() &&
+         std::equal(united.begin(), united.end(), whole.cells.begin(), SameCounts);
+}
+
+// Grows O over the tiles and writes the closed surface they give; the row's growing figures.
+nlohmann::json GrowAndWrite(const Vertices& v, const ms::TileLayout& layout,
+                            const std::string& dir) {
+  ms::TiledScene scene;
+  scene.points = v.points;
+  scene.first_steiner = static_cast<int32_t>(v.scene_points);
+  scene.hull = v.hull;
+  scene.graded = true;
+  scene.cameras = v.cameras;
+  scene.rays = v.rays;
+  const ms::TiledSurface grown = ms::GrowTiles(scene, layout, ms::ManifoldOptions());
+  int64_t outside = 0;
+  for (const auto& cells : grown.outside) outside += static_cast<int64_t>(cells.size());
+  ms::Mesh mesh;
+  mesh.vertices = v.points;
+  mesh.faces = grown.faces;
+  mesh.RemoveUnreferencedVertices();
+  ms::MeshCheckOptions check;
+  check.check_self_intersections = false;  // a Delaunay surface: faces meet only at their edges
+  const ms::MeshReport report = ms::CheckMesh(mesh, check);
+  const std::string path = dir + "/initial_tiles" + std::to_string(layout.num_tiles()) + ".ply";
+  ms::WriteMesh(mesh, path);
+  std::printf("      grown: %lld cells in O, %zu faces, closed 2-manifold %s, %d rounds, %.1f s\n",
+              static_cast<long long>(outside), mesh.faces.size(),
+              report.is_closed_manifold ? "yes" : "NO", grown.stats.rounds,
+              grown.stats.seconds_growing);
+  return {{"outside_cells", outside},
+          {"surface_faces", mesh.faces.size()},
+          {"surface_vertices", mesh.vertices.size()},
+          {"closed_manifold", report.is_closed_manifold},
+          {"components", report.num_components},
+          {"rounds", grown.stats.rounds},
+          {"labels_read", grown.stats.labels_read},
+          {"seconds_counting", grown.stats.seconds_counting},
+          {"seconds_growing", grown.stats.seconds_growing},
+          {"mesh", path}};
+}
+
+nlohmann::json RunTiles(const Vertices& v, int tiles, const WholeCounts* whole,
+                        const std::string& grow_dir) {
   // The split balances the scene's points: the Steiner points fill the enlarged box, whose
   // longest sides across a street would otherwise put seams along it.
   const std::vector<Eigen::Vector3d> scene_points(v.points.begin(),
@@ -109,15 +216,26 @@ nlohmann::json RunTiles(const Vertices& v, int tiles) {
               static_cast<long long>(stats.spheres_asked),
               static_cast<long long>(stats.foreign_points), worst_ratio, stats.seconds,
               colour_count);
-  return {{"tiles", tiles},
-          {"rounds", stats.rounds},
-          {"spheres_asked", stats.spheres_asked},
-          {"points_sent", stats.points_sent},
-          {"foreign_points", stats.foreign_points},
-          {"worst_foreign_per_owned", worst_ratio},
-          {"seconds_exchange", stats.seconds},
-          {"colours", colour_count},
-          {"per_tile", per_tile}};
+  nlohmann::json row = {{"tiles", tiles},
+                        {"rounds", stats.rounds},
+                        {"spheres_asked", stats.spheres_asked},
+                        {"points_sent", stats.points_sent},
+                        {"foreign_points", stats.foreign_points},
+                        {"worst_foreign_per_owned", worst_ratio},
+                        {"seconds_exchange", stats.seconds},
+                        {"colours", colour_count}};
+  if (whole != nullptr) {
+    const bool equal = CountTileRays(v, holdings, *whole, &per_tile);
+    std::printf("      ray counts on the tiles' cells %s the whole triangulation's\n",
+                equal ? "equal" : "DIFFER FROM");
+    row["ray_counts_equal_whole"] = equal;
+    row["whole_rays"] = whole->stats.rays;
+    row["whole_ray_cell_steps"] = whole->stats.cell_steps;
+    row["whole_seconds_rays"] = whole->stats.seconds;
+  }
+  if (!grow_dir.empty()) row["growing"] = GrowAndWrite(v, layout, grow_dir);
+  row["per_tile"] = per_tile;
+  return row;
 }
 
 }  // namespace
@@ -132,6 +250,15 @@ int main(int argc, char** argv) {
   cli.add_option("--tiles", tile_counts, "tile counts, one run each")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  bool rays = false;
+  cli.add_flag("--rays", rays,
+               "also count the viewing rays on each tile's cells and check them against the "
+               "whole triangulation's (one thread)");
+  std::string grow_dir;
+  cli.add_option("--grow", grow_dir,
+                 "also grow O over the tiles and write each tile count's surface into this "
+                 "directory")
+      ->check(CLI::ExistingDirectory);
   cli.add_option("--json", json_path, "write the rows into this JSON file");
   CLI11_PARSE(cli, argc, argv);
   try {
@@ -141,17 +268,37 @@ int main(int argc, char** argv) {
                 v.hull.size());
     std::printf("%5s %6s %12s %12s %9s %9s %7s\n", "tiles", "rounds", "spheres", "foreign",
                 "worst f/o", "seconds", "colours");
+    WholeCounts whole;
+    if (rays) {
+      whole = CountWhole(v);
+      std::printf("whole triangulation: %lld rays, %lld cell steps, %.1f s\n",
+                  static_cast<long long>(whole.stats.rays),
+                  static_cast<long long>(whole.stats.cell_steps), whole.stats.seconds);
+    }
     nlohmann::json rows = nlohmann::json::array();
     for (int tiles : tile_counts) {
-      rows.push_back(RunTiles(v, tiles));
+      rows.push_back(RunTiles(v, tiles, rays ? &whole : nullptr, grow_dir));
       rows.back()["scene_points"] = v.scene_points;
       rows.back()["steiner_points"] = v.steiner_points;
       std::fflush(stdout);
+    }
+    bool counts_differ = false, open_surface = false;
+    for (const nlohmann::json& row : rows) {
+      counts_differ |= row.contains("ray_counts_equal_whole") && !row["ray_counts_equal_whole"];
+      open_surface |= row.contains("growing") && !row["growing"]["closed_manifold"];
     }
     if (!json_path.empty()) {
       std::ofstream json(json_path);
       json << rows.dump(1) << "\n";
       if (!json) throw ms::InputError("cannot write " + json_path);
+    }
+    if (counts_differ) {
+      std::fprintf(stderr, "tiles_bench: the tiles' ray counts differ from the whole's\n");
+      return 1;
+    }
+    if (open_surface) {
+      std::fprintf(stderr, "tiles_bench: the tiles' surface is not a closed 2-manifold\n");
+      return 1;
     }
   } catch (const ms::InputError& e) {
     std::fprintf(stderr, "tiles_bench: %s\n", e.what());
