@@ -137,7 +137,7 @@ bool CountTileRays(const Vertices& v, const std::vector<ms::TileHolding>& holdin
 
 // Grows O over the tiles and writes the closed surface they give; the row's growing figures.
 nlohmann::json GrowAndWrite(const Vertices& v, const ms::TileLayout& layout,
-                            const std::string& dir) {
+                            const ms::TileGrowthOptions& growth, const std::string& dir) {
   ms::TiledScene scene;
   scene.points = v.points;
   scene.first_steiner = static_cast<int32_t>(v.scene_points);
@@ -145,7 +145,7 @@ nlohmann::json GrowAndWrite(const Vertices& v, const ms::TileLayout& layout,
   scene.graded = true;
   scene.cameras = v.cameras;
   scene.rays = v.rays;
-  const ms::TiledSurface grown = ms::GrowTiles(scene, layout, ms::ManifoldOptions());
+  const ms::TiledSurface grown = ms::GrowTiles(scene, layout, ms::ManifoldOptions(), growth);
   int64_t outside = 0;
   for (const auto& cells : grown.outside) outside += static_cast<int64_t>(cells.size());
   ms::Mesh mesh;
@@ -161,7 +161,8 @@ nlohmann::json GrowAndWrite(const Vertices& v, const ms::TileLayout& layout,
               static_cast<long long>(outside), mesh.faces.size(),
               report.is_closed_manifold ? "yes" : "NO", grown.stats.rounds,
               grown.stats.seconds_growing);
-  return {{"outside_cells", outside},
+  return {{"band", growth.band},
+          {"outside_cells", outside},
           {"surface_faces", mesh.faces.size()},
           {"surface_vertices", mesh.vertices.size()},
           {"closed_manifold", report.is_closed_manifold},
@@ -174,7 +175,7 @@ nlohmann::json GrowAndWrite(const Vertices& v, const ms::TileLayout& layout,
 }
 
 nlohmann::json RunTiles(const Vertices& v, int tiles, const WholeCounts* whole,
-                        const std::string& grow_dir) {
+                        const ms::TileGrowthOptions& growth, const std::string& grow_dir) {
   // The split balances the scene's points: the Steiner points fill the enlarged box, whose
   // longest sides across a street would otherwise put seams along it.
   const std::vector<Eigen::Vector3d> scene_points(v.points.begin(),
@@ -233,7 +234,7 @@ nlohmann::json RunTiles(const Vertices& v, int tiles, const WholeCounts* whole,
     row["whole_ray_cell_steps"] = whole->stats.cell_steps;
     row["whole_seconds_rays"] = whole->stats.seconds;
   }
-  if (!grow_dir.empty()) row["growing"] = GrowAndWrite(v, layout, grow_dir);
+  if (!grow_dir.empty()) row["growing"] = GrowAndWrite(v, layout, growth, grow_dir);
   row["per_tile"] = per_tile;
   return row;
 }
@@ -259,6 +260,10 @@ int main(int argc, char** argv) {
                  "also grow O over the tiles and write each tile count's surface into this "
                  "directory")
       ->check(CLI::ExistingDirectory);
+  ms::TileGrowthOptions growth;
+  cli.add_option("--band", growth.band,
+                 "growing's bands of weight, each this many times lighter (0: one band)")
+      ->capture_default_str();
   cli.add_option("--json", json_path, "write the rows into this JSON file");
   CLI11_PARSE(cli, argc, argv);
   try {
@@ -277,7 +282,7 @@ int main(int argc, char** argv) {
     }
     nlohmann::json rows = nlohmann::json::array();
     for (int tiles : tile_counts) {
-      rows.push_back(RunTiles(v, tiles, rays ? &whole : nullptr, grow_dir));
+      rows.push_back(RunTiles(v, tiles, rays ? &whole : nullptr, growth, grow_dir));
       rows.back()["scene_points"] = v.scene_points;
       rows.back()["steiner_points"] = v.steiner_points;
       std::fflush(stdout);

@@ -6,16 +6,11 @@
 #include <unordered_set>
 #include <utility>
 
+#include "base/error.h"
 #include "tiles/tile_stars.h"
 
 namespace ms {
 namespace {
-
-// Growing goes in bands of weight, each kBand times lighter than the one before. Without bands
-// (each tile growing all it can in turn) the 60-view streets' initial meshes measured up to 13x
-// the untiled MAE at 8 tiles; with 1.25 every tiled run was within 11% of it, most equal
-// (docs/design/scalability.md, "Growing in tiles").
-constexpr double kBand = 1.25;
 
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -62,7 +57,10 @@ std::optional<SeedInTile> HeaviestFreeCell(const std::vector<TileManifold>& tile
 }  // namespace
 
 TiledSurface GrowTiles(const TiledScene& scene, const TileLayout& layout,
-                       const ManifoldOptions& options) {
+                       const ManifoldOptions& options, const TileGrowthOptions& growth) {
+  if (!(growth.band == 0 || growth.band > 1)) {
+    throw InputError("tiles: the growing band must be 0 (none) or above 1");
+  }
   TiledSurface result;
   TileGrowthStats& stats = result.stats;
   auto start = std::chrono::steady_clock::now();
@@ -106,9 +104,9 @@ TiledSurface GrowTiles(const TiledScene& scene, const TileLayout& layout,
     const std::optional<SeedInTile> seed = HeaviestFreeCell(tiles);
     if (!seed) break;
     std::optional<TileManifold::Cell> seed_cell = seed->seed.cell;  // grown from once
-    // Bands of weight, heaviest first, each grown by all tiles until it adds nothing: the
-    // order of one queue over all cells, to within a factor of kBand.
-    for (double band = seed->seed.weight / kBand;; band /= kBand) {
+    // Bands of weight, heaviest first, each grown by all tiles until it adds nothing.
+    for (double band = growth.band > 0 ? seed->seed.weight / growth.band : 0.0;;
+         band /= growth.band) {
       const double min_weight = band < options.free_threshold ? 0.0 : band;
       for (bool grew = true; grew;) {
         grew = false;
