@@ -749,20 +749,6 @@ void DelaunayManifold::Impl::LogCameraStars(int64_t completed) const {
       completed);
 }
 
-namespace {
-
-// Whether a cell around a vertex of `cells` has flipped since labels_.relabels() was `relabels`.
-bool FlippedAroundSince(const std::vector<manifold_detail::Cell_handle>& cells, uint32_t relabels) {
-  for (const auto& c : cells) {
-    for (int i = 0; i < 4; ++i) {
-      if (c->vertex(i)->info().relabelled > relabels) return true;
-    }
-  }
-  return false;
-}
-
-}  // namespace
-
 // A camera stands in free space, but greedy growing can leave the free cells around one out of
 // O: a pocket that touches O only where adding any one cell would pinch the surface (seen after
 // an insertion re-triangulated the space in front of a camera). Completing the star of a vertex
@@ -788,7 +774,7 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* bounda
         const std::pair<int32_t, const void*> key(camera, &*start);
         const auto before = failed.find(key);
         if (before != failed.end() &&
-            !FlippedAroundSince(before->second.read, before->second.relabels)) {
+            !manifold_detail::FlippedAroundSince(before->second.read, before->second.relabels)) {
           continue;
         }
         const std::vector<Cell_handle> pocket =
@@ -817,116 +803,11 @@ int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* bounda
   }
 }
 
-// Growing adds one cell at a time, so a pocket of free space that touches O only where each
-// single cell would pinch the surface stays out of O, and with it what lies behind it: on open
-// scenes such pockets stand in front of the cameras as fins of matter (docs/design/manifold.md,
-// "Pockets of free space"). Each pocket next to O joins whole if every vertex stays regular,
-// else the free cells around one of its surface vertices at a time (each vertex tried once a
-// round, and only if those cells are well crossed); growing goes on from what joined. Later rounds
-// look only at the pockets around what entered O and at refused ones around which a cell has
-// flipped since (a refusal depends on the labels around the pocket's vertices), so that a round
-// costs what changed, not a scan.
 int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t changed_in,
-                                                int pinch_rounds, GrowShrink::Refusals* boundary) {
-  if (!options_.join_pockets) return 0;
-  constexpr size_t kMaxPocketCells = 1 << 16;
-  // A vertex's free cells join only if each weighs twice the free threshold (two crossing
-  // rays): on castle-P30, whose sparse points are noisy, joining singly-crossed cells too cost
-  // 1.6 points of photo-consistency; the street keeps its gain without them
-  // (docs/design/manifold.md).
-  const double star_min_weight = 2 * options_.free_threshold;
-  // A free pocket joins with the matter that pinches it (--manifold.pocket-pinch-rounds) only
-  // piece by piece of at most this many cells: larger pieces are the scene. Fewer leave fins on
-  // the pyramids, more take the street's buildings into O (docs/design/accuracy.md measures both).
-  constexpr size_t kMaxPinchPieceCells = 16;
-  struct Refused {
-    std::vector<Cell_handle> pocket;
-    uint32_t relabels = 0;  // labels_.relabels() when it was refused
-  };
-  // The cells next to O (GrowShrink::NextToO) around the vertices of `cells`, each once: where
-  // growing or a pocket may have become possible when `cells` joined O. Each vertex's star is
-  // scanned once, however many of `cells` hold it (a box point's star can hold 10^4 cells):
-  // a repeated star adds nothing, its cells are all stamped already.
-  std::vector<Cell_handle> incident;
-  std::unordered_set<const void*> scanned;
-  const auto around = [&](const std::vector<Cell_handle>& cells) {
-    std::vector<Vertex_handle> vertices;
-    scanned.clear();
-    for (const Cell_handle& c : cells) {
-      for (int i = 0; i < 4; ++i) {
-        if (scanned.insert(&*c->vertex(i)).second) vertices.push_back(c->vertex(i));
-      }
-    }
-    const uint32_t found = walker_.NextStamp();
-    std::vector<Cell_handle> out;
-    for (const Vertex_handle& v : vertices) {
-      incident.clear();
-      dt_.incident_cells(v, std::back_inserter(incident));
-      for (const Cell_handle& n : incident) {
-        if (n->info().stamp == found) continue;
-        n->info().stamp = found;
-        if (grow_shrink_.NextToO(n)) out.push_back(n);
-      }
-    }
-    return out;
-  };
-  int64_t joined = 0;
-  std::vector<Cell_handle> seeds = grow_shrink_.BoundarySeeds(which, changed_in);
-  std::vector<Refused> refused;
-  std::vector<Cell_handle> all_entered;  // with `boundary`: what joined O here
-  while (!seeds.empty()) {
-    const uint32_t stamp = walker_.NextStamp();
-    std::unordered_set<const void*> tried;
-    std::vector<Cell_handle> entered;
-    std::vector<Refused> refused_now;
-    for (const Cell_handle& seed : seeds) {
-      std::vector<Cell_handle> pocket = grow_shrink_.Pocket(seed, kMaxPocketCells, stamp);
-      if (pocket.empty()) continue;  // joined, or found from an earlier seed
-      std::vector<Cell_handle> flipped_cells =
-          grow_shrink_.JoinPocket(pocket, star_min_weight, &tried);
-      if (flipped_cells.empty() && pinch_rounds > 0) {
-        flipped_cells =
-            grow_shrink_.JoinPocketWithPinches(pocket, pinch_rounds, nullptr, kMaxPinchPieceCells);
-      }
-      if (flipped_cells.empty()) {
-        refused_now.push_back({std::move(pocket), labels_.relabels()});
-        continue;
-      }
-      ++joined;
-      for (const Cell_handle& c : flipped_cells) {
-        if (c->info().outside) entered.push_back(c);
-      }
-    }
-    if (entered.empty()) break;
-    // Grow from around what joined; then look at the pockets next to everything that entered
-    // O, and again at the refused pockets around whose vertices a cell has flipped.
-    grow_shrink_.Grow(around(entered), &entered);
-    if (boundary != nullptr) all_entered.insert(all_entered.end(), entered.begin(), entered.end());
-    seeds = around(entered);
-    std::vector<Refused> still_refused;
-    for (std::vector<Refused>* list : {&refused, &refused_now}) {
-      for (Refused& r : *list) {
-        // Next to what entered O, if anything.
-        if (!labels_.FreeOutsideO(r.pocket.front())) continue;
-        if (FlippedAroundSince(r.pocket, r.relabels)) {
-          seeds.push_back(r.pocket.front());
-        } else {
-          still_refused.push_back(std::move(r));
-        }
-      }
-    }
-    refused = std::move(still_refused);
-  }
-  // Growing from the local seeds above retries only cells near what joined: one growing from
-  // the whole boundary keeps O maximal for single cells.
-  if (joined > 0 && boundary != nullptr) {
-    // The free cells next to O now: those in `boundary` and those beside what entered.
-    boundary->Flipped(all_entered);
-    grow_shrink_.Grow(grow_shrink_.NextToOBeside(all_entered), nullptr, boundary);
-  } else if (joined > 0) {
-    grow_shrink_.Grow(grow_shrink_.BoundarySeeds(which, changed_in));
-  }
-  return joined;
+                                                int pinch_rounds,
+                                                manifold_detail::GrowShrink::Refusals* boundary) {
+  return grow_shrink_.JoinFreePockets(which, changed_in, pinch_rounds, boundary,
+                                      [this] { return walker_.NextStamp(); });
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -15,6 +16,10 @@
 #include "manifold/triangulation.h"
 
 namespace ms::manifold_detail {
+
+// Whether a cell around a vertex of `cells` has flipped since CellLabels::relabels() was
+// `relabels`.
+bool FlippedAroundSince(const std::vector<Cell_handle>& cells, uint32_t relabels);
 
 class GrowShrink {
  public:
@@ -110,6 +115,13 @@ class GrowShrink {
   int64_t slivers_joined() const { return slivers_joined_; }
   // Rounds of JoinPocketWithPinches that took a whole piece where O touches itself, so far.
   int64_t whole_pieces_tried() const { return whole_pieces_tried_; }
+  // Joins the pockets of free space next to O (from the cells BoundarySeeds(which, changed_in)
+  // gives) that growing could not enter, and grows on from them; returns the joins. With
+  // `pinch_rounds` > 0 a pocket may take the small matter pieces that pinch it. With `boundary`
+  // (the refusals of the growing before) the last growing starts from what changed.
+  // next_stamp: a fresh visit stamp (RayWalker::NextStamp).
+  int64_t JoinFreePockets(RegrowSeeds which, uint32_t changed_in, int pinch_rounds,
+                          Refusals* boundary, const std::function<uint32_t()>& next_stamp);
   // Free, not in O, and sharing a face with O: a cell growing can start from.
   bool NextToO(const Cell_handle& c) const;
   // The face neighbours of `cells` that are NextToO.

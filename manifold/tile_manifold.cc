@@ -4,6 +4,7 @@
 #include <iterator>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 
 #include "base/error.h"
@@ -36,6 +37,7 @@ class TileManifold::Impl {
        const std::function<bool(int32_t)>& owns, int32_t first_steiner, bool graded,
        const std::vector<CellRayCount>& counts, const ManifoldOptions& options)
       : first_steiner_(first_steiner),
+        owns_(owns),
         options_(options),
         labels_(dt_, options_),
         regularity_(dt_),
@@ -45,12 +47,11 @@ class TileManifold::Impl {
     for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
       for (int i = 0; i < 4; ++i) ++c->vertex(i)->info().cells;
     }
+    MarkFlippableCells();
     std::unordered_map<Cell, const CellRayCount*, CellHash> count_of;
     for (const CellRayCount& n : counts) count_of[n.ids] = &n;
     for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
       const Cell key = KeyOf(c);
-      c->info().frozen = !owns(key[0]);
-      owned_cells_ += !c->info().frozen;
       const auto it = count_of.find(key);
       if (it == count_of.end()) continue;
       // The counts are by ascending ids; face i of the cell is opposite its vertex i.
@@ -62,7 +63,6 @@ class TileManifold::Impl {
       }
       labels_.SetCounts(c, static_cast<int32_t>(it->second->crossings), beyond);
     }
-    IndexReadCells();
   }
 
   std::optional<Seed> HeaviestFreeCell() const {
@@ -73,6 +73,7 @@ class TileManifold::Impl {
       for (int i = 0; i < 4; ++i) touches |= c->vertex(i)->info().outside_cells > 0;
       if (touches) continue;
       const Seed seed{labels_.Weight(c), KeyOf(c)};
+      if (!owns_(seed.cell[0])) continue;  // another tile's to propose
       if (!best || seed.weight > best->weight ||
           (seed.weight == best->weight && seed.cell < best->cell)) {
         best = seed;
@@ -96,21 +97,32 @@ class TileManifold::Impl {
     return keys;
   }
 
-  int64_t SetFrozenLabels(const std::vector<Cell>& cells, bool outside) {
-    int64_t labelled = 0;
+  std::vector<Cell> JoinPockets() {
+    const std::vector<Cell> before = FlippableInO();
+    grow_.JoinFreePockets(RegrowSeeds::kBoundary, 0, /*pinch_rounds=*/0, nullptr,
+                          [this] { return NextStamp(); });
+    std::vector<Cell> added;
+    const std::vector<Cell> after = FlippableInO();
+    std::set_difference(after.begin(), after.end(), before.begin(), before.end(),
+                        std::back_inserter(added));
+    return added;
+  }
+
+  int64_t SetLabels(const std::vector<Cell>& cells, bool outside) {
+    int64_t changed = 0;
     for (const Cell& key : cells) {
       const auto it = read_cells_.find(key);
-      if (it == read_cells_.end()) continue;
+      if (it == read_cells_.end() || it->second->info().outside == outside) continue;
       labels_.SetOutside(it->second, outside);
-      ++labelled;
+      ++changed;
     }
-    return labelled;
+    return changed;
   }
 
   std::vector<Cell> OutsideCells() const {
     std::vector<Cell> cells;
     for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
-      if (!c->info().frozen && c->info().outside) cells.push_back(KeyOf(c));
+      if (c->info().outside && owns_(KeyOf(c)[0])) cells.push_back(KeyOf(c));
     }
     std::sort(cells.begin(), cells.end());
     return cells;
@@ -119,7 +131,7 @@ class TileManifold::Impl {
   std::vector<Face> SurfaceFaces() const {
     std::vector<Face> faces;
     for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
-      if (c->info().frozen || !c->info().outside) continue;
+      if (!c->info().outside || !owns_(KeyOf(c)[0])) continue;
       for (int i = 0; i < 4; ++i) {
         if (labels_.InO(c->neighbor(i))) continue;
         Face face;  // the order that makes the normal point into c
@@ -135,6 +147,12 @@ class TileManifold::Impl {
 
   int64_t num_owned_cells() const { return owned_cells_; }
   int64_t num_read_cells() const { return static_cast<int64_t>(read_cells_.size()); }
+  int64_t num_flippable_cells() const {
+    int64_t n = 0;
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c)
+      n += !c->info().frozen;
+    return n;
+  }
 
  private:
   // Steiner points carry negative ids in the triangulation (-1 - k for the k-th), as in
@@ -151,25 +169,44 @@ class TileManifold::Impl {
     std::sort(key.begin(), key.end());
     return key;
   }
-  Cell_handle FindOwned(const Cell& key) const {
+  // The cells in O that the tile may flip, ascending.
+  std::vector<Cell> FlippableInO() const {
+    std::vector<Cell> cells;
     for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
-      if (!c->info().frozen && KeyOf(c) == key) return c;
+      if (!c->info().frozen && c->info().outside) cells.push_back(KeyOf(c));
     }
-    return Cell_handle();
+    std::sort(cells.begin(), cells.end());
+    return cells;
   }
-  // The frozen cells around the vertices of owned cells: growing reads their labels (the
-  // manifold test reads the stars of a flipped cell's vertices).
-  void IndexReadCells() {
-    std::vector<Cell_handle> star;
-    for (auto v = dt_.finite_vertices_begin(); v != dt_.finite_vertices_end(); ++v) {
-      star.clear();
-      dt_.finite_incident_cells(v, std::back_inserter(star));
-      const bool near_owned = std::any_of(star.begin(), star.end(),
-                                          [](const Cell_handle& c) { return !c->info().frozen; });
-      if (!near_owned) continue;
-      for (const Cell_handle& c : star) {
-        if (c->info().frozen) read_cells_.emplace(KeyOf(c), c);
-      }
+  // A fresh visit stamp for CellInfo::stamp, as RayWalker::NextStamp.
+  uint32_t NextStamp() {
+    if (++stamp_ == 0) {
+      for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) c->info().stamp = 0;
+      stamp_ = 1;
+    }
+    return stamp_;
+  }
+  Cell_handle FindOwned(const Cell& key) const {
+    const auto it = read_cells_.find(key);
+    return it != read_cells_.end() && owns_(key[0]) ? it->second : Cell_handle();
+  }
+  // The tile flips its own cells, and other tiles' cells whose four vertices are vertices of
+  // its own cells: their stars are exact here, so their flips are tested as the whole
+  // triangulation would test them (a pocket of free space across a seam joins whole). Every
+  // other cell is frozen. The cells around the vertices of its own cells are those whose
+  // labels it reads (read_cells_).
+  void MarkFlippableCells() {
+    std::unordered_set<const void*> near_own;  // vertices of owned cells
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      if (!owns_(KeyOf(c)[0])) continue;
+      ++owned_cells_;
+      for (int i = 0; i < 4; ++i) near_own.insert(&*c->vertex(i));
+    }
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      int near = 0;
+      for (int i = 0; i < 4; ++i) near += near_own.count(&*c->vertex(i)) > 0 ? 1 : 0;
+      c->info().frozen = near < 4;
+      if (near > 0) read_cells_.emplace(KeyOf(c), c);
     }
   }
   void Triangulate(const std::vector<Eigen::Vector3d>& points, const std::vector<int32_t>& held) {
@@ -191,12 +228,14 @@ class TileManifold::Impl {
   }
 
   const int32_t first_steiner_;
+  const std::function<bool(int32_t)> owns_;
   const ManifoldOptions options_;
   Delaunay dt_;
   manifold_detail::CellLabels labels_;
   manifold_detail::Regularity regularity_;
   manifold_detail::GrowShrink grow_;
   int64_t owned_cells_ = 0;
+  uint32_t stamp_ = 0;
   std::unordered_map<Cell, Cell_handle, CellHash> read_cells_;
 };
 
@@ -217,12 +256,14 @@ std::vector<TileManifold::Cell> TileManifold::Grow(const std::optional<Cell>& se
                                                    double min_weight) {
   return impl_->Grow(seed, min_weight);
 }
-int64_t TileManifold::SetFrozenLabels(const std::vector<Cell>& cells, bool outside) {
-  return impl_->SetFrozenLabels(cells, outside);
+std::vector<TileManifold::Cell> TileManifold::JoinPockets() { return impl_->JoinPockets(); }
+int64_t TileManifold::SetLabels(const std::vector<Cell>& cells, bool outside) {
+  return impl_->SetLabels(cells, outside);
 }
 std::vector<TileManifold::Cell> TileManifold::OutsideCells() const { return impl_->OutsideCells(); }
 std::vector<TileManifold::Face> TileManifold::SurfaceFaces() const { return impl_->SurfaceFaces(); }
 int64_t TileManifold::num_owned_cells() const { return impl_->num_owned_cells(); }
 int64_t TileManifold::num_read_cells() const { return impl_->num_read_cells(); }
+int64_t TileManifold::num_flippable_cells() const { return impl_->num_flippable_cells(); }
 
 }  // namespace ms

@@ -1,13 +1,14 @@
 // One tile's part of the manifold (docs/design/scalability.md, "Tiles"): the Delaunay
 // triangulation of the points the tile holds, the visibility counts of the cells around its own,
-// and the labels of O. The tile owns some of the cells, those it grows; every other cell it
-// holds is frozen: its label is set from the tile that owns it, and is never free here. Where
-// the tile holds the whole triangulation's stars (tiles/tile_stars.h), a flip of an owned cell
-// is tested on exactly the labels the whole triangulation would read, so tiles that never share
-// a star may grow at the same time and their surfaces together are one 2-manifold.
+// and the labels of O. The tile owns the cells whose smallest point id it owns; it may flip
+// those and the cells whose four vertices are vertices of its own cells, since it holds the
+// whole triangulation's stars of those vertices (tiles/tile_stars.h): each flip is tested on
+// exactly the labels the whole triangulation would read. Every other cell is frozen: its label
+// is set from the tiles that flip it, and it is never free here. Tiles that never share a star
+// may flip at the same time, and their surfaces together are one 2-manifold.
 //
-// Growing here is the build's heaviest-first growing (GrowShrink::Grow); the camera repairs and
-// pocket joins of DelaunayManifold::Build are not done in tiles.
+// Growing here is the build's heaviest-first growing (GrowShrink::Grow) and its pocket joins;
+// the camera repairs of DelaunayManifold::Build are not done in tiles.
 #pragma once
 
 #include <Eigen/Core>
@@ -35,9 +36,10 @@ class TileManifold {
   };
 
   // Triangulates points[held] (pairwise distinct). The tile owns the cells whose smallest id
-  // it owns (owns(id)); ids from first_steiner on are Steiner points (with `graded`, a cell of
-  // Steiner points only is free, as CellLabels). `counts` (CountRaysOnCells) must hold every
-  // owned cell and every cell sharing a face with one; cells it lacks count no ray.
+  // it owns (owns(id), kept: what it reads must outlive the tile); ids from first_steiner on are
+  // Steiner points (with `graded`, a cell of Steiner points only is free, as CellLabels). `counts`
+  // (CountRaysOnCells) must hold every owned cell and every cell sharing a face with one; cells it
+  // lacks count no ray.
   TileManifold(const std::vector<Eigen::Vector3d>& points, const std::vector<int32_t>& held,
                const std::function<bool(int32_t)>& owns, int32_t first_steiner, bool graded,
                const std::vector<CellRayCount>& counts, const ManifoldOptions& options);
@@ -47,13 +49,16 @@ class TileManifold {
 
   // The heaviest owned free cell outside O with no vertex touching O (ties: the smaller ids).
   std::optional<Seed> HeaviestFreeCell() const;
-  // Grows O over the owned cells of at least `min_weight`, from `seed` (a cell the tile owns)
-  // and from every owned free cell beside O. Returns the cells added, in the order added.
+  // Grows O over the cells it may flip of at least `min_weight`, from `seed` (a cell the tile
+  // owns) and from every such free cell beside O. Returns the cells added, in the order added.
   std::vector<Cell> Grow(const std::optional<Cell>& seed = std::nullopt, double min_weight = 0);
-  // Labels other tiles' cells: those of `cells` that the tile reads (frozen cells around the
-  // vertices of its own cells) go into O, or out of it. Others are ignored. Returns the cells
-  // it labelled.
-  int64_t SetFrozenLabels(const std::vector<Cell>& cells, bool outside);
+  // Joins the pockets of free space next to O that growing could not enter, and grows on from
+  // them (GrowShrink::JoinFreePockets; frozen cells never join). Returns the cells added.
+  std::vector<Cell> JoinPockets();
+  // Labels cells as other tiles flipped them: those of `cells` that the tile reads (the cells
+  // around the vertices of its own cells) go into O, or out of it. Others are ignored.
+  // Returns the labels it changed.
+  int64_t SetLabels(const std::vector<Cell>& cells, bool outside);
 
   // The owned cells in O, ascending.
   std::vector<Cell> OutsideCells() const;
@@ -61,8 +66,9 @@ class TileManifold {
   std::vector<Face> SurfaceFaces() const;
 
   int64_t num_owned_cells() const;
-  // Frozen cells whose labels the tile reads.
+  // Cells whose labels the tile reads, and cells it may flip (its own among them).
   int64_t num_read_cells() const;
+  int64_t num_flippable_cells() const;
 
  private:
   class Impl;

@@ -31,8 +31,8 @@ TileManifold MakeTile(const TiledScene& scene, const TileHolding& holding,
                            [&](int32_t id) { return around.count(id) > 0; });
       });
   return TileManifold(
-      scene.points, held, [&](int32_t id) { return owner[id] == tile; }, scene.first_steiner,
-      scene.graded, counts, options);
+      scene.points, held, [&owner, tile](int32_t id) { return owner[id] == tile; },
+      scene.first_steiner, scene.graded, counts, options);
 }
 
 struct SeedInTile {
@@ -91,7 +91,7 @@ TiledSurface GrowTiles(const TiledScene& scene, const TileLayout& layout,
   const auto read_labels = [&](const std::vector<int>& which) {
     for (int t : which) {
       const std::vector<TileManifold::Cell> unread(added.begin() + read_up_to[t], added.end());
-      stats.labels_read += tiles[t].SetFrozenLabels(unread, true);
+      stats.labels_read += tiles[t].SetLabels(unread, true);
       read_up_to[t] = added.size();
     }
   };
@@ -132,6 +132,24 @@ TiledSurface GrowTiles(const TiledScene& scene, const TileLayout& layout,
       if (min_weight == 0) break;
     }
     if (!options.grow_all_components) break;
+  }
+  // Pockets of free space that growing could not enter, as the untiled build joins them:
+  // each tile its own, in the same phases, until no tile joins one.
+  for (bool joined = true; joined;) {
+    joined = false;
+    ++stats.pocket_rounds;
+    for (int c = 0; c < stats.colours; ++c) {
+      std::vector<int> phase;
+      for (int t = 0; t < num_tiles; ++t) {
+        if (colour[t] == c) phase.push_back(t);
+      }
+      read_labels(phase);
+      for (int t : phase) {
+        const std::vector<TileManifold::Cell> cells = tiles[t].JoinPockets();
+        added.insert(added.end(), cells.begin(), cells.end());
+        joined |= !cells.empty();
+      }
+    }
   }
   for (const TileManifold& tile : tiles) result.outside.push_back(tile.OutsideCells());
   for (const TileManifold& tile : tiles) {

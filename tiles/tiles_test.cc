@@ -238,7 +238,7 @@ bool SameCounts(const CellRayCount& a, const CellRayCount& b) {
 // (most end at points it does not hold); together the tiles' counts are the whole's.
 std::vector<CellRayCount> UnitedTileCounts(const std::vector<Eigen::Vector3d>& points,
                                            const std::vector<TileHolding>& holdings,
-                                           const RayScene& scene, int64_t* rays_walked) {
+                                           const RayScene& scene) {
   std::vector<int> owner(points.size(), -1);
   for (size_t t = 0; t < holdings.size(); ++t) {
     for (int32_t id : holdings[t].owned) owner[id] = static_cast<int>(t);
@@ -247,12 +247,9 @@ std::vector<CellRayCount> UnitedTileCounts(const std::vector<Eigen::Vector3d>& p
   for (size_t t = 0; t < holdings.size(); ++t) {
     std::vector<int32_t> held = holdings[t].owned;
     held.insert(held.end(), holdings[t].foreign.begin(), holdings[t].foreign.end());
-    CellRayCountStats stats;
     const std::vector<CellRayCount> counts = CountRaysOnCells(
         points, held, scene.cameras, scene.rays,
-        [&](const std::array<int32_t, 4>& ids) { return owner[ids[0]] == static_cast<int>(t); },
-        &stats);
-    *rays_walked += stats.rays_walked;
+        [&](const std::array<int32_t, 4>& ids) { return owner[ids[0]] == static_cast<int>(t); });
     united.insert(united.end(), counts.begin(), counts.end());
   }
   std::sort(united.begin(), united.end(),
@@ -260,38 +257,46 @@ std::vector<CellRayCount> UnitedTileCounts(const std::vector<Eigen::Vector3d>& p
   return united;
 }
 
-TEST(TileRays, TilesCountTheWholeTriangulationsRaysOnTheirCells) {
-  std::vector<Eigen::Vector3d> points = RandomPoints(800, 5);
-  const std::vector<int32_t> hull = AddHullCorners(-1, 2, &points);
-  const RayScene scene = CamerasAndRays(points, hull, 9);
-  std::vector<int32_t> all(points.size());
+// Random points in a hull of corners, cameras and rays, and the whole triangulation's counts.
+struct RayCase {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<int32_t> hull;
+  RayScene scene;
+  std::vector<CellRayCount> whole;
+};
+RayCase MakeRayCase() {
+  RayCase c;
+  c.points = RandomPoints(800, 5);
+  c.hull = AddHullCorners(-1, 2, &c.points);
+  c.scene = CamerasAndRays(c.points, c.hull, 9);
+  std::vector<int32_t> all(c.points.size());
   for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int32_t>(i);
-  const std::vector<CellRayCount> whole = CountRaysOnCells(
-      points, all, scene.cameras, scene.rays, [](const std::array<int32_t, 4>&) { return true; });
+  c.whole = CountRaysOnCells(c.points, all, c.scene.cameras, c.scene.rays,
+                             [](const std::array<int32_t, 4>&) { return true; });
+  return c;
+}
+
+TEST(TileRays, TilesCountTheWholeTriangulationsRaysOnTheirCells) {
+  const RayCase c = MakeRayCase();
   int64_t whole_crossings = 0;
-  for (const CellRayCount& n : whole) whole_crossings += n.crossings;
-  ASSERT_GT(whole_crossings, static_cast<int64_t>(scene.rays.size()));
+  for (const CellRayCount& n : c.whole) whole_crossings += n.crossings;
+  ASSERT_GT(whole_crossings, static_cast<int64_t>(c.scene.rays.size()));
   for (int tiles : {2, 5}) {
     SCOPED_TRACE("tiles " + std::to_string(tiles));
-    const TileLayout layout = TileLayout::Split(points, tiles);
-    int64_t rays_walked = 0;
+    const TileLayout layout = TileLayout::Split(c.points, tiles);
     const std::vector<CellRayCount> united =
-        UnitedTileCounts(points, ExchangeStarPoints(points, hull, layout), scene, &rays_walked);
-    ASSERT_EQ(united.size(), whole.size());
-    EXPECT_TRUE(std::equal(united.begin(), united.end(), whole.begin(), SameCounts))
+        UnitedTileCounts(c.points, ExchangeStarPoints(c.points, c.hull, layout), c.scene);
+    ASSERT_EQ(united.size(), c.whole.size());
+    EXPECT_TRUE(std::equal(united.begin(), united.end(), c.whole.begin(), SameCounts))
         << "a tile's counts differ from the whole triangulation's";
   }
 }
 
 // Without the exchange a tile's cells near its seams are not the whole's, nor their counts.
 TEST(TileRays, WithoutTheExchangeTheCountsDiffer) {
-  std::vector<Eigen::Vector3d> points = RandomPoints(800, 5);
-  const std::vector<int32_t> hull = AddHullCorners(-1, 2, &points);
-  const RayScene scene = CamerasAndRays(points, hull, 9);
-  std::vector<int32_t> all(points.size());
-  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int32_t>(i);
-  const std::vector<CellRayCount> whole = CountRaysOnCells(
-      points, all, scene.cameras, scene.rays, [](const std::array<int32_t, 4>&) { return true; });
+  const RayCase c = MakeRayCase();
+  const std::vector<Eigen::Vector3d>& points = c.points;
+  const std::vector<int32_t>& hull = c.hull;
   const TileLayout layout = TileLayout::Split(points, 4);
   std::vector<TileHolding> bare = ExchangeStarPoints(points, hull, layout);
   for (TileHolding& h : bare) {
@@ -300,10 +305,9 @@ TEST(TileRays, WithoutTheExchangeTheCountsDiffer) {
       if (!std::binary_search(h.owned.begin(), h.owned.end(), id)) h.foreign.push_back(id);
     }
   }
-  int64_t rays_walked = 0;
-  const std::vector<CellRayCount> united = UnitedTileCounts(points, bare, scene, &rays_walked);
-  EXPECT_FALSE(united.size() == whole.size() &&
-               std::equal(united.begin(), united.end(), whole.begin(), SameCounts));
+  const std::vector<CellRayCount> united = UnitedTileCounts(points, bare, c.scene);
+  EXPECT_FALSE(united.size() == c.whole.size() &&
+               std::equal(united.begin(), united.end(), c.whole.begin(), SameCounts));
 }
 
 // A sphere of points seen from cameras around it, inside a box of Steiner corners: growing
