@@ -16,6 +16,7 @@
 #include "base/memory.h"
 #include "manifold/cell_predicates.h"
 #include "manifold/manifold_impl.h"
+#include "manifold/manifold_vertices.h"
 #include "manifold/steiner_sight.h"
 
 namespace ms {
@@ -106,9 +107,7 @@ BuildStats DelaunayManifold::Impl::Build(std::vector<RayPoint> points) {
   Eigen::Vector3d lo, hi;
   CheckAndBound(points, &lo, &hi);
   const SteinerPoints steiner = PlaceSteinerPoints(points, lo, hi, &stats);
-  // Relative to the box every vertex lies in, hence to every mesh's diagonal.
-  merge_.floor = options_.merge_floor * (box_max_ - box_min_).norm();
-  merge_.pixel_fraction = options_.merge_pixels;
+  merge_ = InputMergeTolerance(steiner.points, options_);
   new_point_merge_.floor = merge_.floor;
   new_point_merge_.pixel_fraction = options_.merge_new_pixels;
   Triangulate(points, steiner.points, &stats);
@@ -148,74 +147,15 @@ BuildStats DelaunayManifold::Impl::Build(std::vector<RayPoint> points) {
 
 void DelaunayManifold::Impl::CheckAndBound(const std::vector<RayPoint>& points, Eigen::Vector3d* lo,
                                            Eigen::Vector3d* hi) const {
-  *lo = Eigen::Vector3d::Constant(INFINITY);
-  *hi = -*lo;
-  for (size_t i = 0; i < points.size(); ++i) {
-    const RayPoint& p = points[i];
-    if (!p.position.allFinite()) {
-      throw InputError("point " + std::to_string(i) + ": position is not finite");
-    }
-    for (int32_t c : p.cameras) {
-      if (c < 0 || c >= static_cast<int32_t>(cameras_.size())) {
-        throw InputError("point " + std::to_string(i) + ": camera " + std::to_string(c) +
-                         " out of range (" + std::to_string(cameras_.size()) + " cameras)");
-      }
-    }
-    *lo = lo->cwiseMin(p.position);
-    *hi = hi->cwiseMax(p.position);
-  }
-  for (const ManifoldCamera& c : cameras_) {
-    *lo = lo->cwiseMin(c.center);
-    *hi = hi->cwiseMax(c.center);
-  }
-  if (!(lo->array() <= hi->array()).all()) throw InputError("no points and no cameras");
+  BoundPointsAndCameras(points, cameras_, lo, hi);
 }
-
-namespace {
-
-// Keeps the box grid and, of the graded points, those hidden in every view that holds them
-// and those in open air that rays cross densely (steiner_sight.h).
-void KeepGradedPointsBySight(const std::vector<RayPoint>& points,
-                             const std::vector<ManifoldCamera>& cameras, SteinerPoints* made) {
-  const size_t box = made->points.size() - static_cast<size_t>(made->graded);
-  const std::vector<Eigen::Vector3d> graded(made->points.begin() + box, made->points.end());
-  const std::vector<SteinerSight> sight =
-      ClassifyBySight(graded, made->graded_clearance, points, cameras, made->median_spacing);
-  const std::vector<double> clearance = std::move(made->graded_clearance);
-  made->graded_clearance.clear();
-  made->points.resize(box);
-  int64_t hidden = 0;
-  for (size_t k = 0; k < graded.size(); ++k) {
-    if (sight[k] == SteinerSight::kDrop) continue;
-    made->points.push_back(graded[k]);
-    made->graded_clearance.push_back(clearance[k]);
-    hidden += sight[k] == SteinerSight::kHidden;
-  }
-  made->graded = static_cast<int64_t>(made->points.size() - box);
-  spdlog::info(
-      "manifold: graded Steiner points kept by sight: {} hidden in every view, {} in open air "
-      "(of {})",
-      hidden, made->graded - hidden, graded.size());
-}
-
-}  // namespace
 
 SteinerPoints DelaunayManifold::Impl::PlaceSteinerPoints(const std::vector<RayPoint>& points,
                                                          const Eigen::Vector3d& lo,
                                                          const Eigen::Vector3d& hi,
                                                          BuildStats* stats) {
-  std::vector<Eigen::Vector3d> data(points.size());
-  for (size_t i = 0; i < points.size(); ++i) data[i] = points[i].position;
-  SteinerOptions steiner_options;
-  steiner_options.margin = options_.steiner_margin;
-  steiner_options.grid = options_.steiner_grid;
-  const GradedSteiner scheme = options_.steiner_graded;
-  labels_.set_graded(scheme == GradedSteiner::kOn);
-  steiner_options.graded = scheme != GradedSteiner::kOff;
-  steiner_options.clearance = options_.steiner_clearance;
-  steiner_options.min_spacing_factor = options_.steiner_min_spacing;
-  SteinerPoints made = MakeSteinerPoints(lo, hi, data, steiner_options);
-  if (scheme == GradedSteiner::kHidden) KeepGradedPointsBySight(points, cameras_, &made);
+  SteinerPoints made = ms::PlaceSteinerPoints(points, cameras_, lo, hi, options_);
+  labels_.set_graded(SteinerCellsFree(options_));
   stats->steiner_points = static_cast<int64_t>(made.points.size());
   stats->graded_steiner_points = made.graded;
   box_min_ = Eigen::Vector3d::Constant(INFINITY);
