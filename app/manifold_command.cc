@@ -1,19 +1,25 @@
 // `manisweep manifold`: the initial manifold alone (the paper's "initial mesh"), with timing
-// per step.
+// per step; with --tiles, grown over spatial tiles in one process (tiles/tile_growth.h).
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <vector>
 
 #include "app/commands.h"
 #include "app/option_registration.h"
 #include "base/error.h"
+#include "base/file_util.h"
 #include "base/log.h"
 #include "manifold/delaunay_manifold.h"
 #include "manifold/output_meshes.h"
 #include "manifold/scene_rays.h"
+#include "mesh/float_cleanup.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
 #include "scene/scene_io.h"
+#include "tiles/tile_growth.h"
+#include "tiles/tile_layout.h"
 
 namespace ms::app {
 namespace {
@@ -25,8 +31,98 @@ struct ManifoldCommandOptions {
   std::string free_space_boundary;
   bool ascii = false;
   bool check = true;
+  int tiles = 0;
+  std::string tile_meshes;
   ManifoldOptions manifold;
 };
+
+// The independent check of a written mesh: a closed 2-manifold without self-intersections.
+void CheckClosedManifold(const Mesh& mesh) {
+  MeshCheckOptions check_options;
+  check_options.check_self_intersections = mesh.NumFaces() < 2000000;
+  const MeshReport report = CheckMesh(mesh, check_options);
+  std::printf("  check-mesh        %s\n",
+              report.is_closed_manifold ? "closed 2-manifold" : "NOT a closed 2-manifold");
+  if (!report.is_closed_manifold) {
+    for (const std::string& problem : report.Problems()) std::printf("    %s\n", problem.c_str());
+    throw InternalError("the extracted surface is not a closed 2-manifold");
+  }
+}
+
+void ThrowIfEmpty(const Mesh& mesh, const ManifoldCommandOptions& options) {
+  if (!mesh.faces.empty()) return;
+  throw InputError(options.input +
+                   ": the manifold is empty: no cell reached the free-space "
+                   "threshold (--manifold.free-threshold " +
+                   std::to_string(options.manifold.free_threshold) + ") or none could grow");
+}
+
+// Each tile's faces as a mesh of its own (open along the seams), and the layout, into `dir`.
+void WriteTileMeshes(const TiledScene& tiled, const TiledSurface& grown, const TileLayout& layout,
+                     const std::string& dir, const MeshWriteOptions& write_options) {
+  std::filesystem::create_directories(dir);
+  const std::string json = layout.ToJson();
+  WriteFileAtomically(
+      dir + "/tiles.json", [&](std::ostream& out) { out << json; }, false);
+  for (size_t t = 0; t < grown.tile_faces.size(); ++t) {
+    Mesh piece;
+    piece.vertices = tiled.points;
+    piece.faces = grown.tile_faces[t];
+    piece.RemoveUnreferencedVertices();
+    WriteMesh(piece, dir + "/tile_" + std::to_string(t) + ".ply", write_options);
+  }
+}
+
+// The initial manifold grown over `options.tiles` tiles, one after another in this process.
+void RunTiledManifold(const ManifoldCommandOptions& options, const Scene& scene) {
+  Timer timer;
+  const TiledScene tiled = TiledSceneFromPoints(RayPointsFromScene(scene),
+                                                ManifoldCamerasFromScene(scene), options.manifold);
+  const TileLayout layout =
+      TileLayout::Split(std::vector<Eigen::Vector3d>(tiled.points.begin(),
+                                                     tiled.points.begin() + tiled.first_steiner),
+                        options.tiles);
+  const TiledSurface grown = GrowTiles(tiled, layout, options.manifold);
+  Mesh mesh;
+  mesh.vertices = tiled.points;
+  mesh.faces = grown.faces;
+  ThrowIfEmpty(mesh, options);
+  // Steiner points are scaffolding: a cleanup collapse keeps the point over them.
+  std::vector<uint8_t> scaffold(mesh.vertices.size(), 0);
+  std::fill(scaffold.begin() + tiled.first_steiner, scaffold.end(), 1);
+  FloatCleanupStats cleanup;
+  if (options.manifold.float_cleanup) {
+    cleanup = CleanForFloatingPoint(&mesh, &scaffold);
+  } else {
+    mesh.RemoveUnreferencedVertices();
+  }
+  const double total = timer.Seconds();
+  MeshWriteOptions write_options;
+  write_options.binary = !options.ascii;
+  WriteMesh(mesh, options.output, write_options);
+  const TileGrowthStats& stats = grown.stats;
+  std::printf("initial manifold of %s over %d tiles\n", options.input.c_str(), options.tiles);
+  std::printf("  points            %d (+%zu Steiner), %zu rays\n", tiled.first_steiner,
+              tiled.points.size() - tiled.first_steiner, tiled.rays.size());
+  std::printf("  seams             %lld points held beyond the tiles' own, %.3f s\n",
+              static_cast<long long>(stats.foreign_points), stats.seconds_exchange);
+  std::printf("  ray counts        %.3f s\n", stats.seconds_counting);
+  std::printf("  growing           %d colours, %d rounds, %d rounds of pocket joins, %.3f s\n",
+              stats.colours, stats.rounds, stats.pocket_rounds, stats.seconds_growing);
+  std::printf("  surface           %zu vertices, %zu faces\n", mesh.NumVertices(), mesh.NumFaces());
+  if (options.manifold.float_cleanup) {
+    std::printf("  float cleanup     %lld problems -> %lld, %.3f s\n",
+                static_cast<long long>(cleanup.problems_before),
+                static_cast<long long>(cleanup.problems_after), cleanup.seconds);
+  }
+  std::printf("  total             %.3f s; wrote %s\n", total, options.output.c_str());
+  if (!options.tile_meshes.empty()) {
+    WriteTileMeshes(tiled, grown, layout, options.tile_meshes, write_options);
+    std::printf("  tiles             wrote %s/tiles.json and tile_<n>.ply\n",
+                options.tile_meshes.c_str());
+  }
+  if (options.check) CheckClosedManifold(mesh);
+}
 
 void RunManifold(const ManifoldCommandOptions& options) {
   options.manifold.Check();
@@ -36,17 +132,17 @@ void RunManifold(const ManifoldCommandOptions& options) {
   if (scene.NumObservations() == 0) {
     throw InputError(options.input + ": no point has visibility (observations)");
   }
+  if (options.tiles > 0) {
+    RunTiledManifold(options, scene);
+    return;
+  }
+  if (!options.tile_meshes.empty()) throw InputError("--tile-meshes needs --tiles");
   Timer timer;
   DelaunayManifold manifold(ManifoldCamerasFromScene(scene), options.manifold);
   const BuildStats stats = manifold.Build(RayPointsFromScene(scene));
   SurfaceInfo info;
   Mesh extracted = manifold.ExtractSurface(&info);
-  if (extracted.faces.empty()) {
-    throw InputError(options.input +
-                     ": the manifold is empty: no cell reached the free-space "
-                     "threshold (--manifold.free-threshold " +
-                     std::to_string(options.manifold.free_threshold) + ") or none could grow");
-  }
+  ThrowIfEmpty(extracted, options);
   const OutputMeshes output =
       MakeOutputMeshes(manifold, std::move(extracted), info, options.manifold.float_cleanup);
   const Mesh& mesh = output.closed;
@@ -96,17 +192,7 @@ void RunManifold(const ManifoldCommandOptions& options) {
         static_cast<long long>(stats.free_cells_left_inside), boundary.NumFaces(),
         options.free_space_boundary.c_str());
   }
-  if (options.check) {
-    MeshCheckOptions check_options;
-    check_options.check_self_intersections = mesh.NumFaces() < 2000000;
-    const MeshReport report = CheckMesh(mesh, check_options);
-    std::printf("  check-mesh        %s\n",
-                report.is_closed_manifold ? "closed 2-manifold" : "NOT a closed 2-manifold");
-    if (!report.is_closed_manifold) {
-      for (const std::string& problem : report.Problems()) std::printf("    %s\n", problem.c_str());
-      throw InternalError("the extracted surface is not a closed 2-manifold");
-    }
-  }
+  if (options.check) CheckClosedManifold(mesh);
 }
 
 }  // namespace
@@ -127,6 +213,15 @@ void RegisterManifoldCommand(CLI::App& app) {
                   "manifold; for diagnosis)");
   cmd->add_flag("--ascii", options->ascii, "write ASCII PLY instead of binary");
   cmd->add_flag("!--no-check", options->check, "skip the independent manifold check of the result");
+  cmd->add_option("--tiles", options->tiles,
+                  "grow the manifold over this many spatial tiles, one after another in this "
+                  "process, and write their surfaces as one mesh (0: one triangulation; "
+                  "docs/design/scalability.md, \"Tiles\")")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
+  cmd->add_option("--tile-meshes", options->tile_meshes,
+                  "with --tiles: write each tile's faces (tile_<n>.ply) and the layout "
+                  "(tiles.json) into this directory");
   AddOptionGroup(cmd, &options->manifold);
   cmd->callback([options] { RunManifold(*options); });
 }

@@ -1,8 +1,9 @@
 // What splitting a scene into tiles costs each tile (docs/design/scalability.md, "Tiles"):
 //   tiles_bench SCENE [--tiles 1 2 4 8] [--rays] [--grow DIR] [--json FILE]
-// The vertices are the scene's points (exact repeats once) and the Steiner points the manifold
-// adds with its default options: the box grid (which every tile holds) and the graded points in
-// the empty space, all of them (the manifold keeps those hidden in every view). For each tile
+// The vertices are the scene's points (near-duplicates merged as the manifold merges them) and
+// the Steiner points the manifold adds: the box grid (which every tile holds) and the graded
+// points in the empty space, all of them (--manifold.graded-steiner on; by default the manifold
+// keeps those hidden in every view or in open air). For each tile
 // count: the k-d layout, the exchange that makes every tile's stars exact, and per tile its own
 // and foreign points and its cells; the colours of the growing phases. With --rays, also the
 // visibility counts: each tile walks the rays that may reach its cells through its own
@@ -23,7 +24,7 @@
 #include "base/log.h"
 #include "manifold/cell_ray_counts.h"
 #include "manifold/manifold_options.h"
-#include "manifold/steiner_points.h"
+#include "manifold/scene_rays.h"
 #include "mesh/mesh.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
@@ -34,58 +35,18 @@
 
 namespace {
 
-struct Vertices {
-  std::vector<Eigen::Vector3d> points;
-  std::vector<int32_t> hull;  // the Steiner box grid
-  int64_t scene_points = 0, steiner_points = 0;
-  std::vector<Eigen::Vector3d> cameras;
-  std::vector<ms::ViewingRay> rays;  // to the points' ids (exact repeats share one)
-};
-
-bool Before(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+// The scene's vertices and rays as the tiles start from them (TiledSceneFromPoints), with
+// every graded Steiner point kept (--manifold.graded-steiner on): the densest Steiner set, whose
+// stars reach farthest across the seams.
+ms::TiledScene SceneVertices(const ms::Scene& scene) {
+  ms::ManifoldOptions options;
+  options.steiner_graded = ms::GradedSteiner::kOn;
+  return ms::TiledSceneFromPoints(ms::RayPointsFromScene(scene),
+                                  ms::ManifoldCamerasFromScene(scene), options);
 }
 
-Vertices SceneVertices(const ms::Scene& scene) {
-  Vertices v;
-  std::vector<Eigen::Vector3d> data;
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-  for (const ms::ScenePoint& p : scene.points) data.push_back(p.position);
-  std::sort(data.begin(), data.end(), Before);
-  data.erase(std::unique(data.begin(), data.end()), data.end());
-  for (const ms::ScenePoint& p : scene.points) {
-    const auto id = std::lower_bound(data.begin(), data.end(), p.position, Before) - data.begin();
-    for (const ms::Observation& o : p.observations) {
-      v.rays.push_back({o.view, static_cast<int32_t>(id)});
-    }
-  }
-  for (const Eigen::Vector3d& p : data) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  for (const ms::View& view : scene.views) {
-    lo = lo.cwiseMin(view.Center());
-    hi = hi.cwiseMax(view.Center());
-    v.cameras.push_back(view.Center());
-  }
-  // The manifold's default Steiner options, read from its option group, not copied.
-  const ms::ManifoldOptions defaults;
-  ms::SteinerOptions steiner;
-  steiner.margin = defaults.steiner_margin;
-  steiner.grid = defaults.steiner_grid;
-  steiner.graded = defaults.steiner_graded != ms::GradedSteiner::kOff;
-  steiner.clearance = defaults.steiner_clearance;
-  steiner.min_spacing_factor = defaults.steiner_min_spacing;
-  const ms::SteinerPoints made = ms::MakeSteinerPoints(lo, hi, data, steiner);
-  v.scene_points = static_cast<int64_t>(data.size());
-  v.steiner_points = static_cast<int64_t>(made.points.size());
-  v.points = std::move(data);
-  const size_t box = made.points.size() - static_cast<size_t>(made.graded);
-  for (size_t k = 0; k < made.points.size(); ++k) {
-    if (k < box) v.hull.push_back(static_cast<int32_t>(v.points.size()));
-    v.points.push_back(made.points[k]);
-  }
-  return v;
+int64_t SteinerPoints(const ms::TiledScene& v) {
+  return static_cast<int64_t>(v.points.size()) - v.first_steiner;
 }
 
 bool SameCounts(const ms::CellRayCount& a, const ms::CellRayCount& b) {
@@ -97,7 +58,7 @@ struct WholeCounts {
   std::vector<ms::CellRayCount> cells;
   ms::CellRayCountStats stats;
 };
-WholeCounts CountWhole(const Vertices& v) {
+WholeCounts CountWhole(const ms::TiledScene& v) {
   std::vector<int32_t> all(v.points.size());
   for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int32_t>(i);
   WholeCounts whole;
@@ -109,7 +70,7 @@ WholeCounts CountWhole(const Vertices& v) {
 
 // Each tile counts the rays on the cells it owns; adds per tile what that cost to `per_tile`
 // and returns whether the tiles' counts together are the whole's.
-bool CountTileRays(const Vertices& v, const std::vector<ms::TileHolding>& holdings,
+bool CountTileRays(const ms::TiledScene& v, const std::vector<ms::TileHolding>& holdings,
                    const WholeCounts& whole, nlohmann::json* per_tile) {
   std::vector<int> owner(v.points.size(), -1);
   for (size_t t = 0; t < holdings.size(); ++t) {
@@ -136,16 +97,11 @@ bool CountTileRays(const Vertices& v, const std::vector<ms::TileHolding>& holdin
 }
 
 // Grows O over the tiles and writes the closed surface they give; the row's growing figures.
-nlohmann::json GrowAndWrite(const Vertices& v, const ms::TileLayout& layout,
+nlohmann::json GrowAndWrite(const ms::TiledScene& v, const ms::TileLayout& layout,
                             const ms::TileGrowthOptions& growth, const std::string& dir) {
-  ms::TiledScene scene;
-  scene.points = v.points;
-  scene.first_steiner = static_cast<int32_t>(v.scene_points);
-  scene.hull = v.hull;
-  scene.graded = true;
-  scene.cameras = v.cameras;
-  scene.rays = v.rays;
-  const ms::TiledSurface grown = ms::GrowTiles(scene, layout, ms::ManifoldOptions(), growth);
+  ms::ManifoldOptions options;
+  options.steiner_graded = ms::GradedSteiner::kOn;
+  const ms::TiledSurface grown = ms::GrowTiles(v, layout, options, growth);
   int64_t outside = 0;
   for (const auto& cells : grown.outside) outside += static_cast<int64_t>(cells.size());
   ms::Mesh mesh;
@@ -174,12 +130,12 @@ nlohmann::json GrowAndWrite(const Vertices& v, const ms::TileLayout& layout,
           {"mesh", path}};
 }
 
-nlohmann::json RunTiles(const Vertices& v, int tiles, const WholeCounts* whole,
+nlohmann::json RunTiles(const ms::TiledScene& v, int tiles, const WholeCounts* whole,
                         const ms::TileGrowthOptions& growth, const std::string& grow_dir) {
   // The split balances the scene's points: the Steiner points fill the enlarged box, whose
   // longest sides across a street would otherwise put seams along it.
   const std::vector<Eigen::Vector3d> scene_points(v.points.begin(),
-                                                  v.points.begin() + v.scene_points);
+                                                  v.points.begin() + v.first_steiner);
   const ms::TileLayout layout = ms::TileLayout::Split(scene_points, tiles);
   ms::StarExchangeStats stats;
   const std::vector<ms::TileHolding> holdings =
@@ -208,7 +164,7 @@ nlohmann::json RunTiles(const Vertices& v, int tiles, const WholeCounts* whole,
                         {"foreign", h.foreign.size()},
                         {"cells", cells.size()},
                         {"largest_star_vertex", largest.first},
-                        {"largest_star_is_steiner", largest.first >= v.scene_points},
+                        {"largest_star_is_steiner", largest.first >= v.first_steiner},
                         {"largest_star_cells", largest.second},
                         {"colour", colours[t]}});
   }
@@ -267,9 +223,9 @@ int main(int argc, char** argv) {
   cli.add_option("--json", json_path, "write the rows into this JSON file");
   CLI11_PARSE(cli, argc, argv);
   try {
-    const Vertices v = SceneVertices(ms::ReadScene(scene_path));
+    const ms::TiledScene v = SceneVertices(ms::ReadScene(scene_path));
     std::printf("%lld scene points, %lld Steiner points (%zu on the box)\n",
-                static_cast<long long>(v.scene_points), static_cast<long long>(v.steiner_points),
+                static_cast<long long>(v.first_steiner), static_cast<long long>(SteinerPoints(v)),
                 v.hull.size());
     std::printf("%5s %6s %12s %12s %9s %9s %7s\n", "tiles", "rounds", "spheres", "foreign",
                 "worst f/o", "seconds", "colours");
@@ -283,8 +239,8 @@ int main(int argc, char** argv) {
     nlohmann::json rows = nlohmann::json::array();
     for (int tiles : tile_counts) {
       rows.push_back(RunTiles(v, tiles, rays ? &whole : nullptr, growth, grow_dir));
-      rows.back()["scene_points"] = v.scene_points;
-      rows.back()["steiner_points"] = v.steiner_points;
+      rows.back()["scene_points"] = v.first_steiner;
+      rows.back()["steiner_points"] = SteinerPoints(v);
       std::fflush(stdout);
     }
     bool counts_differ = false, open_surface = false;

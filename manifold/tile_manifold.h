@@ -38,8 +38,8 @@ class TileManifold {
   // Triangulates points[held] (pairwise distinct). The tile owns the cells whose smallest id
   // it owns (owns(id), kept: what it reads must outlive the tile); ids from first_steiner on are
   // Steiner points (with `graded`, a cell of Steiner points only is free, as CellLabels). `counts`
-  // (CountRaysOnCells) must hold every owned cell and every cell sharing a face with one; cells it
-  // lacks count no ray.
+  // (CountRaysOnCells) must hold every cell with a vertex among the owned cells' vertices (the
+  // cells it may flip and their face neighbours); cells it lacks count no ray.
   TileManifold(const std::vector<Eigen::Vector3d>& points, const std::vector<int32_t>& held,
                const std::function<bool(int32_t)>& owns, int32_t first_steiner, bool graded,
                const std::vector<CellRayCount>& counts, const ManifoldOptions& options);

@@ -1,12 +1,16 @@
 #include "tiles/tile_growth.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <map>
 #include <optional>
 #include <unordered_set>
 #include <utility>
 
 #include "base/error.h"
+#include "manifold/manifold_vertices.h"
+#include "manifold/point_merging.h"
 #include "tiles/tile_stars.h"
 
 namespace ms {
@@ -55,6 +59,45 @@ std::optional<SeedInTile> HeaviestFreeCell(const std::vector<TileManifold>& tile
 }
 
 }  // namespace
+
+TiledScene TiledSceneFromPoints(const std::vector<RayPoint>& points,
+                                const std::vector<ManifoldCamera>& cameras,
+                                const ManifoldOptions& options,
+                                std::vector<int32_t>* vertex_of_point) {
+  Eigen::Vector3d lo, hi;
+  BoundPointsAndCameras(points, cameras, &lo, &hi);
+  const SteinerPoints steiner = PlaceSteinerPoints(points, cameras, lo, hi, options);
+  const std::vector<int32_t> representative =
+      NearDuplicateRepresentatives(points, cameras, InputMergeTolerance(steiner.points, options));
+  TiledScene scene;
+  std::vector<int32_t> id_of(points.size(), -1);
+  // A point at exactly an earlier kept point's position (no merge tolerance) is that point.
+  std::map<std::array<double, 3>, int32_t> kept_at;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (representative[i] != static_cast<int32_t>(i)) {
+      id_of[i] = id_of[representative[i]];
+      continue;
+    }
+    const Eigen::Vector3d& p = points[i].position;
+    const auto [at, added] =
+        kept_at.emplace(std::array<double, 3>{p.x(), p.y(), p.z()}, scene.points.size());
+    if (added) scene.points.push_back(p);
+    id_of[i] = at->second;
+  }
+  scene.first_steiner = static_cast<int32_t>(scene.points.size());
+  const size_t box = steiner.points.size() - static_cast<size_t>(steiner.graded);
+  for (size_t k = 0; k < steiner.points.size(); ++k) {
+    if (k < box) scene.hull.push_back(static_cast<int32_t>(scene.points.size()));
+    scene.points.push_back(steiner.points[k]);
+  }
+  scene.graded = SteinerCellsFree(options);
+  for (const ManifoldCamera& c : cameras) scene.cameras.push_back(c.center);
+  for (size_t i = 0; i < points.size(); ++i) {
+    for (int32_t c : points[i].cameras) scene.rays.push_back({c, id_of[i]});
+  }
+  if (vertex_of_point != nullptr) *vertex_of_point = std::move(id_of);
+  return scene;
+}
 
 TiledSurface GrowTiles(const TiledScene& scene, const TileLayout& layout,
                        const ManifoldOptions& options, const TileGrowthOptions& growth) {
@@ -153,8 +196,9 @@ TiledSurface GrowTiles(const TiledScene& scene, const TileLayout& layout,
   }
   for (const TileManifold& tile : tiles) result.outside.push_back(tile.OutsideCells());
   for (const TileManifold& tile : tiles) {
-    const std::vector<TileManifold::Face> faces = tile.SurfaceFaces();
-    result.faces.insert(result.faces.end(), faces.begin(), faces.end());
+    result.tile_faces.push_back(tile.SurfaceFaces());
+    result.faces.insert(result.faces.end(), result.tile_faces.back().begin(),
+                        result.tile_faces.back().end());
   }
   std::sort(result.faces.begin(), result.faces.end());
   stats.seconds_growing = SecondsSince(start);

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "manifold/cell_ray_counts.h"
+#include "manifold/delaunay_manifold.h"
 #include "manifold/manifold_options.h"
 #include "manifold/tile_manifold.h"
 #include "tiles/tile_layout.h"
@@ -45,6 +46,15 @@ struct TileGrowthOptions {
   double band = 1.25;
 };
 
+// The tiles' start from a scene's points and cameras, as DelaunayManifold::Build starts: the
+// same Steiner points and near-duplicates merged the same way (manifold/manifold_vertices.h).
+// The points kept are numbered in input order; a merged point's rays end at the point it
+// merges into. vertex_of_point (optional) gets each input point's id.
+TiledScene TiledSceneFromPoints(const std::vector<RayPoint>& points,
+                                const std::vector<ManifoldCamera>& cameras,
+                                const ManifoldOptions& options,
+                                std::vector<int32_t>* vertex_of_point = nullptr);
+
 struct TileGrowthStats {
   int colours = 0;
   int rounds = 0;           // rounds over the colours until one added nothing, all bands
@@ -55,8 +65,9 @@ struct TileGrowthStats {
 };
 
 struct TiledSurface {
-  std::vector<std::array<int32_t, 3>> faces;             // by point id, normals into O, sorted
-  std::vector<std::vector<TileManifold::Cell>> outside;  // per tile, its cells in O
+  std::vector<std::array<int32_t, 3>> faces;  // by point id, normals into O, sorted
+  std::vector<std::vector<std::array<int32_t, 3>>> tile_faces;  // per tile, its cells' faces
+  std::vector<std::vector<TileManifold::Cell>> outside;         // per tile, its cells in O
   TileGrowthStats stats;
 };
 
