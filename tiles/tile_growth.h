@@ -40,8 +40,8 @@ struct TiledScene {
 // Growing goes in bands of weight, heaviest first, each `band` times lighter than the one
 // before; all tiles grow a band until it adds nothing, which follows the order of one queue over
 // all cells to within that factor. 0: one band (each tile grows all it can in turn), for
-// comparison: on the 60-view streets its initial meshes measured up to 1.42x the untiled MAE at
-// 8 tiles, bands of 1.25 within 2% (docs/design/scalability.md, "Growing in tiles").
+// comparison: on the 60-view streets its initial meshes measured 0.89-1.11x the untiled MAE,
+// bands of 1.25 0.99-1.01x (docs/design/scalability.md, "Growing in tiles").
 struct TileGrowthOptions {
   double band = 1.25;
 };
