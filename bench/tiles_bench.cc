@@ -220,6 +220,9 @@ int main(int argc, char** argv) {
   cli.add_option("--band", growth.band,
                  "growing's bands of weight, each this many times lighter (0: one band)")
       ->capture_default_str();
+  growth.threads = 1;  // the growing's seconds are one thread's
+  cli.add_option("--threads", growth.threads, "threads for the tiles of a phase (0: one per core)")
+      ->capture_default_str();
   cli.add_option("--json", json_path, "write the rows into this JSON file");
   CLI11_PARSE(cli, argc, argv);
   try {

@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <functional>
 #include <map>
 #include <optional>
 #include <unordered_set>
 #include <utility>
 
 #include "base/error.h"
+#include "base/parallel_for.h"
 #include "manifold/manifold_vertices.h"
 #include "manifold/point_merging.h"
 #include "tiles/tile_stars.h"
@@ -99,6 +101,104 @@ TiledScene TiledSceneFromPoints(const std::vector<RayPoint>& points,
   return scene;
 }
 
+namespace {
+
+// The tiles' rounds of phases: each phase, the tiles of one colour read the cells flipped since
+// their last phase and then work at once, each on its own triangulation; what they flipped is
+// appended in tile order, so the result does not depend on the threads.
+class PhaseRounds {
+ public:
+  PhaseRounds(std::vector<TileManifold>* tiles, std::vector<int> colour, int threads,
+              TileGrowthStats* stats)
+      : tiles_(*tiles),
+        colour_(std::move(colour)),
+        threads_(threads),
+        stats_(*stats),
+        read_up_to_(tiles->size(), 0) {}
+
+  // Every tile reads what it has not read yet.
+  void ReadAll() {
+    for (size_t t = 0; t < tiles_.size(); ++t) Read(static_cast<int>(t));
+  }
+
+  // One round over the colours from `first_colour` on: step(tile) works on a tile and returns
+  // the cells it flipped. Returns whether any tile flipped one.
+  bool Round(int first_colour, const std::function<std::vector<TileManifold::Cell>(int)>& step) {
+    bool flipped = false;
+    for (int k = 0; k < stats_.colours; ++k) {
+      std::vector<int> phase;
+      for (size_t t = 0; t < tiles_.size(); ++t) {
+        if (colour_[t] == (first_colour + k) % stats_.colours) phase.push_back(static_cast<int>(t));
+      }
+      for (int t : phase) Read(t);
+      std::vector<std::vector<TileManifold::Cell>> cells(phase.size());
+      ParallelFor(
+          phase.size(), [&](size_t i) { cells[i] = step(phase[i]); }, threads_);
+      for (const std::vector<TileManifold::Cell>& c : cells) {
+        added_.insert(added_.end(), c.begin(), c.end());
+        flipped |= !c.empty();
+      }
+    }
+    return flipped;
+  }
+
+ private:
+  void Read(int t) {
+    const std::vector<TileManifold::Cell> unread(added_.begin() + read_up_to_[t], added_.end());
+    stats_.labels_read += tiles_[t].SetLabels(unread, true);
+    read_up_to_[t] = added_.size();
+  }
+
+  std::vector<TileManifold>& tiles_;
+  const std::vector<int> colour_;
+  const int threads_;
+  TileGrowthStats& stats_;
+  // The cells the tiles flipped, in order; each tile has read them up to its mark. A tile
+  // coordinator would get them from its neighbours at the end of their phase.
+  std::vector<TileManifold::Cell> added_;
+  std::vector<size_t> read_up_to_;
+};
+
+// Grows one component from `seed`, in bands of weight, heaviest first, each grown by all tiles
+// until a round adds nothing.
+void GrowInBands(const SeedInTile& seed, const std::vector<int>& colour,
+                 const ManifoldOptions& options, const TileGrowthOptions& growth,
+                 std::vector<TileManifold>* tiles, PhaseRounds* rounds, TileGrowthStats* stats) {
+  std::optional<TileManifold::Cell> seed_cell = seed.seed.cell;  // grown from once
+  for (double band = growth.band > 0 ? seed.seed.weight / growth.band : 0.0;; band /= growth.band) {
+    const double min_weight = band < options.free_threshold ? 0.0 : band;
+    bool grew = true;
+    while (grew) {
+      ++stats->rounds;
+      // The seed's colour first.
+      grew = rounds->Round(colour[seed.tile], [&](int t) {
+        return (*tiles)[t].Grow(t == seed.tile ? seed_cell : std::nullopt, min_weight);
+      });
+      seed_cell.reset();
+    }
+    if (min_weight == 0) break;
+  }
+}
+
+// The tiles, each with its triangulation and ray counts, built at once.
+std::vector<TileManifold> MakeTiles(const TiledScene& scene,
+                                    const std::vector<TileHolding>& holdings,
+                                    const std::vector<int>& owner, const ManifoldOptions& options,
+                                    int threads) {
+  std::vector<std::optional<TileManifold>> made(holdings.size());
+  ParallelFor(
+      holdings.size(),
+      [&](size_t t) {
+        made[t].emplace(MakeTile(scene, holdings[t], owner, static_cast<int>(t), options));
+      },
+      threads);
+  std::vector<TileManifold> tiles;
+  for (std::optional<TileManifold>& tile : made) tiles.push_back(std::move(*tile));
+  return tiles;
+}
+
+}  // namespace
+
 TiledSurface GrowTiles(const TiledScene& scene, const TileLayout& layout,
                        const ManifoldOptions& options, const TileGrowthOptions& growth) {
   if (!(growth.band == 0 || growth.band > 1)) {
@@ -111,91 +211,37 @@ TiledSurface GrowTiles(const TiledScene& scene, const TileLayout& layout,
   const std::vector<TileHolding> holdings =
       ExchangeStarPoints(scene.points, scene.hull, layout, &exchange);
   stats.foreign_points = exchange.foreign_points;
-  const std::vector<int> colour = ColourTiles(TileNeighbours(scene.points, holdings, layout));
-  const int num_tiles = layout.num_tiles();
+  std::vector<int> colour = ColourTiles(TileNeighbours(scene.points, holdings, layout));
   stats.colours = *std::max_element(colour.begin(), colour.end()) + 1;
   std::vector<int> owner(scene.points.size(), -1);
-  for (int t = 0; t < num_tiles; ++t) {
+  for (int t = 0; t < layout.num_tiles(); ++t) {
     for (int32_t id : holdings[t].owned) owner[id] = t;
   }
   stats.seconds_exchange = SecondsSince(start);
 
   start = std::chrono::steady_clock::now();
-  std::vector<TileManifold> tiles;
-  for (int t = 0; t < num_tiles; ++t)
-    tiles.push_back(MakeTile(scene, holdings[t], owner, t, options));
+  std::vector<TileManifold> tiles = MakeTiles(scene, holdings, owner, options, growth.threads);
   stats.seconds_counting = SecondsSince(start);
 
   start = std::chrono::steady_clock::now();
-  // The cells the tiles added, in order; each tile has read them up to its mark. A tile
-  // coordinator would get them from its neighbours at the end of their phase.
-  std::vector<TileManifold::Cell> added;
-  std::vector<size_t> read_up_to(num_tiles, 0);
-  const auto read_labels = [&](const std::vector<int>& which) {
-    for (int t : which) {
-      const std::vector<TileManifold::Cell> unread(added.begin() + read_up_to[t], added.end());
-      stats.labels_read += tiles[t].SetLabels(unread, true);
-      read_up_to[t] = added.size();
-    }
-  };
-  std::vector<int> every_tile(num_tiles);
-  for (int t = 0; t < num_tiles; ++t) every_tile[t] = t;
+  PhaseRounds rounds(&tiles, colour, growth.threads, &stats);
   // One component from the heaviest free cell (with grow_all_components, then one from the
   // heaviest free cell of each further one), as GrowShrink::GrowFromHeaviest.
   for (;;) {
-    read_labels(every_tile);
+    rounds.ReadAll();
     const std::optional<SeedInTile> seed = HeaviestFreeCell(tiles);
     if (!seed) break;
-    std::optional<TileManifold::Cell> seed_cell = seed->seed.cell;  // grown from once
-    // Bands of weight, heaviest first, each grown by all tiles until it adds nothing.
-    for (double band = growth.band > 0 ? seed->seed.weight / growth.band : 0.0;;
-         band /= growth.band) {
-      const double min_weight = band < options.free_threshold ? 0.0 : band;
-      for (bool grew = true; grew;) {
-        grew = false;
-        ++stats.rounds;
-        for (int k = 0; k < stats.colours; ++k) {
-          // The seed's colour first; tiles of one colour read the labels as the phase starts.
-          const int phase_colour = (colour[seed->tile] + k) % stats.colours;
-          std::vector<int> phase;
-          for (int t = 0; t < num_tiles; ++t) {
-            if (colour[t] == phase_colour) phase.push_back(t);
-          }
-          read_labels(phase);
-          for (int t : phase) {
-            const bool from_seed = t == seed->tile && seed_cell.has_value();
-            const std::vector<TileManifold::Cell> cells =
-                tiles[t].Grow(from_seed ? seed_cell : std::nullopt, min_weight);
-            if (from_seed) seed_cell.reset();
-            added.insert(added.end(), cells.begin(), cells.end());
-            grew |= !cells.empty();
-          }
-        }
-      }
-      if (min_weight == 0) break;
-    }
+    GrowInBands(*seed, colour, options, growth, &tiles, &rounds, &stats);
     if (!options.grow_all_components) break;
   }
   // Pockets of free space that growing could not enter, as the untiled build joins them:
   // each tile its own, in the same phases, until no tile joins one.
   for (bool joined = true; joined;) {
-    joined = false;
     ++stats.pocket_rounds;
-    for (int c = 0; c < stats.colours; ++c) {
-      std::vector<int> phase;
-      for (int t = 0; t < num_tiles; ++t) {
-        if (colour[t] == c) phase.push_back(t);
-      }
-      read_labels(phase);
-      for (int t : phase) {
-        const std::vector<TileManifold::Cell> cells = tiles[t].JoinPockets();
-        added.insert(added.end(), cells.begin(), cells.end());
-        joined |= !cells.empty();
-      }
-    }
+    joined = rounds.Round(0, [&](int t) { return tiles[t].JoinPockets(); });
   }
-  for (const TileManifold& tile : tiles) result.outside.push_back(tile.OutsideCells());
   for (const TileManifold& tile : tiles) {
+    result.outside.push_back(tile.OutsideCells());
     result.tile_faces.push_back(tile.SurfaceFaces());
     result.faces.insert(result.faces.end(), result.tile_faces.back().begin(),
                         result.tile_faces.back().end());

@@ -10,7 +10,7 @@
 // The growing order differs from one coordinator's (one queue over all cells), so the surface
 // may differ from the untiled one; it is the same with any number of workers.
 //
-// Here the tiles run one after another in one process; a tile coordinator will send its
+// Here the tiles run in one process, those of a phase on threads; a tile coordinator will send its
 // labels to its neighbours at the end of its phase.
 #pragma once
 
@@ -44,6 +44,9 @@ struct TiledScene {
 // bands of 1.25 0.99-1.01x (docs/design/scalability.md, "Growing in tiles").
 struct TileGrowthOptions {
   double band = 1.25;
+  // Threads for the tiles of one phase (and for building the tiles); 0: one per core. The
+  // result is the same with any number.
+  int threads = 0;
 };
 
 // The tiles' start from a scene's points and cameras, as DelaunayManifold::Build starts: the

@@ -373,6 +373,24 @@ TEST(TileGrowth, TilesGrowOneClosedManifoldStitchedByIds) {
   }
 }
 
+// Tiles of one phase grow on threads; what they flip is read in tile order, so the surface is
+// the same with any number of threads.
+TEST(TileGrowth, ThreadsDoNotChangeTheSurface) {
+  const TiledScene scene = SphereScene(600);
+  const std::vector<Eigen::Vector3d> scene_points(scene.points.begin(),
+                                                  scene.points.begin() + scene.first_steiner);
+  const TileLayout layout = TileLayout::Split(scene_points, 8);
+  TileGrowthOptions one, four;
+  one.threads = 1;
+  four.threads = 4;
+  const TiledSurface a = GrowTiles(scene, layout, ManifoldOptions(), one);
+  const TiledSurface b = GrowTiles(scene, layout, ManifoldOptions(), four);
+  EXPECT_EQ(a.faces, b.faces);
+  EXPECT_EQ(a.outside, b.outside);
+  EXPECT_EQ(a.stats.rounds, b.stats.rounds);
+  EXPECT_EQ(a.stats.labels_read, b.stats.labels_read);
+}
+
 TEST(TileStars, RefusesAPointOutsideTheHull) {
   std::vector<Eigen::Vector3d> points = RandomPoints(200, 8);
   const std::vector<int32_t> hull = AddHullCorners(-1, 2, &points);
