@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -121,6 +122,25 @@ TEST(CommandOptions, AConfigFileSetsOptionsByTheirDottedNames) {
   EXPECT_EQ(WEXITSTATUS(out.status), 2) << out.text;
   EXPECT_NE(out.text.find("--manifold.steiner-grid must be in [2, 64], got 1"), std::string::npos)
       << out.text;
+}
+
+// `manifold --tiles`: one closed mesh from the tiles, each tile's faces and the layout on
+// request; --tile-meshes without --tiles is refused.
+TEST(CommandOptions, ManifoldOverTilesWritesOneClosedMeshAndEachTile) {
+  const testing::TempDir dir("tiles");
+  ASSERT_EQ(RunManisweep("synth blob --no-images --output " + dir / "blob").status, 0);
+  const Output out = RunManisweep("manifold --input " + dir / "blob" + "/scene.h5 --output " +
+                                  dir / "blob.ply" + " --tiles 3 --tile-meshes " + dir / "tiles");
+  ASSERT_EQ(out.status, 0) << out.text;
+  EXPECT_NE(out.text.find("over 3 tiles"), std::string::npos) << out.text;
+  EXPECT_NE(out.text.find("check-mesh        closed 2-manifold"), std::string::npos) << out.text;
+  for (const char* name : {"tiles.json", "tile_0.ply", "tile_1.ply", "tile_2.ply"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "tiles" + "/" + name)) << name;
+  }
+  const Output refused = RunManisweep("manifold --input " + dir / "blob" + "/scene.h5 --output " +
+                                      dir / "other.ply" + " --tile-meshes " + dir / "tiles");
+  EXPECT_EQ(WEXITSTATUS(refused.status), 2) << refused.text;
+  EXPECT_NE(refused.text.find("--tile-meshes needs --tiles"), std::string::npos) << refused.text;
 }
 
 }  // namespace
