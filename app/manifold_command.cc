@@ -107,8 +107,10 @@ void RunTiledManifold(const ManifoldCommandOptions& options, const Scene& scene)
   std::printf("  seams             %lld points held beyond the tiles' own, %.3f s\n",
               static_cast<long long>(stats.foreign_points), stats.seconds_exchange);
   std::printf("  ray counts        %.3f s\n", stats.seconds_counting);
-  std::printf("  growing           %d colours, %d rounds, %d rounds of pocket joins, %.3f s\n",
-              stats.colours, stats.rounds, stats.pocket_rounds, stats.seconds_growing);
+  std::printf(
+      "  growing           %d colours, %d rounds, %d of camera repairs, %d of pocket joins, "
+      "%.3f s\n",
+      stats.colours, stats.rounds, stats.camera_rounds, stats.pocket_rounds, stats.seconds_growing);
   std::printf("  surface           %zu vertices, %zu faces\n", mesh.NumVertices(), mesh.NumFaces());
   if (options.manifold.float_cleanup) {
     std::printf("  float cleanup     %lld problems -> %lld, %.3f s\n",

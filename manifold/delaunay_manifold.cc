@@ -6,7 +6,6 @@
 #include <array>
 #include <cmath>
 #include <iterator>
-#include <map>
 #include <unordered_set>
 #include <utility>
 
@@ -689,58 +688,11 @@ void DelaunayManifold::Impl::LogCameraStars(int64_t completed) const {
       completed);
 }
 
-// A camera stands in free space, but greedy growing can leave the free cells around one out of
-// O: a pocket that touches O only where adding any one cell would pinch the surface (seen after
-// an insertion re-triangulated the space in front of a camera). Completing the star of a vertex
-// where the pocket touches O adds several cells at once (the whole pocket at once is tried
-// first); growing then goes on from there.
 int64_t DelaunayManifold::Impl::FreeEnclosedCameras(GrowShrink::Refusals* boundary) {
-  constexpr size_t kMaxPocketCells = 1 << 16;
-  // Rounds of pinching matter added to a camera's pocket (camera 5 of the upward pyramid with
-  // --sweep.winners-must-move took 3; docs/design/manifold.md "Known limits").
-  constexpr int kMaxPinchRounds = 8;
-  // A camera's pocket that could not join, with the cells its trial read: it fails again
-  // until a cell around their vertices flips. Trying every camera still in the matter again
-  // after each star completed would cost most of the repair on a street of thousands of cameras.
-  struct Failed {
-    uint32_t relabels;
-    std::vector<Cell_handle> read;
-  };
-  std::map<std::pair<int32_t, const void*>, Failed> failed;
-  for (int64_t completed = 0;; ++completed) {
-    std::vector<Cell_handle> joined;
-    for (const int32_t camera : CamerasInMatter()) {
-      for (const Cell_handle& start : walker_.StartCandidates(walker_.StartOf(camera))) {
-        const std::pair<int32_t, const void*> key(camera, &*start);
-        const auto before = failed.find(key);
-        if (before != failed.end() &&
-            !manifold_detail::FlippedAroundSince(before->second.read, before->second.relabels)) {
-          continue;
-        }
-        const std::vector<Cell_handle> pocket =
-            grow_shrink_.Pocket(start, kMaxPocketCells, walker_.NextStamp());
-        std::unordered_set<const void*> tried;
-        std::vector<Cell_handle> read = {start};
-        joined = grow_shrink_.JoinPocket(pocket, /*star_min_weight=*/0, &tried, &read);
-        if (joined.empty())
-          joined = grow_shrink_.JoinPocketWithPinches(pocket, kMaxPinchRounds, &read, SIZE_MAX,
-                                                      INT32_MAX);
-        if (!joined.empty()) break;
-        failed[key] = {labels_.relabels(), std::move(read)};
-      }
-      if (!joined.empty()) break;
-    }
-    if (joined.empty()) return completed;
-    if (boundary == nullptr) {
-      grow_shrink_.Grow(grow_shrink_.BoundarySeeds(RegrowSeeds::kBoundary, 0));
-      continue;
-    }
-    // The free cells next to O now: those next to it before (in `boundary`) and the face
-    // neighbours of what joined. The same growing as from a scan of every cell, without the
-    // scan, and without testing again the cells around which nothing has flipped.
-    boundary->Flipped(joined);
-    grow_shrink_.Grow(grow_shrink_.NextToOBeside(joined), nullptr, boundary);
-  }
+  return grow_shrink_.FreeEnclosedCameras(
+      [this] { return CamerasInMatter(); },
+      [this](int32_t camera) { return walker_.StartCandidates(walker_.StartOf(camera)); },
+      [this] { return walker_.NextStamp(); }, boundary);
 }
 
 int64_t DelaunayManifold::Impl::JoinFreePockets(RegrowSeeds which, uint32_t changed_in,

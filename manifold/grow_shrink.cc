@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <iterator>
+#include <map>
 #include <queue>
 
 namespace ms::manifold_detail {
@@ -664,6 +665,61 @@ int64_t GrowShrink::JoinFreePockets(RegrowSeeds which, uint32_t changed_in, int 
     Grow(BoundarySeeds(which, changed_in));
   }
   return joined;
+}
+
+// A camera stands in free space, but greedy growing can leave the free cells around one out of
+// O: a pocket that touches O only where adding any one cell would pinch the surface (seen after
+// an insertion re-triangulated the space in front of a camera). Completing the star of a vertex
+// where the pocket touches O adds several cells at once (the whole pocket at once is tried
+// first); growing then goes on from there.
+int64_t GrowShrink::FreeEnclosedCameras(
+    const std::function<std::vector<int32_t>()>& cameras_in_matter,
+    const std::function<std::vector<Cell_handle>(int32_t)>& start_cells,
+    const std::function<uint32_t()>& next_stamp, Refusals* boundary) {
+  constexpr size_t kMaxPocketCells = 1 << 16;
+  // Rounds of pinching matter added to a camera's pocket (camera 5 of the upward pyramid with
+  // --sweep.winners-must-move took 3; docs/design/manifold.md "Known limits").
+  constexpr int kMaxPinchRounds = 8;
+  // A camera's pocket that could not join, with the cells its trial read: it fails again
+  // until a cell around their vertices flips. Trying every camera still in the matter again
+  // after each star completed would cost most of the repair on a street of thousands of cameras.
+  struct Failed {
+    uint32_t relabels;
+    std::vector<Cell_handle> read;
+  };
+  std::map<std::pair<int32_t, const void*>, Failed> failed;
+  for (int64_t completed = 0;; ++completed) {
+    std::vector<Cell_handle> joined;
+    for (const int32_t camera : cameras_in_matter()) {
+      for (const Cell_handle& start : start_cells(camera)) {
+        const std::pair<int32_t, const void*> key(camera, &*start);
+        const auto before = failed.find(key);
+        if (before != failed.end() &&
+            !FlippedAroundSince(before->second.read, before->second.relabels)) {
+          continue;
+        }
+        const std::vector<Cell_handle> pocket = Pocket(start, kMaxPocketCells, next_stamp());
+        std::unordered_set<const void*> tried;
+        std::vector<Cell_handle> read = {start};
+        joined = JoinPocket(pocket, /*star_min_weight=*/0, &tried, &read);
+        if (joined.empty())
+          joined = JoinPocketWithPinches(pocket, kMaxPinchRounds, &read, SIZE_MAX, INT32_MAX);
+        if (!joined.empty()) break;
+        failed[key] = {labels_.relabels(), std::move(read)};
+      }
+      if (!joined.empty()) break;
+    }
+    if (joined.empty()) return completed;
+    if (boundary == nullptr) {
+      Grow(BoundarySeeds(RegrowSeeds::kBoundary, 0));
+      continue;
+    }
+    // The free cells next to O now: those next to it before (in `boundary`) and the face
+    // neighbours of what joined. The same growing as from a scan of every cell, without the
+    // scan, and without testing again the cells around which nothing has flipped.
+    boundary->Flipped(joined);
+    Grow(NextToOBeside(joined), nullptr, boundary);
+  }
 }
 
 bool GrowShrink::ShrinkAround(const std::vector<Cell_handle>& conflicts, uint32_t stamp,

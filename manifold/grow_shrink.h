@@ -115,6 +115,13 @@ class GrowShrink {
   int64_t slivers_joined() const { return slivers_joined_; }
   // Rounds of JoinPocketWithPinches that took a whole piece where O touches itself, so far.
   int64_t whole_pieces_tried() const { return whole_pieces_tried_; }
+  // Brings cameras left in the matter back into free space: joins the free pocket around each
+  // camera in cameras_in_matter() (its start cells: start_cells(camera)) into O, whole or a
+  // vertex's star at a time, with the matter that pinches it if need be, and grows on from
+  // what joined (with `boundary`, from what changed). Returns the joins.
+  int64_t FreeEnclosedCameras(const std::function<std::vector<int32_t>()>& cameras_in_matter,
+                              const std::function<std::vector<Cell_handle>(int32_t)>& start_cells,
+                              const std::function<uint32_t()>& next_stamp, Refusals* boundary);
   // Joins the pockets of free space next to O (from the cells BoundarySeeds(which, changed_in)
   // gives) that growing could not enter, and grows on from them; returns the joins. With
   // `pinch_rounds` > 0 a pocket may take the small matter pieces that pinch it. With `boundary`

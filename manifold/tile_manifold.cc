@@ -10,6 +10,7 @@
 #include "base/error.h"
 #include "manifold/cell_labels.h"
 #include "manifold/grow_shrink.h"
+#include "manifold/ray_walker.h"
 #include "manifold/regularity.h"
 #include "manifold/triangulation.h"
 
@@ -35,14 +36,18 @@ class TileManifold::Impl {
  public:
   Impl(const std::vector<Eigen::Vector3d>& points, const std::vector<int32_t>& held,
        const std::function<bool(int32_t)>& owns, int32_t first_steiner, bool graded,
-       const std::vector<CellRayCount>& counts, const ManifoldOptions& options)
+       const std::vector<CellRayCount>& counts, const std::vector<Eigen::Vector3d>& cameras,
+       const ManifoldOptions& options)
       : first_steiner_(first_steiner),
         owns_(owns),
         options_(options),
         labels_(dt_, options_),
         regularity_(dt_),
-        grow_(dt_, options_, labels_, regularity_) {
+        grow_(dt_, options_, labels_, regularity_),
+        walker_(dt_, cameras.size()),
+        num_cameras_(static_cast<int32_t>(cameras.size())) {
     Triangulate(points, held);
+    walker_.LocateCameras(cameras);
     labels_.set_graded(graded);
     for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
       for (int i = 0; i < 4; ++i) ++c->vertex(i)->info().cells;
@@ -97,15 +102,34 @@ class TileManifold::Impl {
     return keys;
   }
 
+  std::vector<Cell> FreeEnclosedCameras() {
+    const std::vector<Cell> before = FlippableInO();
+    // The cameras this tile answers for: a start cell it may flip, and none in O.
+    const auto in_matter = [this] {
+      std::vector<int32_t> enclosed;
+      for (int32_t camera = 0; camera < num_cameras_; ++camera) {
+        const std::vector<Cell_handle> cells = walker_.StartCandidates(walker_.StartOf(camera));
+        const bool here = std::any_of(cells.begin(), cells.end(), [this](const Cell_handle& c) {
+          return !dt_.is_infinite(c) && !c->info().frozen;
+        });
+        const bool free = std::any_of(cells.begin(), cells.end(),
+                                      [this](const Cell_handle& c) { return labels_.InO(c); });
+        if (here && !free) enclosed.push_back(camera);
+      }
+      return enclosed;
+    };
+    grow_.FreeEnclosedCameras(
+        in_matter,
+        [this](int32_t camera) { return walker_.StartCandidates(walker_.StartOf(camera)); },
+        [this] { return walker_.NextStamp(); }, nullptr);
+    return AddedSince(before);
+  }
+
   std::vector<Cell> JoinPockets() {
     const std::vector<Cell> before = FlippableInO();
     grow_.JoinFreePockets(RegrowSeeds::kBoundary, 0, /*pinch_rounds=*/0, nullptr,
-                          [this] { return NextStamp(); });
-    std::vector<Cell> added;
-    const std::vector<Cell> after = FlippableInO();
-    std::set_difference(after.begin(), after.end(), before.begin(), before.end(),
-                        std::back_inserter(added));
-    return added;
+                          [this] { return walker_.NextStamp(); });
+    return AddedSince(before);
   }
 
   int64_t SetLabels(const std::vector<Cell>& cells, bool outside) {
@@ -178,13 +202,13 @@ class TileManifold::Impl {
     std::sort(cells.begin(), cells.end());
     return cells;
   }
-  // A fresh visit stamp for CellInfo::stamp, as RayWalker::NextStamp.
-  uint32_t NextStamp() {
-    if (++stamp_ == 0) {
-      for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) c->info().stamp = 0;
-      stamp_ = 1;
-    }
-    return stamp_;
+  // The cells the tile may flip that are in O now and were not in `before` (FlippableInO).
+  std::vector<Cell> AddedSince(const std::vector<Cell>& before) const {
+    std::vector<Cell> added;
+    const std::vector<Cell> after = FlippableInO();
+    std::set_difference(after.begin(), after.end(), before.begin(), before.end(),
+                        std::back_inserter(added));
+    return added;
   }
   Cell_handle FindOwned(const Cell& key) const {
     const auto it = read_cells_.find(key);
@@ -234,8 +258,9 @@ class TileManifold::Impl {
   manifold_detail::CellLabels labels_;
   manifold_detail::Regularity regularity_;
   manifold_detail::GrowShrink grow_;
+  manifold_detail::RayWalker walker_;  // the cameras' start cells and the visit stamps
+  const int32_t num_cameras_;
   int64_t owned_cells_ = 0;
-  uint32_t stamp_ = 0;
   std::unordered_map<Cell, Cell_handle, CellHash> read_cells_;
 };
 
@@ -243,8 +268,10 @@ TileManifold::TileManifold(const std::vector<Eigen::Vector3d>& points,
                            const std::vector<int32_t>& held,
                            const std::function<bool(int32_t)>& owns, int32_t first_steiner,
                            bool graded, const std::vector<CellRayCount>& counts,
+                           const std::vector<Eigen::Vector3d>& cameras,
                            const ManifoldOptions& options)
-    : impl_(std::make_unique<Impl>(points, held, owns, first_steiner, graded, counts, options)) {}
+    : impl_(std::make_unique<Impl>(points, held, owns, first_steiner, graded, counts, cameras,
+                                   options)) {}
 TileManifold::~TileManifold() = default;
 TileManifold::TileManifold(TileManifold&&) noexcept = default;
 TileManifold& TileManifold::operator=(TileManifold&&) noexcept = default;
@@ -255,6 +282,9 @@ std::optional<TileManifold::Seed> TileManifold::HeaviestFreeCell() const {
 std::vector<TileManifold::Cell> TileManifold::Grow(const std::optional<Cell>& seed,
                                                    double min_weight) {
   return impl_->Grow(seed, min_weight);
+}
+std::vector<TileManifold::Cell> TileManifold::FreeEnclosedCameras() {
+  return impl_->FreeEnclosedCameras();
 }
 std::vector<TileManifold::Cell> TileManifold::JoinPockets() { return impl_->JoinPockets(); }
 int64_t TileManifold::SetLabels(const std::vector<Cell>& cells, bool outside) {

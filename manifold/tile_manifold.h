@@ -7,8 +7,8 @@
 // is set from the tiles that flip it, and it is never free here. Tiles that never share a star
 // may flip at the same time, and their surfaces together are one 2-manifold.
 //
-// Growing here is the build's heaviest-first growing (GrowShrink::Grow) and its pocket joins;
-// the camera repairs of DelaunayManifold::Build are not done in tiles.
+// Growing here is the build's: heaviest-first growing (GrowShrink::Grow), the repairs of
+// cameras left in the matter and the pocket joins.
 #pragma once
 
 #include <Eigen/Core>
@@ -40,9 +40,11 @@ class TileManifold {
   // Steiner points (with `graded`, a cell of Steiner points only is free, as CellLabels). `counts`
   // (CountRaysOnCells) must hold every cell with a vertex among the owned cells' vertices (the
   // cells it may flip and their face neighbours); cells it lacks count no ray.
+  // `cameras`: the centres, which the points' hull holds.
   TileManifold(const std::vector<Eigen::Vector3d>& points, const std::vector<int32_t>& held,
                const std::function<bool(int32_t)>& owns, int32_t first_steiner, bool graded,
-               const std::vector<CellRayCount>& counts, const ManifoldOptions& options);
+               const std::vector<CellRayCount>& counts, const std::vector<Eigen::Vector3d>& cameras,
+               const ManifoldOptions& options);
   ~TileManifold();
   TileManifold(TileManifold&&) noexcept;
   TileManifold& operator=(TileManifold&&) noexcept;
@@ -52,6 +54,9 @@ class TileManifold {
   // Grows O over the cells it may flip of at least `min_weight`, from `seed` (a cell the tile
   // owns) and from every such free cell beside O. Returns the cells added, in the order added.
   std::vector<Cell> Grow(const std::optional<Cell>& seed = std::nullopt, double min_weight = 0);
+  // Brings the cameras whose start the tile may flip, and which growing left in the matter,
+  // back into free space (GrowShrink::FreeEnclosedCameras). Returns the cells added.
+  std::vector<Cell> FreeEnclosedCameras();
   // Joins the pockets of free space next to O that growing could not enter, and grows on from
   // them (GrowShrink::JoinFreePockets; frozen cells never join). Returns the cells added.
   std::vector<Cell> JoinPockets();

@@ -38,7 +38,7 @@ TileManifold MakeTile(const TiledScene& scene, const TileHolding& holding,
       });
   return TileManifold(
       scene.points, held, [&owner, tile](int32_t id) { return owner[id] == tile; },
-      scene.first_steiner, scene.graded, counts, options);
+      scene.first_steiner, scene.graded, counts, scene.cameras, options);
 }
 
 struct SeedInTile {
@@ -234,8 +234,13 @@ TiledSurface GrowTiles(const TiledScene& scene, const TileLayout& layout,
     GrowInBands(*seed, colour, options, growth, &tiles, &rounds, &stats);
     if (!options.grow_all_components) break;
   }
-  // Pockets of free space that growing could not enter, as the untiled build joins them:
-  // each tile its own, in the same phases, until no tile joins one.
+  // Then, as the untiled build, cameras left in the matter and pockets of free space that
+  // growing could not enter: each tile those it may flip, in the same phases, until no tile
+  // joins one.
+  for (bool joined = true; joined;) {
+    ++stats.camera_rounds;
+    joined = rounds.Round(0, [&](int t) { return tiles[t].FreeEnclosedCameras(); });
+  }
   for (bool joined = true; joined;) {
     ++stats.pocket_rounds;
     joined = rounds.Round(0, [&](int t) { return tiles[t].JoinPockets(); });

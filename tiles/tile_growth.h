@@ -5,7 +5,8 @@
 // one colour share no star, so each flip is tested on the labels the whole triangulation has,
 // and the tiles' surfaces together are one closed 2-manifold, stitched by point ids. Growing
 // goes in bands of weight, heaviest first, each band in rounds of phases until a round adds
-// nothing; then each tile joins its pockets of free space, in rounds of phases too.
+// nothing; then each tile brings the cameras left in the matter back into free space and joins
+// its pockets of free space, in rounds of phases too.
 //
 // The growing order differs from one coordinator's (one queue over all cells), so the surface
 // may differ from the untiled one; it is the same with any number of workers.
@@ -61,6 +62,7 @@ TiledScene TiledSceneFromPoints(const std::vector<RayPoint>& points,
 struct TileGrowthStats {
   int colours = 0;
   int rounds = 0;           // rounds over the colours until one added nothing, all bands
+  int camera_rounds = 0;    // rounds of camera repairs, the last joining none
   int pocket_rounds = 0;    // rounds of pocket joins, the last joining none
   int64_t labels_read = 0;  // frozen cells set in O, over all phases and tiles
   int64_t foreign_points = 0;
