@@ -99,23 +99,6 @@ class CellLabels {
     }
   }
 
-  // Sets c's counts at once, as counted elsewhere (a tile's, cell_ray_counts.h): `crossings`
-  // rays, camera_beyond[i] of them with the camera beyond face i.
-  void SetCounts(const Cell_handle& c, int32_t crossings,
-                 const std::array<int64_t, 4>& camera_beyond) {
-    CellInfo& info = c->info();
-    info.crossings = crossings;
-    for (int i = 0; i < 4; ++i) {
-      const int64_t n = w2_rule_ == W2Rule::kAllFaces ? crossings : camera_beyond[i];
-      if (n < CellInfo::kSpreadOverflow) {
-        info.spread[i] = static_cast<uint16_t>(n);
-      } else {
-        info.spread[i] = CellInfo::kSpreadOverflow;
-        overflow_[&*c][i] = n;
-      }
-    }
-  }
-
   // Spread counts that passed the packed range during concurrent counting, per cell and face:
   // one tally per thread, added to the overflow table by MergeOverflow once the threads are done.
   using OverflowTally = std::unordered_map<const void*, std::array<int64_t, 4>>;

@@ -7,8 +7,8 @@
 #include <unordered_map>
 
 #include "base/error.h"
-#include "manifold/cell_predicates.h"
 #include "manifold/ray_walker.h"
+#include "manifold/rays_through_box.h"
 #include "manifold/triangulation.h"
 
 namespace ms {
@@ -17,7 +17,6 @@ using manifold_detail::Cell_handle;
 using manifold_detail::Delaunay;
 using manifold_detail::KeyOf;
 using manifold_detail::RayWalker;
-using manifold_detail::StampMarks;
 using manifold_detail::ToPoint;
 
 namespace {
@@ -70,16 +69,7 @@ std::vector<CellRayCount> CountRaysOnCells(
   }
 
   RayWalker walker(dt, camera_centres.size());
-  walker.LocateCameras(camera_centres);
-  for (size_t c = 0; c < camera_centres.size(); ++c) {
-    const manifold_detail::CameraStart& start = walker.StartOf(static_cast<int>(c));
-    if (start.type == Delaunay::OUTSIDE_CONVEX_HULL ||
-        start.type == Delaunay::OUTSIDE_AFFINE_HULL) {
-      throw InputError("camera " + std::to_string(c) + " lies outside the held points' hull");
-    }
-  }
-  StampMarks marks(&walker);
-  manifold_detail::WalkScratch scratch;
+  manifold_detail::LocateCamerasInside(camera_centres, &walker);
   const auto count = [&](const Cell_handle& c, unsigned camera_side) {
     const auto it = counts.find(&*c);
     if (it == counts.end()) return;
@@ -92,22 +82,11 @@ std::vector<CellRayCount> CountRaysOnCells(
       n.camera_beyond[std::find(n.ids.begin(), n.ids.end(), opposite) - n.ids.begin()] += 1;
     }
   };
-  for (const ViewingRay& ray : rays) {
-    ++stats->rays;
-    if (ray.camera < 0 || static_cast<size_t>(ray.camera) >= camera_centres.size() ||
-        ray.point < 0 || static_cast<size_t>(ray.point) >= points.size()) {
-      throw InputError("viewing ray (camera " + std::to_string(ray.camera) + ", point " +
-                       std::to_string(ray.point) + ") is out of range");
-    }
-    double entry = 0;
-    if (counts.empty() || !manifold_detail::SegmentMeetsBox(camera_centres[ray.camera],
-                                                            points[ray.point], lo, hi, &entry)) {
-      continue;
-    }
-    ++stats->rays_walked;
-    stats->cell_steps +=
-        walker.WalkToPointWith(walker.StartOf(ray.camera), walker.camera_point(ray.camera),
-                               ToPoint(points[ray.point]), marks, scratch, count);
+  if (counts.empty()) {
+    stats->rays += static_cast<int64_t>(rays.size());  // none can cross a counted cell
+  } else {
+    manifold_detail::WalkRaysMeetingBox(points, camera_centres, rays, lo, hi, &walker, stats,
+                                        count);
   }
 
   std::vector<CellRayCount> result;

@@ -1,7 +1,9 @@
 #include "manifold/tile_manifold.h"
 
 #include <algorithm>
+#include <chrono>
 #include <iterator>
+#include <limits>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -11,6 +13,7 @@
 #include "manifold/cell_labels.h"
 #include "manifold/grow_shrink.h"
 #include "manifold/ray_walker.h"
+#include "manifold/rays_through_box.h"
 #include "manifold/regularity.h"
 #include "manifold/triangulation.h"
 
@@ -36,8 +39,8 @@ class TileManifold::Impl {
  public:
   Impl(const std::vector<Eigen::Vector3d>& points, const std::vector<int32_t>& held,
        const std::function<bool(int32_t)>& owns, int32_t first_steiner, bool graded,
-       const std::vector<CellRayCount>& counts, const std::vector<Eigen::Vector3d>& cameras,
-       const ManifoldOptions& options)
+       const std::vector<Eigen::Vector3d>& cameras, const std::vector<ViewingRay>& rays,
+       const ManifoldOptions& options, CellRayCountStats* ray_stats)
       : first_steiner_(first_steiner),
         owns_(owns),
         options_(options),
@@ -47,27 +50,13 @@ class TileManifold::Impl {
         walker_(dt_, cameras.size()),
         num_cameras_(static_cast<int32_t>(cameras.size())) {
     Triangulate(points, held);
-    walker_.LocateCameras(cameras);
+    manifold_detail::LocateCamerasInside(cameras, &walker_);
     labels_.set_graded(graded);
     for (auto c = dt_.all_cells_begin(); c != dt_.all_cells_end(); ++c) {
       for (int i = 0; i < 4; ++i) ++c->vertex(i)->info().cells;
     }
     MarkFlippableCells();
-    std::unordered_map<Cell, const CellRayCount*, CellHash> count_of;
-    for (const CellRayCount& n : counts) count_of[n.ids] = &n;
-    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
-      const Cell key = KeyOf(c);
-      const auto it = count_of.find(key);
-      if (it == count_of.end()) continue;
-      // The counts are by ascending ids; face i of the cell is opposite its vertex i.
-      std::array<int64_t, 4> beyond;
-      for (int i = 0; i < 4; ++i) {
-        const int32_t opposite = TileId(c->vertex(i)->info().id);
-        beyond[i] =
-            it->second->camera_beyond[std::find(key.begin(), key.end(), opposite) - key.begin()];
-      }
-      labels_.SetCounts(c, static_cast<int32_t>(it->second->crossings), beyond);
-    }
+    CountRays(points, cameras, rays, ray_stats);
   }
 
   std::optional<Seed> HeaviestFreeCell() const {
@@ -214,6 +203,32 @@ class TileManifold::Impl {
     const auto it = read_cells_.find(key);
     return it != read_cells_.end() && owns_(key[0]) ? it->second : Cell_handle();
   }
+  // Counts the rays on the cells it reads (cell_ray_counts.h): a ray that misses the box around
+  // them crosses none. Walks count on every cell they cross, but only those cells' counts are
+  // read: growing weighs the cells it may flip and their neighbours, all among them.
+  void CountRays(const std::vector<Eigen::Vector3d>& points,
+                 const std::vector<Eigen::Vector3d>& cameras, const std::vector<ViewingRay>& rays,
+                 CellRayCountStats* stats) {
+    const auto start = std::chrono::steady_clock::now();
+    CellRayCountStats local;
+    if (stats == nullptr) stats = &local;
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector3d hi = -lo;
+    for (const auto& [key, c] : read_cells_) {
+      for (int i = 0; i < 4; ++i) {
+        const Eigen::Vector3d p = manifold_detail::ToEigen(c->vertex(i)->point());
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+    }
+    if (read_cells_.empty()) return;
+    manifold_detail::WalkRaysMeetingBox(points, cameras, rays, lo, hi, &walker_, stats,
+                                        [this](const Cell_handle& c, unsigned camera_side) {
+                                          labels_.CountCrossing(c, camera_side);
+                                        });
+    stats->seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
   // The tile flips its own cells, and other tiles' cells whose four vertices are vertices of
   // its own cells: their stars are exact here, so their flips are tested as the whole
   // triangulation would test them (a pocket of free space across a seam joins whole). Every
@@ -267,11 +282,11 @@ class TileManifold::Impl {
 TileManifold::TileManifold(const std::vector<Eigen::Vector3d>& points,
                            const std::vector<int32_t>& held,
                            const std::function<bool(int32_t)>& owns, int32_t first_steiner,
-                           bool graded, const std::vector<CellRayCount>& counts,
-                           const std::vector<Eigen::Vector3d>& cameras,
-                           const ManifoldOptions& options)
-    : impl_(std::make_unique<Impl>(points, held, owns, first_steiner, graded, counts, cameras,
-                                   options)) {}
+                           bool graded, const std::vector<Eigen::Vector3d>& cameras,
+                           const std::vector<ViewingRay>& rays, const ManifoldOptions& options,
+                           CellRayCountStats* ray_stats)
+    : impl_(std::make_unique<Impl>(points, held, owns, first_steiner, graded, cameras, rays,
+                                   options, ray_stats)) {}
 TileManifold::~TileManifold() = default;
 TileManifold::TileManifold(TileManifold&&) noexcept = default;
 TileManifold& TileManifold::operator=(TileManifold&&) noexcept = default;

@@ -35,16 +35,17 @@ class TileManifold {
     Cell cell{};
   };
 
-  // Triangulates points[held] (pairwise distinct). The tile owns the cells whose smallest id
-  // it owns (owns(id), kept: what it reads must outlive the tile); ids from first_steiner on are
-  // Steiner points (with `graded`, a cell of Steiner points only is free, as CellLabels). `counts`
-  // (CountRaysOnCells) must hold every cell with a vertex among the owned cells' vertices (the
-  // cells it may flip and their face neighbours); cells it lacks count no ray.
-  // `cameras`: the centres, which the points' hull holds.
+  // Triangulates points[held] (pairwise distinct; their hull holds the cameras) and counts
+  // the viewing rays on the cells around its own cells' vertices (as CountRaysOnCells, into the
+  // cells; ray_stats, when given, gets what that cost). The tile owns the cells whose smallest
+  // id it owns (owns(id), kept: what it reads must outlive the tile); ids from first_steiner
+  // on are Steiner points (with `graded`, a cell of Steiner points only is free, as
+  // CellLabels). Throws InputError for a repeated point, a camera outside the hull or a ray out
+  // of range.
   TileManifold(const std::vector<Eigen::Vector3d>& points, const std::vector<int32_t>& held,
                const std::function<bool(int32_t)>& owns, int32_t first_steiner, bool graded,
-               const std::vector<CellRayCount>& counts, const std::vector<Eigen::Vector3d>& cameras,
-               const ManifoldOptions& options);
+               const std::vector<Eigen::Vector3d>& cameras, const std::vector<ViewingRay>& rays,
+               const ManifoldOptions& options, CellRayCountStats* ray_stats = nullptr);
   ~TileManifold();
   TileManifold(TileManifold&&) noexcept;
   TileManifold& operator=(TileManifold&&) noexcept;

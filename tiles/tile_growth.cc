@@ -6,7 +6,6 @@
 #include <functional>
 #include <map>
 #include <optional>
-#include <unordered_set>
 #include <utility>
 
 #include "base/error.h"
@@ -22,23 +21,14 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// A tile's triangulation with its counts: the rays are counted on its own cells and on every
-// cell around their vertices, which holds the neighbours growing weighs (the w2 spread).
+// A tile's triangulation with its ray counts (manifold/tile_manifold.h).
 TileManifold MakeTile(const TiledScene& scene, const TileHolding& holding,
                       const std::vector<int>& owner, int tile, const ManifoldOptions& options) {
   std::vector<int32_t> held = holding.owned;
   held.insert(held.end(), holding.foreign.begin(), holding.foreign.end());
-  std::unordered_set<int32_t> around;
-  for (const TileCell& cell : OwnedCells(scene.points, holding))
-    around.insert(cell.begin(), cell.end());
-  const std::vector<CellRayCount> counts = CountRaysOnCells(
-      scene.points, held, scene.cameras, scene.rays, [&](const std::array<int32_t, 4>& ids) {
-        return std::any_of(ids.begin(), ids.end(),
-                           [&](int32_t id) { return around.count(id) > 0; });
-      });
   return TileManifold(
       scene.points, held, [&owner, tile](int32_t id) { return owner[id] == tile; },
-      scene.first_steiner, scene.graded, counts, scene.cameras, options);
+      scene.first_steiner, scene.graded, scene.cameras, scene.rays, options);
 }
 
 struct SeedInTile {
