@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <unordered_map>
@@ -25,6 +26,7 @@
 #include "manifold/cell_ray_counts.h"
 #include "manifold/manifold_options.h"
 #include "manifold/scene_rays.h"
+#include "manifold/tile_manifold.h"
 #include "mesh/mesh.h"
 #include "mesh/mesh_checker.h"
 #include "mesh/mesh_io.h"
@@ -38,22 +40,31 @@ namespace {
 // The scene's vertices and rays as the tiles start from them (TiledSceneFromPoints), with
 // every graded Steiner point kept (--manifold.graded-steiner on): the densest Steiner set, whose
 // stars reach farthest across the seams.
-ms::TiledScene SceneVertices(const ms::Scene& scene) {
+ms::ManifoldOptions BenchOptions() {
   ms::ManifoldOptions options;
   options.steiner_graded = ms::GradedSteiner::kOn;
+  return options;
+}
+
+ms::TiledScene SceneVertices(const ms::Scene& scene) {
   return ms::TiledSceneFromPoints(ms::RayPointsFromScene(scene),
-                                  ms::ManifoldCamerasFromScene(scene), options);
+                                  ms::ManifoldCamerasFromScene(scene), BenchOptions());
 }
 
 int64_t SteinerPoints(const ms::TiledScene& v) {
   return static_cast<int64_t>(v.points.size()) - v.first_steiner;
 }
 
-bool SameCounts(const ms::CellRayCount& a, const ms::CellRayCount& b) {
-  return a.ids == b.ids && a.crossings == b.crossings && a.camera_beyond == b.camera_beyond;
+// The rays a tile counts on the cells it owns (ms::TileManifold), and what that cost.
+std::vector<ms::CellRayCount> OwnedCounts(const ms::TiledScene& v, const std::vector<int32_t>& held,
+                                          const std::function<bool(int32_t)>& owns,
+                                          ms::CellRayCountStats* stats) {
+  return ms::TileManifold(v.points, held, owns, v.first_steiner, v.graded, v.cameras, v.rays,
+                          BenchOptions(), stats)
+      .OwnedCounts();
 }
 
-// The whole triangulation's counts: one tile that holds and counts everything.
+// The whole triangulation's counts: one tile that holds and owns everything.
 struct WholeCounts {
   std::vector<ms::CellRayCount> cells;
   ms::CellRayCountStats stats;
@@ -62,9 +73,8 @@ WholeCounts CountWhole(const ms::TiledScene& v) {
   std::vector<int32_t> all(v.points.size());
   for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int32_t>(i);
   WholeCounts whole;
-  whole.cells = ms::CountRaysOnCells(
-      v.points, all, v.cameras, v.rays, [](const std::array<int32_t, 4>&) { return true; },
-      &whole.stats);
+  whole.cells = OwnedCounts(
+      v, all, [](int32_t) { return true; }, &whole.stats);
   return whole;
 }
 
@@ -81,10 +91,8 @@ bool CountTileRays(const ms::TiledScene& v, const std::vector<ms::TileHolding>& 
     std::vector<int32_t> held = holdings[t].owned;
     held.insert(held.end(), holdings[t].foreign.begin(), holdings[t].foreign.end());
     ms::CellRayCountStats stats;
-    const std::vector<ms::CellRayCount> counts = ms::CountRaysOnCells(
-        v.points, held, v.cameras, v.rays,
-        [&](const std::array<int32_t, 4>& ids) { return owner[ids[0]] == static_cast<int>(t); },
-        &stats);
+    const std::vector<ms::CellRayCount> counts = OwnedCounts(
+        v, held, [&](int32_t id) { return owner[id] == static_cast<int>(t); }, &stats);
     united.insert(united.end(), counts.begin(), counts.end());
     (*per_tile)[t]["rays_walked"] = stats.rays_walked;
     (*per_tile)[t]["ray_cell_steps"] = stats.cell_steps;
@@ -92,16 +100,13 @@ bool CountTileRays(const ms::TiledScene& v, const std::vector<ms::TileHolding>& 
   }
   std::sort(united.begin(), united.end(),
             [](const ms::CellRayCount& a, const ms::CellRayCount& b) { return a.ids < b.ids; });
-  return united.size() == whole.cells.size() &&
-         std::equal(united.begin(), united.end(), whole.cells.begin(), SameCounts);
+  return united == whole.cells;
 }
 
 // Grows O over the tiles and writes the closed surface they give; the row's growing figures.
 nlohmann::json GrowAndWrite(const ms::TiledScene& v, const ms::TileLayout& layout,
                             const ms::TileGrowthOptions& growth, const std::string& dir) {
-  ms::ManifoldOptions options;
-  options.steiner_graded = ms::GradedSteiner::kOn;
-  const ms::TiledSurface grown = ms::GrowTiles(v, layout, options, growth);
+  const ms::TiledSurface grown = ms::GrowTiles(v, layout, BenchOptions(), growth);
   int64_t outside = 0;
   for (const auto& cells : grown.outside) outside += static_cast<int64_t>(cells.size());
   ms::Mesh mesh;

@@ -132,6 +132,26 @@ class TileManifold::Impl {
     return changed;
   }
 
+  std::vector<CellRayCount> OwnedCounts() const {
+    std::vector<CellRayCount> counts;
+    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
+      CellRayCount n;
+      n.ids = KeyOf(c);
+      if (!owns_(n.ids[0])) continue;
+      n.crossings = c->info().crossings;
+      for (int i = 0; i < 4; ++i) {
+        // Face i is opposite vertex i: its place among the ascending ids.
+        const int32_t opposite = TileId(c->vertex(i)->info().id);
+        n.spread[std::find(n.ids.begin(), n.ids.end(), opposite) - n.ids.begin()] =
+            labels_.Spread(c, i);
+      }
+      counts.push_back(n);
+    }
+    std::sort(counts.begin(), counts.end(),
+              [](const CellRayCount& a, const CellRayCount& b) { return a.ids < b.ids; });
+    return counts;
+  }
+
   std::vector<Cell> OutsideCells() const {
     std::vector<Cell> cells;
     for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
@@ -156,15 +176,6 @@ class TileManifold::Impl {
       }
     }
     return faces;
-  }
-
-  int64_t num_owned_cells() const { return owned_cells_; }
-  int64_t num_read_cells() const { return static_cast<int64_t>(read_cells_.size()); }
-  int64_t num_flippable_cells() const {
-    int64_t n = 0;
-    for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c)
-      n += !c->info().frozen;
-    return n;
   }
 
  private:
@@ -238,7 +249,6 @@ class TileManifold::Impl {
     std::unordered_set<const void*> near_own;  // vertices of owned cells
     for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
       if (!owns_(KeyOf(c)[0])) continue;
-      ++owned_cells_;
       for (int i = 0; i < 4; ++i) near_own.insert(&*c->vertex(i));
     }
     for (auto c = dt_.finite_cells_begin(); c != dt_.finite_cells_end(); ++c) {
@@ -275,7 +285,6 @@ class TileManifold::Impl {
   manifold_detail::GrowShrink grow_;
   manifold_detail::RayWalker walker_;  // the cameras' start cells and the visit stamps
   const int32_t num_cameras_;
-  int64_t owned_cells_ = 0;
   std::unordered_map<Cell, Cell_handle, CellHash> read_cells_;
 };
 
@@ -305,10 +314,8 @@ std::vector<TileManifold::Cell> TileManifold::JoinPockets() { return impl_->Join
 int64_t TileManifold::SetLabels(const std::vector<Cell>& cells, bool outside) {
   return impl_->SetLabels(cells, outside);
 }
+std::vector<CellRayCount> TileManifold::OwnedCounts() const { return impl_->OwnedCounts(); }
 std::vector<TileManifold::Cell> TileManifold::OutsideCells() const { return impl_->OutsideCells(); }
 std::vector<TileManifold::Face> TileManifold::SurfaceFaces() const { return impl_->SurfaceFaces(); }
-int64_t TileManifold::num_owned_cells() const { return impl_->num_owned_cells(); }
-int64_t TileManifold::num_read_cells() const { return impl_->num_read_cells(); }
-int64_t TileManifold::num_flippable_cells() const { return impl_->num_flippable_cells(); }
 
 }  // namespace ms

@@ -36,8 +36,8 @@ class TileManifold {
   };
 
   // Triangulates points[held] (pairwise distinct; their hull holds the cameras) and counts
-  // the viewing rays on the cells around its own cells' vertices (as CountRaysOnCells, into the
-  // cells; ray_stats, when given, gets what that cost). The tile owns the cells whose smallest
+  // the viewing rays on the cells around its own cells' vertices (cell_ray_counts.h;
+  // ray_stats, when given, gets what that cost). The tile owns the cells whose smallest
   // id it owns (owns(id), kept: what it reads must outlive the tile); ids from first_steiner
   // on are Steiner points (with `graded`, a cell of Steiner points only is free, as
   // CellLabels). Throws InputError for a repeated point, a camera outside the hull or a ray out
@@ -66,15 +66,13 @@ class TileManifold {
   // Returns the labels it changed.
   int64_t SetLabels(const std::vector<Cell>& cells, bool outside);
 
+  // The rays counted on each owned cell, sorted by ids: the whole triangulation's counts where
+  // the tile holds its stars (tiles/tile_stars.h).
+  std::vector<CellRayCount> OwnedCounts() const;
   // The owned cells in O, ascending.
   std::vector<Cell> OutsideCells() const;
   // The faces between an owned cell in O and a cell outside O.
   std::vector<Face> SurfaceFaces() const;
-
-  int64_t num_owned_cells() const;
-  // Cells whose labels the tile reads, and cells it may flip (its own among them).
-  int64_t num_read_cells() const;
-  int64_t num_flippable_cells() const;
 
  private:
   class Impl;

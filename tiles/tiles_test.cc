@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <set>
 
 #include "base/error.h"
 #include "manifold/cell_ray_counts.h"
+#include "manifold/tile_manifold.h"
 #include "mesh/mesh.h"
 #include "mesh/mesh_checker.h"
 #include "tiles/tile_growth.h"
@@ -230,12 +232,19 @@ RayScene CamerasAndRays(const std::vector<Eigen::Vector3d>& points,
   return scene;
 }
 
-bool SameCounts(const CellRayCount& a, const CellRayCount& b) {
-  return a.ids == b.ids && a.crossings == b.crossings && a.camera_beyond == b.camera_beyond;
+// The rays a tile counts on the cells it owns (TileManifold walks them through its own
+// triangulation; most end at points it does not hold).
+std::vector<CellRayCount> OwnedCounts(const std::vector<Eigen::Vector3d>& points,
+                                      const std::vector<int32_t>& held,
+                                      const std::function<bool(int32_t)>& owns,
+                                      const RayScene& scene) {
+  const int32_t no_steiner = static_cast<int32_t>(points.size());
+  return TileManifold(points, held, owns, no_steiner, false, scene.cameras, scene.rays,
+                      ManifoldOptions())
+      .OwnedCounts();
 }
 
-// Each tile counts the rays on the cells it owns, walking them through its own triangulation
-// (most end at points it does not hold); together the tiles' counts are the whole's.
+// Together the tiles' counts on their cells, each cell once.
 std::vector<CellRayCount> UnitedTileCounts(const std::vector<Eigen::Vector3d>& points,
                                            const std::vector<TileHolding>& holdings,
                                            const RayScene& scene) {
@@ -247,9 +256,8 @@ std::vector<CellRayCount> UnitedTileCounts(const std::vector<Eigen::Vector3d>& p
   for (size_t t = 0; t < holdings.size(); ++t) {
     std::vector<int32_t> held = holdings[t].owned;
     held.insert(held.end(), holdings[t].foreign.begin(), holdings[t].foreign.end());
-    const std::vector<CellRayCount> counts = CountRaysOnCells(
-        points, held, scene.cameras, scene.rays,
-        [&](const std::array<int32_t, 4>& ids) { return owner[ids[0]] == static_cast<int>(t); });
+    const std::vector<CellRayCount> counts = OwnedCounts(
+        points, held, [&](int32_t id) { return owner[id] == static_cast<int>(t); }, scene);
     united.insert(united.end(), counts.begin(), counts.end());
   }
   std::sort(united.begin(), united.end(),
@@ -271,8 +279,8 @@ RayCase MakeRayCase() {
   c.scene = CamerasAndRays(c.points, c.hull, 9);
   std::vector<int32_t> all(c.points.size());
   for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int32_t>(i);
-  c.whole = CountRaysOnCells(c.points, all, c.scene.cameras, c.scene.rays,
-                             [](const std::array<int32_t, 4>&) { return true; });
+  c.whole = OwnedCounts(
+      c.points, all, [](int32_t) { return true; }, c.scene);
   return c;
 }
 
@@ -287,8 +295,7 @@ TEST(TileRays, TilesCountTheWholeTriangulationsRaysOnTheirCells) {
     const std::vector<CellRayCount> united =
         UnitedTileCounts(c.points, ExchangeStarPoints(c.points, c.hull, layout), c.scene);
     ASSERT_EQ(united.size(), c.whole.size());
-    EXPECT_TRUE(std::equal(united.begin(), united.end(), c.whole.begin(), SameCounts))
-        << "a tile's counts differ from the whole triangulation's";
+    EXPECT_TRUE(united == c.whole) << "a tile's counts differ from the whole triangulation's";
   }
 }
 
@@ -306,8 +313,7 @@ TEST(TileRays, WithoutTheExchangeTheCountsDiffer) {
     }
   }
   const std::vector<CellRayCount> united = UnitedTileCounts(points, bare, c.scene);
-  EXPECT_FALSE(united.size() == c.whole.size() &&
-               std::equal(united.begin(), united.end(), c.whole.begin(), SameCounts));
+  EXPECT_FALSE(united == c.whole);
 }
 
 // A sphere of points seen from cameras around it, inside a box of Steiner corners: growing
