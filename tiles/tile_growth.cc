@@ -54,8 +54,7 @@ std::optional<SeedInTile> HeaviestFreeCell(const std::vector<TileManifold>& tile
 
 TiledScene TiledSceneFromPoints(const std::vector<RayPoint>& points,
                                 const std::vector<ManifoldCamera>& cameras,
-                                const ManifoldOptions& options,
-                                std::vector<int32_t>* vertex_of_point) {
+                                const ManifoldOptions& options) {
   Eigen::Vector3d lo, hi;
   BoundPointsAndCameras(points, cameras, &lo, &hi);
   const SteinerPoints steiner = PlaceSteinerPoints(points, cameras, lo, hi, options);
@@ -87,7 +86,6 @@ TiledScene TiledSceneFromPoints(const std::vector<RayPoint>& points,
   for (size_t i = 0; i < points.size(); ++i) {
     for (int32_t c : points[i].cameras) scene.rays.push_back({c, id_of[i]});
   }
-  if (vertex_of_point != nullptr) *vertex_of_point = std::move(id_of);
   return scene;
 }
 

@@ -53,11 +53,10 @@ struct TileGrowthOptions {
 // The tiles' start from a scene's points and cameras, as DelaunayManifold::Build starts: the
 // same Steiner points and near-duplicates merged the same way (manifold/manifold_vertices.h).
 // The points kept are numbered in input order; a merged point's rays end at the point it
-// merges into. vertex_of_point (optional) gets each input point's id.
+// merges into.
 TiledScene TiledSceneFromPoints(const std::vector<RayPoint>& points,
                                 const std::vector<ManifoldCamera>& cameras,
-                                const ManifoldOptions& options,
-                                std::vector<int32_t>* vertex_of_point = nullptr);
+                                const ManifoldOptions& options);
 
 struct TileGrowthStats {
   int colours = 0;
