@@ -67,6 +67,11 @@ class CellLabels {
         c->vertex(2)->info().id < 0 && c->vertex(3)->info().id < 0) {
       return true;
     }
+    // The free-space cut decided the cells that existed when it ran (--manifold.visibility cut).
+    if (!cut_.empty()) {
+      const auto it = cut_.find(&*c);
+      if (it != cut_.end()) return it->second;
+    }
     // Rays that end just in front of a cell are evidence of matter there: a cell that more of
     // them enter past their points than cross it stays matter (behind_ratio).
     if (behind_ratio_ > 0 && c->info().crossings < behind_ratio_ * Behind(c)) return false;
@@ -147,10 +152,15 @@ class CellLabels {
   }
   void CountBehind(const Cell_handle& c) { ++behind_[&*c]; }
 
+  // The free-space cut's verdict on c (--manifold.visibility cut): free or not, whatever its
+  // weight. Cells born later are decided by their weight.
+  void SetCutVerdict(const Cell_handle& c, bool free) { cut_[&*c] = free; }
+
   // Drops what the tables hold for c, a cell an insertion is about to destroy (its memory may
   // come back as a new cell).
   void ForgetCounts(const Cell_handle& c) {
     if (!behind_.empty()) behind_.erase(&*c);
+    if (!cut_.empty()) cut_.erase(&*c);
     const uint16_t* spread = c->info().spread;
     if (std::find(spread, spread + 4, CellInfo::kSpreadOverflow) != spread + 4) {
       overflow_.erase(&*c);
@@ -193,6 +203,7 @@ class CellLabels {
   // Spread counts past 16 bits, by cell (CellInfo::kSpreadOverflow).
   std::unordered_map<const void*, std::array<int64_t, 4>> overflow_;
   std::unordered_map<const void*, int32_t> behind_;
+  std::unordered_map<const void*, bool> cut_;  // the free-space cut's verdicts
   int64_t outside_count_ = 0;
   uint32_t relabels_ = 0;  // flips so far (a wrap can only cost a growing some retests)
 };

@@ -119,6 +119,7 @@ BuildStats DelaunayManifold::Impl::Build(std::vector<RayPoint> points) {
   timer.Restart();
   TraceRays(points, &stats);
   CountRaysBehind();
+  if (options_.visibility == FreeSpaceRule::kCut) CutFreeSpace();
   stats.seconds_ray_tracing = timer.Seconds();
   // What the manifold needs of the points is in it now; growing is the build's peak of memory,
   // so the points with their cameras go before it.

@@ -168,6 +168,9 @@ class DelaunayManifold::Impl {
   void TraceRays(const std::vector<RayPoint>& points, BuildStats* stats);
   // (2b) With behind_ratio > 0: every ray counted on the cell it enters past its point.
   void CountRaysBehind();
+  // (2c) With --manifold.visibility cut: every cell's free-space verdict from a minimum cut of
+  // the cell graph (free_space_cut.cc).
+  void CutFreeSpace();
   // (3) O grown from the heaviest free cell.
   void GrowInitial(BuildStats* stats);
 

@@ -8,6 +8,12 @@ const std::vector<std::pair<const char*, W2Rule>>& OptionChoices(W2Rule) {
   return choices;
 }
 
+const std::vector<std::pair<const char*, FreeSpaceRule>>& OptionChoices(FreeSpaceRule) {
+  static const std::vector<std::pair<const char*, FreeSpaceRule>> choices = {
+      {"threshold", FreeSpaceRule::kThreshold}, {"cut", FreeSpaceRule::kCut}};
+  return choices;
+}
+
 const std::vector<std::pair<const char*, GradedSteiner>>& OptionChoices(GradedSteiner) {
   static const std::vector<std::pair<const char*, GradedSteiner>> choices = {
       {"hidden", GradedSteiner::kHidden}, {"on", GradedSteiner::kOn}, {"off", GradedSteiner::kOff}};

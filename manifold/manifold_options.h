@@ -21,6 +21,13 @@ enum class W2Rule {
 };
 const std::vector<std::pair<const char*, W2Rule>>& OptionChoices(W2Rule);
 
+// Which cells are free space (--manifold.visibility, docs/design/manifold.md).
+enum class FreeSpaceRule {
+  kThreshold,  // a cell's ray weight reaches t_w (the paper)
+  kCut,        // a minimum s-t cut of the cell graph (Labatut et al.)
+};
+const std::vector<std::pair<const char*, FreeSpaceRule>>& OptionChoices(FreeSpaceRule);
+
 // Whether Build adds graded Steiner points (--manifold.graded-steiner).
 enum class GradedSteiner { kHidden, kOn, kOff };
 const std::vector<std::pair<const char*, GradedSteiner>>& OptionChoices(GradedSteiner);

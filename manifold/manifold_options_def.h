@@ -18,6 +18,24 @@ MS_OPTION(double, behind_ratio, 0.0, "behind-ratio",
           "a cell stays matter while fewer rays cross it than this x the rays that, continued "
           "past their point (a vertex of the cell), enter it (0 = the paper's weights alone)",
           AtLeast(0))
+// Which cells are free space: the paper's threshold on each cell's weight, or a minimum s-t cut
+// of the cell graph (Labatut et al. 2009, as OpenMVS's ReconstructMesh): a ray's crossings of
+// faces cost cutting there, cameras' cells are free, the cell past each point is matter, and
+// every face costs cut-quality x (1 - the cosine of its worse circumsphere angle), so the surface
+// prefers faces with large empty balls on both sides. Incremental insertion decides the new
+// cells by the threshold (docs/design/manifold.md, "The free-space cut").
+MS_OPTION(FreeSpaceRule, visibility, FreeSpaceRule::kThreshold, "visibility",
+          "which cells are free space: threshold (a cell's ray weight reaches t_w: the paper) or "
+          "cut (a minimum cut of the cell graph weighing rays, the cells past the points and the "
+          "faces' shapes; Labatut et al.)",
+          AnyValue())
+MS_OPTION(double, cut_quality, 1.0, "cut-quality",
+          "with --manifold.visibility cut: the weight of a face's shape against one ray's",
+          AtLeast(0))
+MS_OPTION(double, cut_thickness, 1.0, "cut-thickness",
+          "with --manifold.visibility cut: a ray costs less to cut within this x the median "
+          "edge length of its point (the points' noise)",
+          AtLeast(0))
 MS_OPTION(W2Rule, w2_rule, W2Rule::kCameraSide, "w2-rule",
           "which face neighbours of a crossed cell get w_2: camera-side (only between the camera "
           "and the cell) or all-faces (the paper's wording)",
