@@ -192,6 +192,12 @@ TiledSurface GrowTiles(const TiledScene& scene, const TileLayout& layout,
   if (!(growth.band == 0 || growth.band > 1)) {
     throw InputError("tiles: the growing band must be 0 (none) or above 1");
   }
+  // A tile decides free space by the threshold of its own cells' weights only.
+  if (options.visibility != FreeSpaceRule::kThreshold || options.behind_ratio > 0) {
+    throw InputError(
+        "tiles: --manifold.visibility cut and --manifold.behind-ratio are not built for tiles "
+        "(a tile weighs its cells by the paper's threshold)");
+  }
   TiledSurface result;
   TileGrowthStats& stats = result.stats;
   auto start = std::chrono::steady_clock::now();

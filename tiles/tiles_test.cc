@@ -397,6 +397,26 @@ TEST(TileGrowth, ThreadsDoNotChangeTheSurface) {
   EXPECT_EQ(a.stats.labels_read, b.stats.labels_read);
 }
 
+// Tiles weigh their cells by the threshold only: the rules they do not have are refused by
+// name, not silently replaced.
+TEST(TileGrowth, RefusesFreeSpaceRulesItDoesNotHave) {
+  const TiledScene scene = SphereScene(200);
+  const std::vector<Eigen::Vector3d> scene_points(scene.points.begin(),
+                                                  scene.points.begin() + scene.first_steiner);
+  const TileLayout layout = TileLayout::Split(scene_points, 2);
+  ManifoldOptions cut, behind;
+  cut.visibility = FreeSpaceRule::kCut;
+  behind.behind_ratio = 1;
+  for (const ManifoldOptions& options : {cut, behind}) {
+    try {
+      GrowTiles(scene, layout, options);
+      ADD_FAILURE() << "not refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--manifold.visibility cut"), std::string::npos);
+    }
+  }
+}
+
 TEST(TileStars, RefusesAPointOutsideTheHull) {
   std::vector<Eigen::Vector3d> points = RandomPoints(200, 8);
   const std::vector<int32_t> hull = AddHullCorners(-1, 2, &points);
