@@ -314,15 +314,33 @@ TEST(DelaunayManifold, SphereIsReconstructedAsAClosedManifold) {
   EXPECT_GT(outward, 0.93 * sphere_faces);
 }
 
+// 300 points on the unit sphere seen by a ring of 10 cameras, and 40 outliers.
+RandomScene SphereWithOutliers(uint32_t seed, std::mt19937* rng) {
+  RandomScene scene = SphereScene(300, 10, seed);
+  AddOutliers(40, rng, &scene);
+  return scene;
+}
+
+// Three batches of points on spheres a little inside and on the unit sphere, with outliers,
+// each inserted and the state validated after it.
+void InsertSphereBatchesValidating(uint32_t seed, std::mt19937* rng, DelaunayManifold* manifold) {
+  for (int batch = 0; batch < 3; ++batch) {
+    RandomScene more = SphereScene(60, 10, seed * 1000 + batch, 0.98 + 0.02 * batch);
+    AddOutliers(5, rng, &more);
+    manifold->Insert(more.points);
+    ASSERT_EQ(manifold->Validate(true), "") << "batch " << batch;
+    ASSERT_EQ(SurfaceProblems(manifold->ExtractSurface()), "") << "batch " << batch;
+  }
+}
+
 // Outliers' rays cross the sphere and free cells inside it. Counting the rays that end just in
 // front of each cell (--manifold.behind-ratio) keeps some of those cells matter, and the counts
 // that insertion keeps up to date equal a recount from scratch after every batch.
 TEST(DelaunayManifold, RaysEndingInFrontOfACellKeepItMatter) {
   for (uint32_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    RandomScene scene = SphereScene(300, 10, seed);
     std::mt19937 rng(seed);
-    AddOutliers(40, &rng, &scene);
+    const RandomScene scene = SphereWithOutliers(seed, &rng);
     ManifoldOptions behind_options;
     behind_options.behind_ratio = 1;
     DelaunayManifold paper(scene.cameras, ManifoldOptions{});
@@ -332,13 +350,7 @@ TEST(DelaunayManifold, RaysEndingInFrontOfACellKeepItMatter) {
     EXPECT_LT(behind_stats.free_cells, paper_stats.free_cells);
     ASSERT_EQ(behind.Validate(true), "");
     ASSERT_EQ(SurfaceProblems(behind.ExtractSurface()), "");
-    for (int batch = 0; batch < 3; ++batch) {
-      RandomScene more = SphereScene(60, 10, seed * 1000 + batch, 0.98 + 0.02 * batch);
-      AddOutliers(5, &rng, &more);
-      behind.Insert(more.points);
-      ASSERT_EQ(behind.Validate(true), "") << "batch " << batch;
-      ASSERT_EQ(SurfaceProblems(behind.ExtractSurface()), "") << "batch " << batch;
-    }
+    InsertSphereBatchesValidating(seed, &rng, &behind);
   }
 }
 
@@ -359,9 +371,8 @@ TEST(DelaunayManifold, TheFreeSpaceCutKeepsTheInsideOfASphereAgainstOutliers) {
   };
   for (uint32_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    RandomScene scene = SphereScene(300, 10, seed);
     std::mt19937 rng(seed);
-    AddOutliers(40, &rng, &scene);
+    const RandomScene scene = SphereWithOutliers(seed, &rng);
     ManifoldOptions cut_options;
     cut_options.visibility = FreeSpaceRule::kCut;
     DelaunayManifold paper(scene.cameras, ManifoldOptions{});
@@ -372,13 +383,7 @@ TEST(DelaunayManifold, TheFreeSpaceCutKeepsTheInsideOfASphereAgainstOutliers) {
     ASSERT_EQ(SurfaceProblems(cut.ExtractSurface()), "");
     EXPECT_LT(freed_inside(cut.ExtractFreeSpaceBoundary()),
               freed_inside(paper.ExtractFreeSpaceBoundary()));
-    for (int batch = 0; batch < 3; ++batch) {
-      RandomScene more = SphereScene(60, 10, seed * 1000 + batch, 0.98 + 0.02 * batch);
-      AddOutliers(5, &rng, &more);
-      cut.Insert(more.points);
-      ASSERT_EQ(cut.Validate(true), "") << "batch " << batch;
-      ASSERT_EQ(SurfaceProblems(cut.ExtractSurface()), "") << "batch " << batch;
-    }
+    InsertSphereBatchesValidating(seed, &rng, &cut);
   }
 }
 

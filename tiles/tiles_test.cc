@@ -342,15 +342,20 @@ TiledScene SphereScene(int count) {
   return scene;
 }
 
+// The layout of `tiles` tiles over the scene's own points (not its Steiner points).
+TileLayout LayoutOfScenePoints(const TiledScene& scene, int tiles) {
+  const std::vector<Eigen::Vector3d> scene_points(scene.points.begin(),
+                                                  scene.points.begin() + scene.first_steiner);
+  return TileLayout::Split(scene_points, tiles);
+}
+
 TEST(TileGrowth, TilesGrowOneClosedManifoldStitchedByIds) {
   const TiledScene scene = SphereScene(600);
-  std::vector<Eigen::Vector3d> scene_points(scene.points.begin(),
-                                            scene.points.begin() + scene.first_steiner);
   int64_t untiled_outside = 0;
   for (int tiles : {1, 2, 4, 8}) {
     SCOPED_TRACE("tiles " + std::to_string(tiles));
     const TiledSurface grown =
-        GrowTiles(scene, TileLayout::Split(scene_points, tiles), ManifoldOptions());
+        GrowTiles(scene, LayoutOfScenePoints(scene, tiles), ManifoldOptions());
     std::vector<TileManifold::Cell> outside;
     for (const auto& cells : grown.outside)
       outside.insert(outside.end(), cells.begin(), cells.end());
@@ -383,9 +388,7 @@ TEST(TileGrowth, TilesGrowOneClosedManifoldStitchedByIds) {
 // the same with any number of threads.
 TEST(TileGrowth, ThreadsDoNotChangeTheSurface) {
   const TiledScene scene = SphereScene(600);
-  const std::vector<Eigen::Vector3d> scene_points(scene.points.begin(),
-                                                  scene.points.begin() + scene.first_steiner);
-  const TileLayout layout = TileLayout::Split(scene_points, 8);
+  const TileLayout layout = LayoutOfScenePoints(scene, 8);
   TileGrowthOptions one, four;
   one.threads = 1;
   four.threads = 4;
@@ -401,9 +404,7 @@ TEST(TileGrowth, ThreadsDoNotChangeTheSurface) {
 // name, not silently replaced.
 TEST(TileGrowth, RefusesFreeSpaceRulesItDoesNotHave) {
   const TiledScene scene = SphereScene(200);
-  const std::vector<Eigen::Vector3d> scene_points(scene.points.begin(),
-                                                  scene.points.begin() + scene.first_steiner);
-  const TileLayout layout = TileLayout::Split(scene_points, 2);
+  const TileLayout layout = LayoutOfScenePoints(scene, 2);
   ManifoldOptions cut, behind;
   cut.visibility = FreeSpaceRule::kCut;
   behind.behind_ratio = 1;
