@@ -12,7 +12,9 @@
 // dear across a thin cell that reaches from a facade's last points past its edge.
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "base/log.h"
