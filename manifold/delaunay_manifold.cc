@@ -350,6 +350,11 @@ InsertionStats DelaunayManifold::Impl::FinishInsert() {
     RewalkMarked(&batch, batch.part, &stats);
   }
   CountRaysBehindAfterBatch(batch);
+  // The cut decides the batch's new cells too, and may change its verdict on older ones: O
+  // then grows into what it frees (a cell in O stays there). Left to the threshold, new cells
+  // beside cells the cut kept as matter raise fins in front of cameras (docs/design/accuracy.md,
+  // "The free-space cut").
+  if (options_.visibility == FreeSpaceRule::kCut) CutFreeSpace();
   stats.seconds_insertion += timer.Seconds();
 
   timer.Restart();

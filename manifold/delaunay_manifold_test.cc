@@ -356,8 +356,8 @@ TEST(DelaunayManifold, RaysEndingInFrontOfACellKeepItMatter) {
 
 // Outliers' lone rays free cells inside the sphere under the paper's threshold. The free-space
 // cut (--manifold.visibility cut) weighs them against the rays that end on the sphere in front
-// of those cells, so it frees fewer of them, and the state stays valid through insertions (whose
-// new cells the threshold decides).
+// of those cells, so it frees fewer of them, and the state stays valid through insertions (each
+// batch cut again).
 TEST(DelaunayManifold, TheFreeSpaceCutKeepsTheInsideOfASphereAgainstOutliers) {
   auto freed_inside = [](const Mesh& mesh) {
     // Faces well inside the unit sphere bound free space carved into it.

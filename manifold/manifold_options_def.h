@@ -22,8 +22,8 @@ MS_OPTION(double, behind_ratio, 0.0, "behind-ratio",
 // of the cell graph (Labatut et al. 2009, as OpenMVS's ReconstructMesh): a ray's crossings of
 // faces cost cutting there, cameras' cells are free, the cell past each point is matter, and
 // every face costs cut-quality x (1 - the cosine of its worse circumsphere angle), so the surface
-// prefers faces with large empty balls on both sides. Incremental insertion decides the new
-// cells by the threshold (docs/design/manifold.md, "The free-space cut").
+// prefers faces with large empty balls on both sides. Incremental insertion cuts again after
+// each batch (docs/design/manifold.md, "The free-space cut").
 MS_OPTION(FreeSpaceRule, visibility, FreeSpaceRule::kThreshold, "visibility",
           "which cells are free space: threshold (a cell's ray weight reaches t_w: the paper) or "
           "cut (a minimum cut of the cell graph weighing rays, the cells past the points and the "
