@@ -153,7 +153,7 @@ class CellLabels {
   void CountBehind(const Cell_handle& c) { ++behind_[&*c]; }
 
   // The free-space cut's verdict on c (--manifold.visibility cut): free or not, whatever its
-  // weight. Cells born later are decided by their weight.
+  // weight. Cells born since the last cut are decided by their weight until the next.
   void SetCutVerdict(const Cell_handle& c, bool free) { cut_[&*c] = free; }
 
   // Drops what the tables hold for c, a cell an insertion is about to destroy (its memory may

@@ -352,8 +352,8 @@ InsertionStats DelaunayManifold::Impl::FinishInsert() {
   CountRaysBehindAfterBatch(batch);
   // The cut decides the batch's new cells too, and may change its verdict on older ones: O
   // then grows into what it frees (a cell in O stays there). Left to the threshold, new cells
-  // beside cells the cut kept as matter raise fins in front of cameras (docs/design/accuracy.md,
-  // "The free-space cut").
+  // beside cells the cut decided raise fins in front of cameras (docs/design/manifold.md, "The
+  // free-space cut").
   if (options_.visibility == FreeSpaceRule::kCut) CutFreeSpace();
   stats.seconds_insertion += timer.Seconds();
 
