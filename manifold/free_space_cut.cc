@@ -53,10 +53,14 @@ double MedianPointEdge(const Delaunay& dt) {
 
 // The cosine of the angle between face i's plane and c's circumsphere: positive when the
 // circumcentre lies on c's side of the face (Labatut et al.'s beta-skeleton measure).
+// The corners of face i of c.
+std::array<Eigen::Vector3d, 3> FaceCorners(const Cell_handle& c, int i) {
+  return {ToEigen(c->vertex((i + 1) & 3)->point()), ToEigen(c->vertex((i + 2) & 3)->point()),
+          ToEigen(c->vertex((i + 3) & 3)->point())};
+}
+
 double FaceSphereCosine(const Cell_handle& c, int i, const Eigen::Vector3d& centre) {
-  const Eigen::Vector3d p0 = ToEigen(c->vertex((i + 1) & 3)->point());
-  const Eigen::Vector3d p1 = ToEigen(c->vertex((i + 2) & 3)->point());
-  const Eigen::Vector3d p2 = ToEigen(c->vertex((i + 3) & 3)->point());
+  const auto [p0, p1, p2] = FaceCorners(c, i);
   Eigen::Vector3d normal = (p1 - p0).cross(p2 - p0);
   if (normal.dot(ToEigen(c->vertex(i)->point()) - p0) < 0) normal = -normal;
   const double radius = (centre - p0).norm();
@@ -68,9 +72,7 @@ double FaceSphereCosine(const Cell_handle& c, int i, const Eigen::Vector3d& cent
 // Where the segment a -> b crosses the plane of face i of c, as the distance from b.
 double CrossingDistanceToEnd(const Cell_handle& c, int i, const Eigen::Vector3d& a,
                              const Eigen::Vector3d& b) {
-  const Eigen::Vector3d p0 = ToEigen(c->vertex((i + 1) & 3)->point());
-  const Eigen::Vector3d p1 = ToEigen(c->vertex((i + 2) & 3)->point());
-  const Eigen::Vector3d p2 = ToEigen(c->vertex((i + 3) & 3)->point());
+  const auto [p0, p1, p2] = FaceCorners(c, i);
   const Eigen::Vector3d normal = (p1 - p0).cross(p2 - p0);
   const double along = normal.dot(b - a);
   if (along == 0) return ((p0 + p1 + p2) / 3 - b).norm();
